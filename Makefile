@@ -1,0 +1,60 @@
+# drystone: every target installs what is missing first (make setup is idempotent and quick).
+SHELL   := /bin/bash
+VENV    := .venv
+PY      := $(VENV)/bin/python
+JOBS    ?= 2
+SUDO    := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+DEB_PKGS := yade python3-matplotlib python3-venv
+STAMP   := $(VENV)/.setup-stamp
+RUN     := $(PY) -m drystone
+
+.PHONY: setup system-deps test demo run gravity4 settlement4 bench clean help
+
+help:
+	@echo "make setup        install Debian's YADE, make .venv, install PyPI dependencies"
+	@echo "make demo         the main job (see README)"
+	@echo "make test         the test suite"
+	@echo "make run CASE=cases/x.toml [SET='key=value ...']   run any case file"
+	@echo "make gravity4 | settlement4   the paper's four-block verification cases"
+	@echo "make bench        speed figures (not a test)"
+
+setup: system-deps $(STAMP)
+
+system-deps:
+	@missing=""; for p in $(DEB_PKGS); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
+	if [ -n "$$missing" ]; then \
+	  echo "setup: installing Debian packages:$$missing"; \
+	  $(SUDO) apt-get update -qq && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq $$missing; \
+	fi
+
+$(STAMP): requirements.txt requirements-nodeps.txt constraints.txt pyproject.toml | system-deps
+	@test -x $(PY) || /usr/bin/python3 -m venv --system-site-packages $(VENV)
+	$(PY) -m pip install -q --disable-pip-version-check -c constraints.txt -r requirements.txt
+	$(PY) -m pip install -q --disable-pip-version-check --no-deps -r requirements-nodeps.txt
+	$(PY) -m pip install -q --disable-pip-version-check --no-deps --no-build-isolation -e .
+	$(PY) -c "import numpy, scipy; assert numpy.__version__ == '1.24.2' and scipy.__version__ == '1.10.1', 'numpy/scipy are not Debian''s'"
+	@touch $@
+
+test: setup
+	$(PY) -m pytest $(PYTEST_ARGS)
+
+run: setup
+	@test -n "$(CASE)" || { echo "usage: make run CASE=path/to/case.toml [SET='key=value ...']"; exit 2; }
+	$(RUN) run $(CASE) -j $(JOBS) $(foreach s,$(SET),--set $(s))
+
+gravity4: setup
+	$(RUN) run cases/gravity4.toml -j $(JOBS)
+
+settlement4: setup
+	$(RUN) run cases/settlement4.toml -j $(JOBS)
+
+demo: setup
+	$(RUN) run cases/gravity4.toml -j $(JOBS)
+	$(RUN) run cases/settlement4.toml -j $(JOBS)
+	$(RUN) compare results/gravity4 results/settlement4
+
+bench: setup
+	$(RUN) bench
+
+clean:
+	rm -rf results
