@@ -1,0 +1,308 @@
+"""Case files (TOML): every key declared once, with default, unit and meaning.
+
+``load(path, overrides)`` reads a case, applies ``--set key=value`` overrides, refuses
+unknown keys, fills defaults and checks values, raising CaseError naming the file and
+key. ``python -m drystone keys`` prints the table below (README points to it).
+"""
+from __future__ import annotations
+
+import copy
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+REQUIRED = object()
+
+
+class CaseError(ValueError):
+    """A case file problem; the message names the file and key."""
+
+
+@dataclass(frozen=True)
+class Key:
+    default: object
+    unit: str
+    meaning: str
+    kind: type | tuple = float
+    choices: tuple = ()
+    positive: bool = False  # > 0
+    nonneg: bool = False  # >= 0
+
+
+# -- the declaration --------------------------------------------------------------
+SECTIONS: dict[str, dict[str, Key]] = {
+    "case": {
+        "name": Key(None, "-", "case name; results go to results/<name>/ (default: file stem)", str),
+        "description": Key("", "-", "free text", str),
+        "geometry": Key(REQUIRED, "-", "block file (path relative to the case file) or a table "
+                        "{generator = NAME, ...parameters}", (str, dict)),
+    },
+    "contact": {
+        "law": Key("penalty_coulomb", "-", "penalty_coulomb (the paper's law, per-contact shear and "
+                   "damping) or stock_volumetric (YADE's law: shared shear, no damping)", str,
+                   ("penalty_coulomb", "stock_volumetric")),
+        "kn": Key(None, "N/m^3", "override K_n of every material", float, positive=True),
+        "kt": Key(None, "N/m^3", "override K_t of every material", float, positive=True),
+        "mu": Key(None, "-", "override the friction coefficient of every material", float, nonneg=True),
+        "damping": Key(None, "-", "override the contact damping (fraction of critical) of every material",
+                       float, nonneg=True),
+    },
+    "time": {
+        "step": Key("auto", "s", "time step, or 'auto' = safety x the critical step of the stiffest "
+                    "contact; a step above the critical one is refused", (float, str)),
+        "safety": Key(0.5, "-", "safety factor applied to the critical step when step = 'auto'", float,
+                      positive=True),
+    },
+    "physics": {
+        "gravity": Key(9.81, "m/s^2", "gravitational acceleration", float, positive=True),
+    },
+    "output": {
+        "interval": Key(0.01, "s", "time between recorded samples", float, positive=True),
+        "contacts": Key([], "-", "named contacts to record: list of {name, blocks = [a, b]}", list),
+        "collapse_displacement": Key("auto", "m", "a block that moves more than this has collapsed; "
+                                     "'auto' = half the block's smallest dimension", (float, str)),
+    },
+    "analysis": {
+        "penetration": Key(None, "-", "name of a recorded contact whose final normal penetration is "
+                           "reported as penetration_<name>_m", str),
+        "slip": Key(None, "-", "name of a recorded contact whose first slip is reported "
+                    "(slip_time_s, slip_force_N, slip_normal_force_N, slip_tilt_deg)", str),
+        "tilt_block": Key(None, "-", "block whose tilt (deg) is recorded for the slip report", int),
+    },
+}
+
+STAGES: dict[str, dict[str, Key]] = {
+    "gravity": {
+        "duration": Key(REQUIRED, "s", "stage length", float, positive=True),
+        "ramp": Key(None, "s", "gravity grows linearly over this time, then holds (default: half the "
+                    "duration)", float, nonneg=True),
+    },
+    "settlement": {
+        "duration": Key(REQUIRED, "s", "stage length; the settlement is linear over it", float, positive=True),
+        "block": Key(REQUIRED, "-", "id of the fixed block that settles", int),
+        "displacement": Key(REQUIRED, "m", "downward settlement", float, positive=True),
+    },
+    "tilt": {
+        "rate_deg_s": Key(REQUIRED, "deg/s", "platform rotation rate", float, positive=True),
+        "to_deg": Key(None, "deg", "stop the stage at this platform angle", float, positive=True),
+        "until_collapse": Key(False, "-", "run until collapse (or max_deg)", bool),
+        "max_deg": Key(45.0, "deg", "upper bound of an until_collapse stage", float, positive=True),
+        "towards": Key("+y", "-", "horizontal direction the platform tilts towards: +x, -x, +y, -y", str,
+                       ("+x", "-x", "+y", "-y")),
+        "reaction_drop": Key(0.05, "-", "collapse when the vertical reaction of the moving blocks drops "
+                             "by this fraction of their weight", float, positive=True),
+        "after_collapse": Key(1.0, "s", "keep running this long after collapse", float, nonneg=True),
+    },
+    "excitation": {
+        "duration": Key(None, "s", "stage length (default: the motion's length)", float, positive=True),
+        "motion": Key(REQUIRED, "-", "sine, white_noise or record", str, ("sine", "white_noise", "record")),
+        "direction": Key("y", "-", "base acceleration direction: x, y or z", str, ("x", "y", "z")),
+        "frequency_hz": Key(None, "Hz", "sine frequency", float, positive=True),
+        "amplitude": Key(0.5, "m/s^2", "sine acceleration amplitude (the paper's Eq. 9 uses 0.5)", float,
+                         positive=True),
+        "pga_g": Key(None, "g", "scale the motion to this peak ground acceleration", float, positive=True),
+        "record": Key(None, "-", "catalogue name or file of an acceleration record", str),
+        "seed": Key(0, "-", "white-noise seed", int),
+    },
+    "rest": {
+        "duration": Key(REQUIRED, "s", "free motion under the current loads", float, positive=True),
+    },
+}
+
+
+def _check_value(where: str, key: str, spec: Key, value):
+    if isinstance(value, bool) and spec.kind is not bool:
+        raise CaseError(f"{where}: '{key}' must be {spec.kind}, got {value!r}")
+    kinds = spec.kind if isinstance(spec.kind, tuple) else (spec.kind,)
+    if float in kinds and isinstance(value, int) and not isinstance(value, bool):
+        value = float(value)
+    if not isinstance(value, kinds):
+        names = "/".join(k.__name__ for k in kinds)
+        raise CaseError(f"{where}: '{key}' must be of type {names}, got {value!r}")
+    if spec.choices and value not in spec.choices:
+        raise CaseError(f"{where}: '{key}' must be one of {list(spec.choices)}, got {value!r}")
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise CaseError(f"{where}: '{key}' must be finite, got {value!r}")
+        if spec.positive and value <= 0:
+            raise CaseError(f"{where}: '{key}' must be > 0, got {value!r}")
+        if spec.nonneg and value < 0:
+            raise CaseError(f"{where}: '{key}' must be >= 0, got {value!r}")
+    return value
+
+
+def _fill(where: str, table: dict, keys: dict[str, Key]) -> dict:
+    unknown = sorted(set(table) - set(keys))
+    if unknown:
+        raise CaseError(f"{where}: unknown key(s) {unknown}; allowed: {sorted(keys)}")
+    out = {}
+    for name, spec in keys.items():
+        if name in table:
+            out[name] = _check_value(where, name, spec, table[name])
+        elif spec.default is REQUIRED:
+            raise CaseError(f"{where}: missing required key '{name}'")
+        else:
+            out[name] = copy.deepcopy(spec.default)
+    return out
+
+
+FORCE = {"block": Key(REQUIRED, "-", "id of the free block the force acts on (at its centroid)", int),
+         "force": Key(REQUIRED, "N", "force vector [fx, fy, fz] in the platform frame", list),
+         "start": Key(0.0, "s", "time the force is switched on", float, nonneg=True),
+         "end": Key(None, "s", "time it is switched off (default: never)", float, positive=True)}
+
+MATERIAL_OVERRIDE = {"density": Key(None, "kg/m^3", "density", float, positive=True),
+                     "kn": Key(None, "N/m^3", "normal stiffness per unit area", float, positive=True),
+                     "kt": Key(None, "N/m^3", "tangential stiffness per unit area", float, positive=True),
+                     "mu": Key(None, "-", "friction coefficient", float, nonneg=True),
+                     "damping": Key(None, "-", "contact damping, fraction of critical", float, nonneg=True)}
+
+
+def _parse_value(text: str):
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text  # a bare string
+
+
+def apply_overrides(data: dict, overrides: list[str], where: str) -> dict:
+    """Apply ``key.path=value`` overrides (values in TOML syntax, bare words as strings)."""
+    data = copy.deepcopy(data)
+    for item in overrides:
+        if "=" not in item:
+            raise CaseError(f"{where}: override {item!r} is not of the form key=value")
+        path, text = item.split("=", 1)
+        parts = path.strip().split(".")
+        node = data
+        for p in parts[:-1]:
+            if p.isdigit() and isinstance(node, list):
+                node = node[int(p)]
+            else:
+                node = node.setdefault(p, {})
+        last = parts[-1]
+        if isinstance(node, list):
+            node[int(last)] = _parse_value(text.strip())
+        else:
+            node[last] = _parse_value(text.strip())
+    return data
+
+
+def load(path, overrides: list[str] | None = None) -> dict:
+    """Read, override, validate and complete a case file. Returns a plain dict with every
+    section filled (``stages`` a list of dicts with a ``type``)."""
+    p = Path(path)
+    if not p.is_file():
+        raise CaseError(f"{p}: case file not found")
+    try:
+        raw = tomllib.loads(p.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise CaseError(f"{p}: not valid TOML: {exc}") from None
+    raw = apply_overrides(raw, overrides or [], str(p))
+    return validate(raw, str(p), p.parent, p.stem)
+
+
+def validate(raw: dict, where: str, base_dir: Path, stem: str = "case") -> dict:
+    allowed = set(SECTIONS) | {"stages", "materials", "forces"}
+    unknown = sorted(set(raw) - allowed)
+    if unknown:
+        raise CaseError(f"{where}: unknown section(s) {unknown}; allowed: {sorted(allowed)}")
+    case = {name: _fill(f"{where} [{name}]", raw.get(name, {}), keys) for name, keys in SECTIONS.items()}
+    if case["case"]["name"] is None:
+        case["case"]["name"] = stem
+    geo = case["case"]["geometry"]
+    if isinstance(geo, str):
+        gp = (base_dir / geo) if not Path(geo).is_absolute() else Path(geo)
+        if not gp.is_file():
+            raise CaseError(f"{where}: [case] 'geometry': block file {gp} not found")
+        case["case"]["geometry"] = str(gp.resolve())
+    elif "generator" not in geo:
+        raise CaseError(f"{where}: [case] 'geometry' table needs a 'generator' key")
+    if isinstance(case["time"]["step"], str) and case["time"]["step"] != "auto":
+        raise CaseError(f"{where}: [time] 'step' must be a number (s) or 'auto', got {case['time']['step']!r}")
+    if isinstance(case["time"]["step"], float) and case["time"]["step"] <= 0:
+        raise CaseError(f"{where}: [time] 'step' must be > 0, got {case['time']['step']}")
+    cd = case["output"]["collapse_displacement"]
+    if isinstance(cd, str) and cd != "auto" or isinstance(cd, float) and cd <= 0:
+        raise CaseError(f"{where}: [output] 'collapse_displacement' must be > 0 (m) or 'auto', got {cd!r}")
+    for k, c in enumerate(case["output"]["contacts"]):
+        if not isinstance(c, dict) or set(c) != {"name", "blocks"} or len(c["blocks"]) != 2:
+            raise CaseError(f"{where}: [output] contacts[{k}] must be {{name = '...', blocks = [a, b]}}")
+    mats = raw.get("materials", {})
+    case["materials"] = {}
+    for name, table in mats.items():
+        filled = _fill(f"{where} [materials.{name}]", table, MATERIAL_OVERRIDE)
+        case["materials"][name] = {k: v for k, v in filled.items() if v is not None}
+    case["forces"] = []
+    for k, f in enumerate(raw.get("forces", [])):
+        w = f"{where} [[forces]] #{k + 1}"
+        if not isinstance(f, dict):
+            raise CaseError(f"{w}: must be a table")
+        filled = _fill(w, f, FORCE)
+        vec = filled["force"]
+        if len(vec) != 3 or not all(isinstance(x, (int, float)) and math.isfinite(x) for x in vec):
+            raise CaseError(f"{w}: 'force' must be three finite numbers (N)")
+        filled["force"] = [float(x) for x in vec]
+        case["forces"].append(filled)
+    stages = raw.get("stages", [])
+    if not isinstance(stages, list) or not stages:
+        raise CaseError(f"{where}: at least one [[stages]] is required")
+    case["stages"] = []
+    for k, s in enumerate(stages):
+        w = f"{where} [[stages]] #{k + 1}"
+        if not isinstance(s, dict) or "type" not in s:
+            raise CaseError(f"{w}: missing 'type' (one of {sorted(STAGES)})")
+        kind = s["type"]
+        if kind not in STAGES:
+            raise CaseError(f"{w}: unknown stage type {kind!r}; allowed: {sorted(STAGES)}")
+        body = {key: v for key, v in s.items() if key != "type"}
+        filled = _fill(w, body, STAGES[kind])
+        filled["type"] = kind
+        _check_stage(w, filled)
+        case["stages"].append(filled)
+    names = [c["name"] for c in case["output"]["contacts"]]
+    for key in ("penetration", "slip"):
+        ref = case["analysis"][key]
+        if ref is not None and ref not in names:
+            raise CaseError(f"{where}: [analysis] '{key}' names contact {ref!r}, not among [output] contacts {names}")
+    return case
+
+
+def _check_stage(where: str, s: dict):
+    kind = s["type"]
+    if kind == "gravity" and s["ramp"] is None:
+        s["ramp"] = 0.5 * s["duration"]
+    if kind == "gravity" and s["ramp"] > s["duration"]:
+        raise CaseError(f"{where}: 'ramp' ({s['ramp']} s) exceeds 'duration' ({s['duration']} s)")
+    if kind == "tilt":
+        if (s["to_deg"] is None) == (not s["until_collapse"]):
+            raise CaseError(f"{where}: give either 'to_deg' or 'until_collapse = true'")
+    if kind == "excitation":
+        m = s["motion"]
+        if m == "sine" and s["frequency_hz"] is None:
+            raise CaseError(f"{where}: a sine needs 'frequency_hz'")
+        if m == "record" and s["record"] is None:
+            raise CaseError(f"{where}: motion 'record' needs 'record' (catalogue name or file)")
+        if m != "record" and s["duration"] is None:
+            raise CaseError(f"{where}: motion {m!r} needs 'duration'")
+
+
+def describe() -> str:
+    """Markdown table of every case key (for README)."""
+    lines = ["| section | key | default | unit | meaning |", "|---|---|---|---|---|"]
+
+    def row(sec, name, k):
+        d = "required" if k.default is REQUIRED else repr(k.default)
+        lines.append(f"| {sec} | `{name}` | {d} | {k.unit} | {k.meaning} |")
+
+    for sec, keys in SECTIONS.items():
+        for name, k in keys.items():
+            row(f"[{sec}]", name, k)
+    for name, k in MATERIAL_OVERRIDE.items():
+        row("[materials.NAME]", name, k)
+    for name, k in FORCE.items():
+        row("[[forces]]", name, k)
+    for kind, keys in STAGES.items():
+        for name, k in keys.items():
+            row(f"[[stages]] type = \"{kind}\"", name, k)
+    return "\n".join(lines)

@@ -1,0 +1,50 @@
+"""Command line: python -m drystone {run, keys, compare, bench}."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from drystone import case as casemod
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="drystone", description=__doc__)
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    r = sub.add_parser("run", help="run a case file")
+    r.add_argument("case")
+    r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="override a case key, e.g. --set contact.law=stock_volumetric")
+    r.add_argument("--out", help="output folder (default results/<case name>)")
+    r.add_argument("-j", "--threads", type=int, default=1)
+    r.add_argument("-q", "--quiet", action="store_true")
+    sub.add_parser("keys", help="print the table of case-file keys (Markdown)")
+    c = sub.add_parser("compare", help="compare finished verification runs with the paper")
+    c.add_argument("folders", nargs="+")
+    sub.add_parser("bench", help="speed figures for the 40-block running-bond wall")
+    a = ap.parse_args(argv)
+    try:
+        if a.cmd == "run":
+            from drystone import runner
+            s = runner.run(a.case, a.set, a.out, a.threads, a.quiet)
+            keys = [k for k in s if k.startswith(("penetration", "slip", "collapse_angle"))]
+            print(json.dumps({k: s[k] for k in keys}, indent=1))
+        elif a.cmd == "keys":
+            print(casemod.describe())
+        elif a.cmd == "compare":
+            from postprocess import compare
+            print(compare.report(a.folders))
+        elif a.cmd == "bench":
+            from drystone import bench
+            bench.main()
+    except casemod.CaseError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except Exception as exc:  # noqa: BLE001 - report any failure clearly and exit non-zero
+        from drystone.runner import RunError
+        from geometry.blockfile import GeometryError
+        if isinstance(exc, (RunError, GeometryError)):
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
+        raise
+    return 0

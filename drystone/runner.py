@@ -1,0 +1,274 @@
+"""Run a case: validate everything, write the run specification, launch YADE, summarise.
+
+``run(case_path, overrides, out_dir=None, threads=1)`` is what ``python -m drystone run``
+and ``make run CASE=...`` call. All checks (case keys, geometry, time step, stage
+parameters) happen here, before YADE starts; YADE only simulates.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from drystone import case as casemod
+from drystone import paths, provenance, timestep
+from geometry import blockfile as bf
+from geometry import generators
+from geometry import polyhedron as ph
+
+TOWARDS = {"+x": [1.0, 0.0, 0.0], "-x": [-1.0, 0.0, 0.0], "+y": [0.0, 1.0, 0.0], "-y": [0.0, -1.0, 0.0]}
+AXES = {"x": [1.0, 0.0, 0.0], "y": [0.0, 1.0, 0.0], "z": [0.0, 0.0, 1.0]}
+#: sampling step of generated sine motions (s): at least 50 samples per period
+SINE_SAMPLES_PER_PERIOD = 50
+
+
+class RunError(RuntimeError):
+    """A run that could not be prepared or did not complete."""
+
+
+def _geometry(case: dict, where: str, out: Path) -> tuple[bf.BlockSet, dict]:
+    geo = case["case"]["geometry"]
+    if isinstance(geo, str):
+        data = json.loads(Path(geo).read_text()) if Path(geo).is_file() else None
+        bs = bf.load(geo)
+        source = {"file": geo, "sha256": hashlib.sha256(Path(geo).read_bytes()).hexdigest()}
+    else:
+        try:
+            data = generators.generate(geo)
+        except KeyError as exc:
+            raise casemod.CaseError(f"{where}: [case] geometry: {exc.args[0]}") from None
+        bs = bf.parse(data, f"{where}: generated geometry {geo['generator']!r}")
+        source = {"generator": geo}
+    bf.write(data, out / "geometry.json")
+    return bs, source
+
+
+def _materials(case: dict, bs: bf.BlockSet, where: str) -> dict:
+    mats = {}
+    for name, m in bs.materials.items():
+        d = {"density": m.density, "kn": m.kn, "kt": m.kt, "mu": m.mu, "damping": m.damping}
+        for k in ("kn", "kt", "mu", "damping"):
+            if case["contact"][k] is not None:
+                d[k] = case["contact"][k]
+        mats[name] = d
+    for name, over in case["materials"].items():
+        if name not in mats:
+            raise casemod.CaseError(f"{where}: [materials.{name}]: the geometry has no material {name!r} "
+                                    f"(it has {sorted(mats)})")
+        mats[name].update(over)
+    return mats
+
+
+def _excitation(s: dict, where: str, out: Path, k: int) -> tuple[np.ndarray, float, dict]:
+    """Acceleration samples (m/s^2), their step (s) and metadata for an excitation stage."""
+    if s["motion"] == "sine":
+        f = s["frequency_hz"]
+        dt = 1.0 / (SINE_SAMPLES_PER_PERIOD * f)
+        n = int(round(s["duration"] / dt)) + 1
+        t = np.arange(n) * dt
+        amp = s["amplitude"] if s["pga_g"] is None else s["pga_g"] * 9.80665
+        # Eq. 9: base displacement (amp / omega^2) sin(omega t) -> acceleration -amp sin(omega t)
+        acc = -amp * np.sin(2 * np.pi * f * t)
+        meta = {"motion": "sine", "frequency_hz": f, "amplitude_m_s2": amp, "duration_s": s["duration"],
+                "source": "Sacsayhuaman paper Eq. 9"}
+    else:
+        try:
+            from motions import excitation as mex  # the ground-motion package
+        except ImportError as exc:
+            raise casemod.CaseError(f"{where}: motion {s['motion']!r} needs the motions package ({exc})") from None
+        acc, dt, meta = mex.for_stage(s)
+    acc = np.asarray(acc, float)
+    if not np.all(np.isfinite(acc)):
+        raise casemod.CaseError(f"{where}: the excitation of stage {k + 1} has non-finite samples")
+    name = f"excitation_{k + 1}.npy"
+    np.save(out / name, acc)
+    meta = dict(meta, acc_file=name, dt_s=dt, pga_m_s2=float(np.abs(acc).max()),
+                pga_g=float(np.abs(acc).max() / 9.80665), direction=s["direction"])
+    return acc, dt, meta
+
+
+def resolve(case: dict, where: str, out: Path) -> dict:
+    """Turn a validated case into the run specification YADE executes."""
+    bs, geo_source = _geometry(case, where, out)
+    mats = _materials(case, bs, where)
+    ids = set(bs.ids())
+    free = set(bs.ids("free"))
+    for c in case["output"]["contacts"]:
+        for b in c["blocks"]:
+            if b not in ids:
+                raise casemod.CaseError(f"{where}: [output] contact {c['name']!r}: no block {b} in the geometry")
+    for f in case["forces"]:
+        if f["block"] not in free:
+            raise casemod.CaseError(f"{where}: [[forces]] block {f['block']} is not a free block")
+    tb = case["analysis"]["tilt_block"]
+    if tb is not None and tb not in free:
+        raise casemod.CaseError(f"{where}: [analysis] 'tilt_block' {tb} is not a free block")
+
+    blocks = [{"id": b.id, "role": b.role, "material": b.material, "vertices": b.vertices.tolist(),
+               "blocked_dofs": b.blocked_dofs} for b in bs.blocks]
+    # time step
+    damp = max([m["damping"] for m in mats.values()] + [j.get("damping", 0.0) for j in bs.joints])
+    mats_dt = {n: dict(m, damping=damp) for n, m in mats.items()}
+    dt_crit, crit = timestep.critical_step(blocks, mats_dt)
+    step = case["time"]["step"]
+    if step == "auto":
+        dt = case["time"]["safety"] * dt_crit
+    else:
+        if step > dt_crit:
+            raise casemod.CaseError(
+                f"{where}: [time] 'step' = {step:g} s exceeds the critical step {dt_crit:.3g} s "
+                f"(block {crit['block']}: mass {crit['mass_kg']:.3g} kg, contact stiffness "
+                f"{crit['stiffness_N_per_m']:.3g} N/m, damping {crit['damping']}); use a smaller step or 'auto'")
+        dt = step
+
+    # stages
+    stages, t, tilt, excitations = [], 0.0, 0.0, []
+    for k, s in enumerate(case["stages"]):
+        kind = s["type"]
+        params: dict = {}
+        if kind == "gravity":
+            params = {"ramp": s["ramp"]}
+            dur = s["duration"]
+        elif kind == "settlement":
+            if s["block"] not in ids or s["block"] in free:
+                raise casemod.CaseError(f"{where}: [[stages]] #{k + 1}: settlement block {s['block']} must be a "
+                                        "fixed block of the geometry")
+            params = {"block": s["block"], "displacement": s["displacement"]}
+            dur = s["duration"]
+        elif kind == "tilt":
+            target = s["to_deg"] if s["to_deg"] is not None else s["max_deg"]
+            if target <= tilt:
+                raise casemod.CaseError(f"{where}: [[stages]] #{k + 1}: tilt target {target} deg is not above "
+                                        f"the current {tilt} deg")
+            dur = (target - tilt) / s["rate_deg_s"]
+            tilt = target
+            params = {"rate_deg_s": s["rate_deg_s"], "towards": TOWARDS[s["towards"]],
+                      "until_collapse": s["until_collapse"], "reaction_drop": s["reaction_drop"],
+                      "after_collapse": s["after_collapse"]}
+        elif kind == "excitation":
+            acc, sdt, meta = _excitation(s, where, out, k)
+            dur = s["duration"] if s["duration"] is not None else (len(acc) - 1) * sdt
+            params = {"acc_file": meta["acc_file"], "dt": sdt, "direction": AXES[s["direction"]]}
+            excitations.append(dict(meta, stage=k + 1))
+        else:  # rest
+            dur = s["duration"]
+        stages.append({"kind": kind, "start": t, "end": t + dur, "params": params})
+        t += dur
+
+    threshold = {}
+    cd = case["output"]["collapse_displacement"]
+    for b in bs.blocks:
+        if b.role == "free":
+            threshold[str(b.id)] = float(cd) if cd != "auto" else 0.5 * float(ph.extent(b.vertices).min())
+    joint_overrides = {}
+    for j in bs.joints:
+        a, b = sorted(j["blocks"])
+        joint_overrides[f"{a}-{b}"] = {k: v for k, v in j.items() if k != "blocks"}
+    free_areas = [timestep.largest_face_area(b["vertices"]) for b in blocks if b["role"] == "free"]
+    return {
+        "name": case["case"]["name"], "out_dir": str(out), "law": case["contact"]["law"],
+        "dt": dt, "dt_critical": dt_crit, "dt_critical_detail": crit, "gravity": case["physics"]["gravity"],
+        "materials": mats, "blocks": blocks, "joint_overrides": joint_overrides,
+        "control_points": bs.control_points, "stages": stages, "forces": case["forces"],
+        "output": {"interval": case["output"]["interval"], "contacts": case["output"]["contacts"]},
+        "collapse_threshold": threshold, "stock_shear_area": float(np.mean(free_areas)),
+        "geometry_source": geo_source, "excitations": excitations, "analysis": case["analysis"],
+    }
+
+
+def _yade_command(spec_path: Path, threads: int) -> list[str]:
+    yade = shutil.which("yade") or "/usr/bin/yade"
+    script = paths.ROOT / "yade_scripts" / "run_case.py"
+    return [sys.executable, yade, "-n", "-x", "-j", str(threads), str(script), str(spec_path)]
+
+
+NOISE = ("Welcome to Yade", "TCP python prompt", "XMLRPC info provider", "Running script", "Using python version")
+
+
+def run(case_path, overrides=None, out_dir=None, threads=1, quiet=False) -> dict:
+    """Validate, simulate and summarise one case; returns the summary dict."""
+    from postprocess import summary as summ  # plain Python
+
+    case_path = Path(case_path)
+    case = casemod.load(case_path, overrides or [])
+    where = str(case_path)
+    out = Path(out_dir) if out_dir else paths.RESULTS / case["case"]["name"]
+    out.mkdir(parents=True, exist_ok=True)
+    for stale in ("summary.json", "histories.npz", "run_info.json"):
+        (out / stale).unlink(missing_ok=True)
+    spec = resolve(case, where, out)
+    spec["provenance"] = provenance.collect(case_path, case, overrides or [])
+    spec_path = out / "spec.json"
+    spec_path.write_text(json.dumps(spec, indent=1))
+    if not quiet:
+        print(f"[{spec['name']}] dt = {spec['dt']:.3g} s (critical {spec['dt_critical']:.3g} s), "
+              f"{len(spec['blocks'])} blocks, {spec['stages'][-1]['end']:.2f} s simulated, law {spec['law']}",
+              flush=True)
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(paths.ROOT), os.environ.get("PYTHONPATH", "")]),
+               PYTHONUNBUFFERED="1")
+    t0 = time.time()
+    with open(out / "log.txt", "w") as log:
+        proc = subprocess.Popen(_yade_command(spec_path, threads), stdout=subprocess.PIPE,
+                                stderr=subprocess.STDOUT, text=True, env=env, cwd=paths.ROOT)
+        for line in proc.stdout:
+            log.write(line)
+            if not quiet and not line.startswith(NOISE) and "verletDist is set to 0" not in line:
+                print(line, end="", flush=True)
+        rc = proc.wait()
+    if rc != 0 or not (out / "histories.npz").is_file():
+        tail = (out / "log.txt").read_text().splitlines()[-20:]
+        raise RunError(f"{where}: YADE failed (exit {rc}); log {out / 'log.txt'}:\n" + "\n".join(tail))
+    summary = summ.build(spec, out)
+    summary["wall_time_total_s"] = time.time() - t0
+    summ.write(summary, out)
+    return summary
+
+
+def run_dict(case_dict: dict, case_path: Path, **kw) -> dict:
+    """Write a case dict as a TOML file and run it (used by tests and sweeps)."""
+    case_path = Path(case_path)
+    case_path.write_text(to_toml(case_dict))
+    return run(case_path, **kw)
+
+
+def to_toml(d: dict) -> str:
+    """Minimal TOML writer for case dicts (tables, arrays of tables, scalars, lists)."""
+    lines = []
+
+    def scalar(v):
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, str):
+            return json.dumps(v)
+        if isinstance(v, float) and math.isinf(v):
+            return "inf"
+        if isinstance(v, dict):
+            return "{" + ", ".join(f"{k} = {scalar(x)}" for k, x in v.items()) + "}"
+        if isinstance(v, (list, tuple)):
+            return "[" + ", ".join(scalar(x) for x in v) + "]"
+        return repr(v)
+
+    for sec, body in d.items():
+        if isinstance(body, list):
+            for item in body:
+                lines.append(f"[[{sec}]]")
+                lines += [f"{k} = {scalar(v)}" for k, v in item.items()]
+                lines.append("")
+        elif sec == "materials":
+            for name, m in body.items():
+                lines.append(f"[materials.{name}]")
+                lines += [f"{k} = {scalar(v)}" for k, v in m.items()]
+                lines.append("")
+        else:
+            lines.append(f"[{sec}]")
+            lines += [f"{k} = {scalar(v)}" for k, v in body.items()]
+            lines.append("")
+    return "\n".join(lines)

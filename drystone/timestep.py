@@ -1,0 +1,47 @@
+"""Critical time step of the explicit integration, from the block geometry (no YADE).
+
+For a free block i of mass m_i whose largest face has area A_i, the stiffest contact
+mode is a normal one: the block pressed on two opposite faces by neighbours of similar
+mass, omega_i^2 = 4 K_n A_i / m_i (the Gershgorin bound of a chain of such contacts).
+Rocking modes are softer (the rocking stiffness of a face is K_n A b^2/12 against an
+inertia larger than m b^2/12). With contact damping xi (fraction of critical) the
+central-difference limit is dt_crit = (2 / omega)(sqrt(1 + xi^2) - xi).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from drystone import contact as law
+from geometry import polyhedron as ph
+
+
+def largest_face_area(vertices) -> float:
+    """Area (m^2) of the largest planar face of the convex hull of ``vertices``."""
+    h = ph.hull(vertices)
+    v = np.asarray(vertices, float)
+    tri = v[h.simplices]
+    areas = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    faces: dict[tuple, float] = {}
+    for k, a in zip(map(tuple, np.round(h.equations, 9)), areas):
+        faces[k] = faces.get(k, 0.0) + a
+    return max(faces.values())
+
+
+def critical_step(blocks, materials) -> tuple[float, dict]:
+    """(dt_crit in s, details) for blocks (list of dicts with vertices, role, material)
+    and resolved materials (dicts with density, kn, damping)."""
+    worst = None
+    for b in blocks:
+        if b["role"] != "free":
+            continue
+        m = materials[b["material"]]
+        vol = ph.volume_centroid(b["vertices"])[0]
+        mass = m["density"] * vol
+        k = 4.0 * m["kn"] * largest_face_area(b["vertices"])
+        dt = law.critical_time_step(mass, k, m["damping"])
+        if worst is None or dt < worst[0]:
+            worst = (dt, {"block": b["id"], "mass_kg": mass, "stiffness_N_per_m": k,
+                          "damping": m["damping"]})
+    if worst is None:
+        raise ValueError("no free block")
+    return worst

@@ -1,0 +1,88 @@
+"""Convex polyhedron helpers (numpy/scipy only, no YADE).
+
+A block is the convex hull of its vertices (metres). These functions give the hull's
+volume (m^3), centroid (m), face planes, and the overlap between two hulls, which is
+what the block-file validator and the time-step estimate need.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import linprog
+from scipy.spatial import ConvexHull, QhullError
+
+
+class HullError(ValueError):
+    """A vertex set that does not describe a proper convex solid."""
+
+
+def hull(vertices) -> ConvexHull:
+    """Convex hull of an (n, 3) vertex array; raises HullError if it has no volume."""
+    v = np.asarray(vertices, dtype=float)
+    if v.ndim != 2 or v.shape[1] != 3:
+        raise HullError(f"vertices must be a list of [x, y, z] triples, got shape {v.shape}")
+    if len(v) < 4:
+        raise HullError(f"a solid needs at least 4 vertices, got {len(v)}")
+    if not np.all(np.isfinite(v)):
+        raise HullError("vertices contain a non-finite number")
+    try:
+        return ConvexHull(v)
+    except QhullError as exc:
+        raise HullError("vertices are coplanar or degenerate (zero volume)") from exc
+
+
+def planes(h: ConvexHull) -> tuple[np.ndarray, np.ndarray]:
+    """Outward unit normals N (m, 3) and offsets d (m) with N @ x + d <= 0 inside."""
+    eq = h.equations
+    return eq[:, :3], eq[:, 3]
+
+
+def inner_vertices(vertices, tol: float) -> list[int]:
+    """Indices of vertices lying deeper than ``tol`` (m) inside the hull of all vertices.
+
+    Such a vertex means the intended block is not convex (a re-entrant corner), since a
+    block is built as the convex hull of its vertices.
+    """
+    v = np.asarray(vertices, dtype=float)
+    n, d = planes(hull(v))
+    depth = -(v @ n.T + d).max(axis=1)  # distance to the nearest face, >0 inside
+    return [int(i) for i in np.flatnonzero(depth > tol)]
+
+
+def volume_centroid(vertices) -> tuple[float, np.ndarray]:
+    """Volume (m^3) and centroid (m) of the convex hull of ``vertices``."""
+    v = np.asarray(vertices, dtype=float)
+    h = hull(v)
+    c0 = v[h.vertices].mean(axis=0)
+    tets = v[h.simplices] - c0  # (f, 3, 3): each face triangle with apex c0
+    vol6 = np.abs(np.einsum("ij,ij->i", tets[:, 0], np.cross(tets[:, 1], tets[:, 2])))
+    vol = vol6.sum() / 6.0
+    cent = c0 + (vol6[:, None] * tets.sum(axis=1) / 4.0).sum(axis=0) / vol6.sum()
+    return float(vol), cent
+
+
+def extent(vertices) -> np.ndarray:
+    """Axis-aligned size (dx, dy, dz) in m."""
+    v = np.asarray(vertices, dtype=float)
+    return v.max(axis=0) - v.min(axis=0)
+
+
+def overlap_thickness(va, vb) -> float:
+    """Thickness (m) of the overlap of two convex hulls: twice the radius of the largest
+    ball inside both (0 when they are disjoint or only touch).
+
+    For two blocks pressed face to face by a depth d this is exactly d; for blocks that
+    share a face it is 0. Solved as a Chebyshev-centre linear programme.
+    """
+    na, da = planes(hull(va))
+    nb, db = planes(hull(vb))
+    n = np.vstack([na, nb])
+    d = np.concatenate([da, db])
+    # maximise r subject to n.x + d + r <= 0 (unit normals), r >= 0
+    c = np.array([0.0, 0.0, 0.0, -1.0])
+    a_ub = np.hstack([n, np.ones((len(n), 1))])
+    res = linprog(c, A_ub=a_ub, b_ub=-d, bounds=[(None, None)] * 3 + [(0, None)], method="highs")
+    if res.status == 2:  # infeasible: separated
+        return 0.0
+    if not res.success:
+        raise HullError(f"overlap test failed: {res.message}")
+    return float(2.0 * res.x[3])

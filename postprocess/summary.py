@@ -1,0 +1,171 @@
+"""Turn a run's histories into ``summary.json`` (plain Python, no YADE).
+
+Conventions: positions are in the platform frame, so displacements are relative to the
+platform; SI units; rotations as rotation vectors (axis x angle, rad) of each block
+relative to its initial orientation. A block has *collapsed* when its displacement
+exceeds its collapse threshold (case key ``output.collapse_displacement``, by default half
+its smallest dimension) or it ends up lower than its initial position by more than its
+height (it fell).
+"""
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+
+from drystone import rotations
+
+
+def load_histories(out: Path) -> dict:
+    """histories.npz as a dict of arrays; named contacts under ``contacts[name][key]``."""
+    with np.load(Path(out) / "histories.npz") as z:
+        h = {k: z[k] for k in z.files}
+    contacts: dict[str, dict] = {}
+    for k in list(h):
+        if k.startswith("contact:"):
+            _, name, field = k.split(":", 2)
+            contacts.setdefault(name, {})[field] = h.pop(k)
+    h["contacts"] = contacts
+    return h
+
+
+def block_table(spec: dict, h: dict) -> dict:
+    """Per block id: residual and maximum displacement, rotation, collapsed."""
+    ids = [int(i) for i in h["block_ids"]]
+    disp = h["pos"] - h["pos0"][None]
+    rot = rotations.relative_rotation_vectors(h["quat"], h["quat0"][None])
+    heights = {b["id"]: float(np.ptp(np.asarray(b["vertices"])[:, 2])) for b in spec["blocks"]}
+    out = {}
+    for j, bid in enumerate(ids):
+        d = disp[:, j]
+        nrm = np.linalg.norm(d, axis=1)
+        thr = spec["collapse_threshold"][str(bid)]
+        fell = bool(d[-1, 2] < -heights[bid])
+        out[str(bid)] = {
+            "residual_displacement_m": d[-1].tolist(),
+            "residual_displacement_norm_m": float(nrm[-1]),
+            "max_displacement_norm_m": float(nrm.max()),
+            "residual_rotation_rad": rot[-1, j].tolist(),
+            "residual_rotation_angle_rad": float(np.linalg.norm(rot[-1, j])),
+            "collapse_threshold_m": thr,
+            "fell": fell,
+            "collapsed": bool(fell or nrm[-1] > thr),
+        }
+    return out
+
+
+def control_point_table(h: dict) -> dict:
+    """Per control point: max |relative displacement| per axis and in norm, and residual."""
+    out = {}
+    if h["cp"].size == 0:
+        return out
+    rel = h["cp"] - h["cp0"][None]
+    for j, name in enumerate(h["cp_names"]):
+        r = rel[:, j]
+        nrm = np.linalg.norm(r, axis=1)
+        out[str(name)] = {"max_abs_relative_displacement_m": np.abs(r).max(axis=0).tolist(),
+                          "max_relative_displacement_norm_m": float(nrm.max()),
+                          "residual_relative_displacement_m": r[-1].tolist()}
+    return out
+
+
+def penetration(spec: dict, h: dict, name: str) -> dict:
+    """Final normal penetration of a named contact (m), from the blocks' relative
+    displacement along the contact normal (kinematic, as the paper measures it) and from
+    the contact's overlap volume / area."""
+    c = h["contacts"][name]
+    a, b = next(x["blocks"] for x in spec["output"]["contacts"] if x["name"] == name)
+    ids = [int(i) for i in h["block_ids"]]
+    n = c["normal"][-1]
+    if not np.all(np.isfinite(n)):
+        return {f"penetration_{a}_{b}_m": None}
+
+    c_pt = c["point"][-1]
+
+    def origin(bid):
+        """Initial position of the material point of block bid that is now at c_pt."""
+        if bid not in ids:
+            return c_pt  # a non-moving block
+        j = ids.index(bid)
+        r = rotations.to_matrix(h["quat"][-1, j])
+        r0 = rotations.to_matrix(h["quat0"][j])
+        return h["pos0"][j] + r0 @ r.T @ (c_pt - h["pos"][-1, j])
+
+    kin = float((origin(b) - origin(a)) @ n)
+    area = float(c["area"][-1])
+    out = {f"penetration_{a}_{b}_m": kin}
+    if area > 0:
+        out[f"penetration_{a}_{b}_contact_m"] = float(c["volume"][-1] / area)
+        out[f"contact_area_{a}_{b}_m2"] = area
+    out[f"normal_force_{a}_{b}_N"] = float(c["fn"][-1])
+    return out
+
+
+def block_tilt_deg(h: dict, bid: int) -> np.ndarray:
+    """Rotation angle (deg) of a block over time."""
+    j = [int(i) for i in h["block_ids"]].index(bid)
+    rot = rotations.relative_rotation_vectors(h["quat"][:, j], h["quat0"][j][None])
+    return np.degrees(np.linalg.norm(rot, axis=1))
+
+
+def slip(spec: dict, h: dict, name: str, tilt_block: int | None) -> dict:
+    """First slip of a named contact: time (s), tangential and normal force (N) and, if
+    ``tilt_block`` is given, that block's tilt (deg) at that moment."""
+    c = h["contacts"][name]
+    idx = np.flatnonzero(c["slipping"])
+    if len(idx) == 0:
+        return {"slip_time_s": None, "slip_force_N": None, "slip_normal_force_N": None, "slip_tilt_deg": None}
+    i = int(idx[0])
+    ft = float(np.linalg.norm(c["ft"][i]))
+    fn = float(c["fn"][i])
+    out = {"slip_time_s": float(h["t"][i]), "slip_force_N": ft, "slip_normal_force_N": fn,
+           "slip_force_ratio": ft / fn if fn > 0 else None}
+    out["slip_tilt_deg"] = float(block_tilt_deg(h, tilt_block)[i]) if tilt_block is not None else None
+    return out
+
+
+def build(spec: dict, out: Path) -> dict:
+    """The summary of a finished run in folder ``out``."""
+    out = Path(out)
+    h = load_histories(out)
+    info = json.loads((out / "run_info.json").read_text())
+    case = json.loads(json.dumps(spec["provenance"]))
+    s = {
+        "name": spec["name"],
+        "law": spec["law"],
+        "units": "SI (m, kg, s, N, rad); angles in deg where the key says so",
+        "frame": "platform frame: x along the wall, y out of plane, z up; displacements relative to the platform",
+        "run": {k: info[k] for k in ("steps", "simulated_time_s", "wall_time_s", "us_per_step", "dt_s",
+                                     "threads", "max_contacts", "final_contacts", "stopped_early", "yade_version")},
+        "blocks": block_table(spec, h),
+        "control_points": control_point_table(h),
+        "collapse_angle_deg": None,
+        "inputs": {"geometry": spec["geometry_source"], "materials": spec["materials"],
+                   "joint_overrides": spec["joint_overrides"], "stages": spec["stages"],
+                   "excitations": spec["excitations"], "forces": spec["forces"], "dt_s": spec["dt"],
+                   "dt_critical_s": spec["dt_critical"], "gravity_m_s2": spec["gravity"],
+                   "collapse_threshold_m": spec["collapse_threshold"], "provenance": case},
+    }
+    if any(st["kind"] == "tilt" for st in spec["stages"]):
+        col = info.get("collapse")
+        s["collapse_angle_deg"] = col["angle_deg"] if col else None
+        s["collapse"] = col
+    an = spec.get("analysis", {})
+    if an.get("penetration"):
+        s.update(penetration(spec, h, an["penetration"]))
+    if an.get("slip"):
+        s.update(slip(spec, h, an["slip"], an.get("tilt_block")))
+    rv = h["reaction"][-1]
+    s["final_reaction_N"] = rv.tolist()
+    return s
+
+
+def write(summary: dict, out: Path) -> Path:
+    """Write summary.json atomically (it is the marker of a complete run)."""
+    p = Path(out) / "summary.json"
+    tmp = p.with_suffix(".tmp")
+    tmp.write_text(json.dumps(summary, indent=1, default=float))
+    os.replace(tmp, p)
+    return p

@@ -1,0 +1,179 @@
+"""Per-contact tangential force and damping for polyhedra, run every step before
+NewtonIntegrator (inside YADE only). The law itself is ``drystone.contact``; this module
+gathers YADE's contact geometry into arrays, calls it, and applies the forces.
+
+Why not the stock law alone: ``Law2_PolyhedraGeom_PolyhedraPhys_Volumetric`` (YADE
+2023.02a) keeps the running shear force in one member of the functor, shared by all
+contacts, so shear history leaks from one contact to another, and it has no damping.
+Its volumetric normal force (K_n V at the overlap centroid) is right and is kept.
+"""
+from __future__ import annotations
+
+import numpy as np
+import yade
+
+from drystone import contact as law
+from drystone import rotations
+
+
+def _padded(rows) -> np.ndarray:
+    """Stack lists of 3-vectors of different lengths, padding with the first entry."""
+    n = max(len(r) for r in rows)
+    out = np.zeros((len(rows), n, 3))
+    for i, r in enumerate(rows):
+        r = np.asarray(r, float)
+        out[i, : len(r)] = r
+        out[i, len(r):] = r[0]
+    return out
+
+
+def _face_normals(vertices) -> np.ndarray:
+    """Distinct outward unit face normals of the convex hull of ``vertices``."""
+    from scipy.spatial import ConvexHull
+    eq = ConvexHull(np.asarray(vertices, float)).equations[:, :3]
+    return np.unique(np.round(eq, 9), axis=0)
+
+
+class ContactState:
+    """Arrays describing the contacts of the current step (forces act on body B = id2)."""
+
+    def __init__(self):
+        self.clear()
+
+    def clear(self):
+        self.id1 = np.zeros(0, int)
+        self.id2 = np.zeros(0, int)
+        self.normal = np.zeros((0, 3))
+        self.point = np.zeros((0, 3))
+        self.volume = np.zeros(0)
+        self.area = np.zeros(0)
+        self.fn = np.zeros(0)  # elastic normal force magnitude, N
+        self.f_extra = np.zeros((0, 3))  # this law's force on B (damping + shear), N
+        self.shear = np.zeros((0, 3))  # total tangential force on B, N
+        self.slipping = np.zeros(0, bool)
+
+    def force_on_b(self) -> np.ndarray:
+        """Total contact force on body B (N): elastic normal + this law's part."""
+        return self.fn[:, None] * self.normal + self.f_extra
+
+
+class PenaltyCoulomb:
+    """The project's contact law, stateful over steps.
+
+    ``pairs(id1, id2) -> dict(kn, kt, mu, damping)`` gives joint properties by YADE ids;
+    ``mass`` (n_bodies,) kg with inf for non-moving bodies.
+    """
+
+    def __init__(self, pair_props, mass, local_vertices):
+        self.pair_props = pair_props
+        self.mass = np.asarray(mass, float)
+        self.vloc = _padded(local_vertices)  # repeated entries leave min/max/argmax unchanged
+        self.nloc = _padded([_face_normals(v) for v in local_vertices])
+        self._shear: dict[tuple[int, int], np.ndarray] = {}
+        self._props: dict[tuple[int, int], tuple] = {}
+        self.state = ContactState()
+
+    def _props_arrays(self, keys):
+        out = []
+        for k in keys:
+            p = self._props.get(k)
+            if p is None:
+                d = self.pair_props(*k)
+                p = (d["kn"], d["kt"], d["mu"], d["damping"])
+                self._props[k] = p
+            out.append(p)
+        a = np.array(out, float).reshape(-1, 4)
+        return a[:, 0], a[:, 1], a[:, 2], a[:, 3]
+
+    def gather(self, O):
+        """Read the real contacts with a positive overlap and the bodies' states."""
+        rows = []
+        for i in O.interactions:
+            g = i.geom
+            v = g.penetrationVolume
+            if not (g.equivalentPenetrationDepth > law.MIN_DEPTH and v > 0):
+                continue
+            rows.append((i.id1, i.id2, v) + tuple(g.normal) + tuple(g.contactPoint))
+        return np.array(rows, float).reshape(-1, 9)
+
+    def step(self, O, bodies_state):
+        """Compute and apply this step's forces. ``bodies_state``: (pos, vel, angvel, R)
+        arrays over all bodies (m, m/s, rad/s, rotation matrices)."""
+        rows = self.gather(O)
+        st = self.state
+        if len(rows) == 0:
+            st.clear()
+            self._shear = {}
+            return
+        pos, vel, angvel, rot = bodies_state
+        ia = rows[:, 0].astype(int)
+        ib = rows[:, 1].astype(int)
+        vol = rows[:, 2]
+        n = rows[:, 3:6]
+        c = rows[:, 6:9]
+        keys = list(zip(ia.tolist(), ib.tolist()))
+        kn, kt, mu, xi = self._props_arrays(keys)
+
+        # contact area from the overlap extent along the joint's face normal
+        fa = np.einsum("kij,kfj->kfi", rot[ia], self.nloc[ia])
+        fb = np.einsum("kij,kfj->kfi", rot[ib], self.nloc[ib])
+        m = law.projection_direction(n, fa, fb)
+        ga = np.einsum("kij,kvj->kvi", rot[ia], self.vloc[ia]) + pos[ia][:, None, :]
+        gb = np.einsum("kij,kvj->kvi", rot[ib], self.vloc[ib]) + pos[ib][:, None, :]
+        pa = np.einsum("kvj,kj->kv", ga, m)
+        pb = np.einsum("kvj,kj->kv", gb, m)
+        extent = law.overlap_extent(np.stack([pa.min(1), pa.max(1)], 1),
+                                    np.stack([pb.min(1), pb.max(1)], 1))
+        area = law.contact_area(vol, extent)
+
+        ra = c - pos[ia]
+        rb = c - pos[ib]
+        v_rel = (vel[ib] + np.cross(angvel[ib], rb)) - (vel[ia] + np.cross(angvel[ia], ra))
+        ma, mb = self.mass[ia], self.mass[ib]
+        with np.errstate(invalid="ignore"):
+            m_eff = np.where(np.isinf(ma), mb, np.where(np.isinf(mb), ma, ma * mb / (ma + mb)))
+        fn = kn * vol
+
+        fs_prev = np.array([self._shear.get(k, (0.0, 0.0, 0.0)) for k in keys], float).reshape(-1, 3)
+        f_t, fs_new, slipping = law.forces(n, v_rel, fn, fs_prev, area, kt, mu, xi, m_eff, O.dt)
+        f_nd = law.normal_damping(n, v_rel, fn, kn, area, xi, m_eff)
+        f_b = f_t + f_nd
+        self._shear = dict(zip(keys, fs_new))
+
+        st.id1, st.id2, st.normal, st.point, st.volume = ia, ib, n, c, vol
+        st.area, st.fn, st.f_extra, st.shear, st.slipping = area, fn, f_b, f_t, slipping
+
+        nb = len(self.mass)
+        F = np.zeros((nb, 3))
+        T = np.zeros((nb, 3))
+        np.add.at(F, ib, f_b)
+        np.add.at(F, ia, -f_b)
+        np.add.at(T, ib, np.cross(rb, f_b))
+        np.add.at(T, ia, -np.cross(ra, f_b))
+        V3 = yade.Vector3
+        for i in np.flatnonzero(np.isfinite(self.mass)):
+            O.forces.addF(int(i), V3(*F[i]))
+            O.forces.addT(int(i), V3(*T[i]))
+
+
+def stock_contacts(O) -> ContactState:
+    """Contact forces of YADE's stock volumetric law, read back for recording."""
+    st = ContactState()
+    rows = []
+    for i in O.interactions:
+        g, p = i.geom, i.phys
+        if not (g.equivalentPenetrationDepth > law.MIN_DEPTH and g.penetrationVolume > 0):
+            continue
+        rows.append((i.id1, i.id2, g.penetrationVolume) + tuple(g.normal) + tuple(g.contactPoint)
+                    + tuple(p.normalForce) + tuple(p.shearForce))
+    if not rows:
+        return st
+    r = np.array(rows, float)
+    st.id1, st.id2, st.volume = r[:, 0].astype(int), r[:, 1].astype(int), r[:, 2]
+    st.normal, st.point = r[:, 3:6], r[:, 6:9]
+    st.fn = np.linalg.norm(r[:, 9:12], axis=1)
+    st.shear = r[:, 12:15]
+    st.f_extra = st.shear
+    st.area = np.full(len(r), np.nan)
+    st.slipping = np.zeros(len(r), bool)
+    return st

@@ -1,0 +1,274 @@
+"""Run one resolved case inside YADE:  yade -n -x yade_scripts/run_case.py SPEC.json
+
+SPEC.json is written by ``python -m drystone run CASE.toml`` (drystone/runner.py), which
+validates the case and the geometry first; this script only simulates and writes
+``histories.npz`` and ``run_info.json`` into the output folder (under temporary names,
+renamed when complete). Units SI; the simulation runs in the platform frame
+(drystone/loading.py).
+"""
+from __future__ import annotations
+
+import builtins
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import yade
+from yade import log
+
+# the runner puts the repository root on PYTHONPATH (under yade -x, __file__ is not this file)
+from drystone.loading import LoadProgramme, Stage  # noqa: E402
+from drystone import contact as law  # noqa: E402
+from drystone import rotations  # noqa: E402
+from yade_scripts import contact_engine as ce  # noqa: E402
+from yade_scripts import scene as sc  # noqa: E402
+
+# YADE's polyhedra intersection warns "Unhandled switch case" on exactly touching faces,
+# every step; it is harmless (the contact is then treated as no overlap).
+log.setLevel("Polyhedra_support.cpp", log.ERROR)
+
+
+class Driver:
+    def __init__(self, spec: dict):
+        self.spec = spec
+        self.O = yade.Omega()
+        self.out = Path(spec["out_dir"])
+        self.tables = sc.build(spec)
+        self.newton = self.tables["newton"]
+        self.yid, self.bid = self.tables["yid"], self.tables["bid"]
+        self.dyn = np.array(self.tables["dynamic"], int)
+        O = self.O
+        nb = len(O.bodies)
+        self.mass = np.array([O.bodies[i].state.mass if O.bodies[i].dynamic else np.inf for i in range(nb)])
+        self.blocks = {b["id"]: b for b in spec["blocks"]}
+        local_v = [[tuple(v) for v in O.bodies[i].shape.v] for i in range(nb)]
+        self.pos = np.array([tuple(O.bodies[i].state.pos) for i in range(nb)])
+        self.pos0 = self.pos.copy()
+        self.vel = np.zeros((nb, 3))
+        self.angvel = np.zeros((nb, 3))
+        self.quat = np.array([tuple(O.bodies[i].state.ori) for i in range(nb)])
+        self.quat0 = self.quat.copy()
+        self.rot = rotations.to_matrix(self.quat)
+        self.vloc = local_v
+        self.law_name = spec["law"]
+        self.engine = ce.PenaltyCoulomb(self._pair_props, self.mass, local_v)
+        self.prog = LoadProgramme([Stage(**s) for s in spec["stages"]], spec["gravity"])
+        for s in self.prog.stages:
+            if s.kind == "excitation":
+                s.params["acc"] = np.load(self.out / s.params["acc_file"])
+        self.moving_static = [self.yid[s.params["block"]] for s in self.prog.stages if s.kind == "settlement"]
+        self.stage = -1
+        self.forces = [(self.yid[f["block"]], yade.Vector3(*f["force"]), f["start"],
+                        f["end"] if f["end"] is not None else np.inf) for f in spec["forces"]]
+        out = spec["output"]
+        self.rec_every = max(1, int(round(out["interval"] / spec["dt"])))
+        self.steps_total = int(np.ceil(self.prog.end / spec["dt"] - 1e-9))
+        self.cp = [(c["name"], self.yid[c["block"]], np.asarray(c["position"], float)) for c in spec["control_points"]]
+        # control point offsets in each body's local frame
+        self.cp_local = [self.rot[y].T @ (p - self.pos0[y]) for _, y, p in self.cp]
+        self.named = [(c["name"], self.yid[c["blocks"][0]], self.yid[c["blocks"][1]]) for c in out["contacts"]]
+        self.h = {k: [] for k in ("t", "tilt_deg", "g_eff", "base_acc", "pos", "quat", "vel", "angvel",
+                                  "cp", "reaction", "n_contacts", "kinetic", "potential", "elastic")}
+        self.hc = {name: {k: [] for k in ("fn", "ft", "normal", "point", "slipping", "area", "volume")} for name, _, _ in self.named}
+        self.w_free = float(np.sum(self.mass[self.dyn])) * spec["gravity"]
+        self.collapse = None
+        self.stop_at = None
+        self.max_contacts = 0
+        self.t_wall0 = time.time()
+        self.t_print = self.t_wall0
+        self.done = False
+
+    # -- helpers ----------------------------------------------------------------
+    def _pair_props(self, ya, yb):
+        a, b = self.blocks[self.bid[ya]], self.blocks[self.bid[yb]]
+        mats = self.spec["materials"]
+        joint = self.spec["joint_overrides"].get(f"{min(a['id'], b['id'])}-{max(a['id'], b['id'])}")
+        return law.pair_properties(mats[a["material"]], mats[b["material"]], joint)
+
+    def _read_states(self, ids):
+        B = self.O.bodies
+        for i in ids:
+            s = B[int(i)].state
+            self.pos[i] = tuple(s.pos)
+            self.vel[i] = tuple(s.vel)
+            self.angvel[i] = tuple(s.angVel)
+            self.quat[i] = tuple(s.ori)
+        self.rot[ids] = rotations.to_matrix(self.quat[ids])
+
+    def _contacts(self) -> ce.ContactState:
+        if self.law_name == "penalty_coulomb":
+            return self.engine.state
+        return ce.stock_contacts(self.O)
+
+    # -- every step ---------------------------------------------------------------
+    def step(self):
+        O = self.O
+        t = O.time
+        self.newton.gravity = yade.Vector3(*self.prog.body_acceleration(t))
+        k = self.prog.stage_index(t)
+        if k != self.stage:
+            self._enter_stage(k)
+        ids = np.concatenate([self.dyn, np.array(self.moving_static, int)]) if self.moving_static else self.dyn
+        if self.law_name == "penalty_coulomb":
+            self._read_states(ids)
+            self.engine.step(O, (self.pos, self.vel, self.angvel, self.rot))
+        for y, f, start, end in self.forces:
+            if start <= t < end:
+                O.forces.addF(y, f)
+        if O.iter % self.rec_every == 0:
+            if self.law_name != "penalty_coulomb":
+                self._read_states(ids)
+            self._record(t)
+        now = time.time()
+        if now - self.t_print > 5.0:
+            self.t_print = now
+            frac = t / self.prog.end
+            eta = (now - self.t_wall0) * (1 - frac) / max(frac, 1e-9)
+            st = self.prog.stages[k]
+            print(f"[{self.spec['name']}] t = {t:7.3f} / {self.prog.end:.3f} s ({100 * frac:5.1f} %)  "
+                  f"stage {k + 1}/{len(self.prog.stages)} {st.kind}  tilt {self.prog.tilt_deg(t):6.2f} deg  "
+                  f"contacts {len(self._contacts().fn)}  ETA {eta:6.0f} s", flush=True)
+        if self.stop_at is not None and t >= self.stop_at:
+            self.done = True
+            O.pause()
+
+    def _enter_stage(self, k):
+        self.stage = k
+        st = self.prog.stages[k]
+        print(f"[{self.spec['name']}] stage {k + 1}/{len(self.prog.stages)}: {st.kind} "
+              f"{st.start:.3f}-{st.end:.3f} s", flush=True)
+        for block, v in self.prog.imposed_velocities(self.O.time).items():
+            self.O.bodies[self.yid[block]].state.vel = yade.Vector3(*v)
+
+    def _record(self, t):
+        O = self.O
+        st = self._contacts()
+        h = self.h
+        h["t"].append(t)
+        h["tilt_deg"].append(self.prog.tilt_deg(t))
+        g = self.prog.body_acceleration(t)
+        h["g_eff"].append(g)
+        h["base_acc"].append(self.prog.base_acceleration(t))
+        d = self.dyn
+        h["pos"].append(self.pos[d].copy())
+        h["quat"].append(self.quat[d].copy())
+        h["vel"].append(self.vel[d].copy())
+        h["angvel"].append(self.angvel[d].copy())
+        h["cp"].append([self.pos[y] + self.rot[y] @ loc for (_, y, _), loc in zip(self.cp, self.cp_local)])
+        fb = st.force_on_b() if len(st.fn) else np.zeros((0, 3))
+        R = np.zeros(3)  # force of the moving blocks on the non-moving ones, N
+        if len(st.fn):
+            static_a = ~np.isfinite(self.mass[st.id1])
+            static_b = ~np.isfinite(self.mass[st.id2])
+            R -= fb[static_a].sum(axis=0)
+            R += fb[static_b].sum(axis=0)
+        h["reaction"].append(R)
+        h["n_contacts"].append(len(st.fn))
+        self.max_contacts = max(self.max_contacts, len(st.fn))
+        m = self.mass[d]
+        ke = 0.5 * np.sum(m * np.sum(self.vel[d] ** 2, axis=1))
+        for j, i in enumerate(d):
+            inertia = np.array(tuple(O.bodies[int(i)].state.inertia))
+            w_loc = self.rot[i].T @ self.angvel[i]
+            ke += 0.5 * float(np.sum(inertia * w_loc ** 2))
+        h["kinetic"].append(ke)
+        h["potential"].append(-float(np.sum(m * (self.pos[d] @ g))))
+        el = 0.0
+        if len(st.fn) and self.law_name == "penalty_coulomb":
+            ok = st.area > 0
+            el = float(np.sum(0.5 * st.fn[ok] * st.volume[ok] / st.area[ok]))
+        h["elastic"].append(el)
+        for name, ya, yb in self.named:
+            hc = self.hc[name]
+            row = np.flatnonzero(((st.id1 == ya) & (st.id2 == yb)) | ((st.id1 == yb) & (st.id2 == ya))) if len(st.fn) else []
+            if len(row) == 0:
+                for k, v in (("fn", 0.0), ("ft", np.zeros(3)), ("normal", np.full(3, np.nan)),
+                             ("point", np.full(3, np.nan)),
+                             ("slipping", False), ("area", 0.0), ("volume", 0.0)):
+                    hc[k].append(v)
+                continue
+            r = int(row[0])
+            sign = 1.0 if st.id1[r] == ya else -1.0  # orient normal and force from a to b
+            n = sign * st.normal[r]
+            f = sign * fb[r]
+            fn = float(f @ n)
+            hc["fn"].append(fn)
+            hc["ft"].append(f - fn * n)
+            hc["normal"].append(n)
+            hc["point"].append(st.point[r].copy())
+            hc["slipping"].append(bool(st.slipping[r]))
+            hc["area"].append(float(st.area[r]))
+            hc["volume"].append(float(st.volume[r]))
+        self._check_collapse(t, R)
+
+    def _check_collapse(self, t, R):
+        """Tilt stages with ``until_collapse``: stop ``after_collapse`` s after the
+        vertical reaction of the moving blocks drops by ``reaction_drop`` of their weight
+        or a block moves more than its collapse threshold."""
+        st = self.prog.stages[self.prog.stage_index(t)]
+        if self.collapse is not None or st.kind != "tilt" or not st.params.get("until_collapse"):
+            return
+        up = self.prog.true_vertical(t)
+        rv = -float(R @ up)
+        disp = np.linalg.norm(self.pos[self.dyn] - self.pos0[self.dyn], axis=1)
+        thr = np.array([self.spec["collapse_threshold"][str(self.bid[int(i)])] for i in self.dyn])
+        moved = disp > thr
+        drop = rv < (1.0 - st.params["reaction_drop"]) * self.w_free
+        if drop or moved.any():
+            order = np.argsort(-(disp / thr))
+            first = [int(self.bid[int(self.dyn[j])]) for j in order[:5] if disp[j] > 0.5 * thr[j]]
+            self.collapse = {"time_s": t, "angle_deg": self.prog.tilt_deg(t),
+                             "criterion": "reaction_drop" if drop else "displacement",
+                             "vertical_reaction_N": rv, "first_blocks": first}
+            print(f"[{self.spec['name']}] collapse at {self.collapse['angle_deg']:.2f} deg "
+                  f"(t = {t:.2f} s, {self.collapse['criterion']}), blocks {first}", flush=True)
+            self.stop_at = t + st.params["after_collapse"]
+
+    # -- run ----------------------------------------------------------------------
+    def run(self):
+        O = self.O
+        builtins._drystone_step = self.step
+        wall0 = time.time()
+        O.run(self.steps_total, True)
+        wall = time.time() - wall0
+        self._record(O.time)
+        self.save(wall)
+
+    def save(self, wall):
+        arrays = {k: np.asarray(v) for k, v in self.h.items()}
+        arrays["block_ids"] = np.array([self.bid[int(i)] for i in self.dyn])
+        arrays["mass"] = self.mass[self.dyn]
+        arrays["pos0"] = self.pos0[self.dyn]
+        arrays["quat0"] = self.quat0[self.dyn]
+        arrays["cp_names"] = np.array([c[0] for c in self.cp], dtype="U32")
+        arrays["cp0"] = np.array([c[2] for c in self.cp]).reshape(-1, 3)
+        for name, hc in self.hc.items():
+            for k, v in hc.items():
+                arrays[f"contact:{name}:{k}"] = np.asarray(v)
+        tmp = self.out / "histories.tmp.npz"
+        np.savez_compressed(tmp, **arrays)
+        os.replace(tmp, self.out / "histories.npz")
+        info = {"steps": int(self.O.iter), "simulated_time_s": float(self.O.time), "wall_time_s": wall,
+                "dt_s": float(self.O.dt), "threads": int(yade.Omega().numThreads),
+                "max_contacts": int(self.max_contacts), "final_contacts": int(self.h["n_contacts"][-1]),
+                "stopped_early": bool(self.done), "collapse": self.collapse,
+                "yade_version": yade.config.version if hasattr(yade, "config") else "unknown",
+                "us_per_step": 1e6 * wall / max(1, self.O.iter)}
+        tmp = self.out / "run_info.tmp.json"
+        tmp.write_text(json.dumps(info, indent=1))
+        os.replace(tmp, self.out / "run_info.json")
+        print(f"[{self.spec['name']}] done: {info['steps']} steps, {info['simulated_time_s']:.3f} s simulated, "
+              f"{wall:.1f} s wall ({info['us_per_step']:.0f} us/step)", flush=True)
+
+
+def main(argv):
+    if len(argv) != 1:
+        raise SystemExit("usage: yade -n -x yade_scripts/run_case.py SPEC.json")
+    spec = json.loads(Path(argv[0]).read_text())
+    Driver(spec).run()
+
+
+main(sys.argv[1:])
