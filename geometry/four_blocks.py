@@ -10,8 +10,17 @@ between them; block 1 lies flat across both with its centre of mass over block 3
 (x = -0.025 m), block 2 flat on block 1. When block 3 settles by s, block 1 pivots on the
 top edge of block 4 (x = 0) and rests on the far top edge of block 3 (x = -0.05 m), so its
 tilt is atan(s / 0.05 m): 45 deg at s = 50 mm, past the 38 deg at which block 2 must slip
-(reached at s = 0.05 tan 38 deg = 39.1 mm). Lying block 3 and 4 flat instead (0.22 m
-long along x) would give at most atan(0.05 / 0.11) = 24 deg: no slip at all.
+(reached at s = 0.05 tan 38 deg = 39.1 mm). Lying blocks 3 and 4 flat instead (0.22 m
+long along x) would give at most atan(0.05 / 0.11) = 24 deg: no slip at all. Block 1's
+centre sits 10 mm left of the pivot (X_BLOCK1), so that the centre of mass of blocks 1 and
+2 stays between the two support edges up to 45 deg (it is 7.6 mm inside at 45 deg).
+
+Block 1 rests on two edges, so its supports push perpendicular to its face, like block 1
+pushes block 2: with the same friction everywhere, blocks 1 and 2 reach their friction
+limit at the same tilt and slide off the supports together (we ran it: the stack slides
+down the edges and topples at about 17 mm of settlement). The supports are therefore
+rough, restrained blocks: joints 1-3 and 1-4 have mu = SUPPORT_MU = 1.0 (45 deg), which
+isolates the joint under test, 1-2, with the paper's 38 deg.
 """
 from __future__ import annotations
 
@@ -21,7 +30,8 @@ from . import blockfile as bf
 
 L, W, H = 0.220, 0.105, 0.050  # block length (x), width (y), height (z), m
 PIVOT_LEVER = 0.050  # m, distance from block 4's edge to block 3's far edge
-X_BLOCK1 = -0.025  # m, centre of blocks 1 and 2 (over block 3)
+X_BLOCK1 = -0.003  # m, centre of blocks 1 and 2, just left of the pivot (over block 3)
+SUPPORT_MU = 1.0  # friction of the support joints 1-3 and 1-4 (see above)
 
 
 def make(density=2200.0, kn=1.96e7, kt=0.82e7, friction_angle_deg=38.0, damping=0.08) -> dict:
@@ -43,6 +53,7 @@ def make(density=2200.0, kn=1.96e7, kt=0.82e7, friction_angle_deg=38.0, damping=
             "materials": {"stone": {"density": density, "kn": kn, "kt": kt,
                                     "friction_angle_deg": friction_angle_deg, "damping": damping}},
             "blocks": blocks,
+            "joints": [{"blocks": [1, 3], "mu": SUPPORT_MU}, {"blocks": [1, 4], "mu": SUPPORT_MU}],
             "generator": {"name": "four_blocks", "density": density, "kn": kn, "kt": kt,
                           "friction_angle_deg": friction_angle_deg, "damping": damping}}
 

@@ -117,14 +117,17 @@ class PenaltyCoulomb:
         # contact area from the overlap extent along the joint's face normal
         fa = np.einsum("kij,kfj->kfi", rot[ia], self.nloc[ia])
         fb = np.einsum("kij,kfj->kfi", rot[ib], self.nloc[ib])
-        m = law.projection_direction(n, fa, fb)
+        m, face_of_a = law.projection_direction(n, fa, fb)
         ga = np.einsum("kij,kvj->kvi", rot[ia], self.vloc[ia]) + pos[ia][:, None, :]
         gb = np.einsum("kij,kvj->kvi", rot[ib], self.vloc[ib]) + pos[ib][:, None, :]
         pa = np.einsum("kvj,kj->kv", ga, m)
         pb = np.einsum("kvj,kj->kv", gb, m)
-        extent = law.overlap_extent(np.stack([pa.min(1), pa.max(1)], 1),
-                                    np.stack([pb.min(1), pb.max(1)], 1))
-        area = law.contact_area(vol, extent)
+        lo = np.maximum(pa.min(1), pb.min(1))
+        hi = np.minimum(pa.max(1), pb.max(1))
+        cm = np.einsum("kj,kj->k", c, m)
+        # the centroid's distance from the flat face the overlap presses into
+        e = np.where(face_of_a, hi - cm, cm - lo)
+        area = law.contact_area(vol, hi - lo, e)
 
         ra = c - pos[ia]
         rb = c - pos[ib]
