@@ -226,9 +226,15 @@ def run(case_path, overrides=None, out_dir=None, threads=1, quiet=False) -> dict
     if rc != 0 or not (out / "histories.npz").is_file():
         tail = (out / "log.txt").read_text().splitlines()[-20:]
         raise RunError(f"{where}: YADE failed (exit {rc}); log {out / 'log.txt'}:\n" + "\n".join(tail))
+    from postprocess import plots
+
     summary = summ.build(spec, out)
     summary["wall_time_total_s"] = time.time() - t0
     summ.write(summary, out)
+    figures = plots.standard(out)
+    if not quiet:
+        print(f"[{spec['name']}] results in {out}: summary.json, histories.npz, "
+              + ", ".join(f.name for f in figures), flush=True)
     return summary
 
 

@@ -72,6 +72,7 @@ class PenaltyCoulomb:
         self._shear: dict[tuple[int, int], np.ndarray] = {}
         self._props: dict[tuple[int, int], tuple] = {}
         self.state = ContactState()
+        self.elastic = (0.0, 0.0)  # elastic energy (J) at the previous and current step
 
     def _props_arrays(self, keys):
         out = []
@@ -104,6 +105,7 @@ class PenaltyCoulomb:
         if len(rows) == 0:
             st.clear()
             self._shear = {}
+            self.elastic = (self.elastic[1], 0.0)
             return
         pos, vel, angvel, rot = bodies_state
         ia = rows[:, 0].astype(int)
@@ -145,6 +147,10 @@ class PenaltyCoulomb:
 
         st.id1, st.id2, st.normal, st.point, st.volume = ia, ib, n, c, vol
         st.area, st.fn, st.f_extra, st.shear, st.slipping = area, fn, f_b, f_t, slipping
+        ok = area > 0
+        e_el = float(np.sum(0.5 * fn[ok] * vol[ok] / area[ok])
+                     + np.sum(np.sum(fs_new[ok] ** 2, axis=1) / (2.0 * kt[ok] * area[ok])))
+        self.elastic = (self.elastic[1], e_el)
 
         nb = len(self.mass)
         F = np.zeros((nb, 3))

@@ -168,19 +168,17 @@ class Driver:
         h["reaction"].append(R)
         h["n_contacts"].append(len(st.fn))
         self.max_contacts = max(self.max_contacts, len(st.fn))
+        # energies at the half step t - dt/2, where leapfrog velocities live (J)
         m = self.mass[d]
         ke = 0.5 * np.sum(m * np.sum(self.vel[d] ** 2, axis=1))
-        for j, i in enumerate(d):
+        for i in d:
             inertia = np.array(tuple(O.bodies[int(i)].state.inertia))
             w_loc = self.rot[i].T @ self.angvel[i]
             ke += 0.5 * float(np.sum(inertia * w_loc ** 2))
         h["kinetic"].append(ke)
-        h["potential"].append(-float(np.sum(m * (self.pos[d] @ g))))
-        el = 0.0
-        if len(st.fn) and self.law_name == "penalty_coulomb":
-            ok = st.area > 0
-            el = float(np.sum(0.5 * st.fn[ok] * st.volume[ok] / st.area[ok]))
-        h["elastic"].append(el)
+        x_half = self.pos[d] - 0.5 * O.dt * self.vel[d]
+        h["potential"].append(-float(np.sum(m * (x_half @ g))))
+        h["elastic"].append(0.5 * sum(self.engine.elastic) if self.law_name == "penalty_coulomb" else np.nan)
         for name, ya, yb in self.named:
             hc = self.hc[name]
             row = np.flatnonzero(((st.id1 == ya) & (st.id2 == yb)) | ((st.id1 == yb) & (st.id2 == ya))) if len(st.fn) else []

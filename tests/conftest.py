@@ -1,0 +1,48 @@
+"""Shared test fixtures: output folders, matplotlib without a display, YADE runs."""
+from __future__ import annotations
+
+import os
+import shutil
+from pathlib import Path
+
+import matplotlib
+import pytest
+
+matplotlib.use("Agg")
+
+
+def pytest_addoption(parser):
+    parser.addoption("--keep-output", action="store_true",
+                     help="keep test output folders under results/tests/ instead of a temporary folder")
+
+
+@pytest.fixture
+def outdir(request, tmp_path) -> Path:
+    """A folder for a test's outputs (kept under results/tests/<test> with --keep-output)."""
+    if request.config.getoption("--keep-output"):
+        from drystone import paths
+        p = paths.RESULTS / "tests" / request.node.name
+        shutil.rmtree(p, ignore_errors=True)
+        p.mkdir(parents=True)
+        return p
+    return tmp_path
+
+
+def have_yade() -> bool:
+    return shutil.which("yade") is not None or os.path.exists("/usr/bin/yade")
+
+
+requires_yade = pytest.mark.skipif(not have_yade(), reason="YADE is not installed (run make setup)")
+
+
+def run_case(case: dict, outdir: Path, name: str = "case", **kw) -> tuple[dict, dict, dict]:
+    """Write ``case`` as TOML, run it, return (summary, histories, spec)."""
+    import json
+
+    from drystone import runner
+    from postprocess import summary as summ
+
+    out = outdir / name
+    s = runner.run_dict(case, outdir / f"{name}.toml", out_dir=out, quiet=True)
+    spec = json.loads((out / "spec.json").read_text())
+    return s, summ.load_histories(out), spec

@@ -1,0 +1,104 @@
+"""The penalty-Coulomb-damping law inside YADE, against closed forms (issue 2, §5).
+
+Blocks: 0.4 x 0.4 x 0.04 m slabs (flat, so that the push, applied at the centroid, tilts
+them by less than 1e-5 rad and the measured slip is the joint's), 2300 kg/m^3, on a rigid
+platform with K_n = 2e8, K_t = 1e8 N/m^3.
+"""
+import numpy as np
+import pytest
+
+from conftest import requires_yade, run_case
+from postprocess import summary as summ
+
+pytestmark = [requires_yade, pytest.mark.yade]
+G = 9.81
+SLAB = [0.4, 0.4, 0.04]
+MASS = 2300 * 0.4 * 0.4 * 0.04
+W = MASS * G
+
+
+def case(boxes, stages, forces=(), law="penalty_coulomb", mu=0.7, damping=0.8, interval=0.01, contacts=()):
+    c = {"case": {"geometry": {"generator": "boxes_on_platform", "mu": mu, "damping": damping, "boxes": boxes}},
+         "contact": {"law": law}, "stages": stages, "output": {"interval": interval, "contacts": list(contacts)}}
+    if forces:
+        c["forces"] = list(forces)
+    return c
+
+
+TWO = [{"id": 1, "center_xy": [0.0, 0.0], "size": SLAB}, {"id": 2, "center_xy": [0.6, 0.0], "size": SLAB}]
+SETTLE = [{"type": "gravity", "duration": 0.5, "ramp": 0.2}]
+
+
+def disp(h, block):
+    j = list(h["block_ids"]).index(block)
+    return h["pos"][:, j] - h["pos0"][j]
+
+
+def test_push_below_friction_sticks_elastically(outdir):
+    """0.4 W with mu = 0.7: the block deflects by F / (K_t A) (elastic joint) and stops:
+    drift between 0.5 s and 2 s after the push < 1e-7 m; the unloaded neighbour moves
+    < 1e-9 m (with YADE's stock law it creeps: test_stock_law_leaks_shear)."""
+    F = 0.4 * W
+    s, h, _ = run_case(case(TWO, SETTLE + [{"type": "rest", "duration": 2.5}],
+                            [{"block": 1, "force": [F, 0.0, 0.0], "start": 0.5}]), outdir)
+    t = h["t"]
+    x = disp(h, 1)[:, 0]
+    i1, i2 = np.searchsorted(t, 1.0), np.searchsorted(t, 2.5)
+    assert abs(x[i2] - x[i1]) < 1e-7
+    # elastic deflection F / (K_t A); 3 % covers the slab's tilt under the push (1.5 %)
+    assert x[-1] == pytest.approx(F / (1e8 * 0.16), rel=0.03)
+    assert np.abs(disp(h, 2)[:, :2]).max() < 1e-9  # horizontal: it only settles vertically
+
+
+def test_push_above_friction_slides_with_coulomb_acceleration(outdir):
+    """0.8 W with mu = 0.7: uniform acceleration (0.8 - 0.7) g, within 2 %."""
+    s, h, _ = run_case(case(TWO[:1], SETTLE + [{"type": "rest", "duration": 1.0}],
+                            [{"block": 1, "force": [0.8 * W, 0.0, 0.0], "start": 0.5}]), outdir)
+    t = h["t"]
+    x = disp(h, 1)[:, 0]
+    win = (t > 0.6) & (t < 1.5)
+    a = 2 * np.polyfit(t[win], x[win], 2)[0]
+    assert a == pytest.approx(0.1 * G, rel=0.02)
+
+
+def test_stacked_blocks_penetrations(outdir):
+    """Two stacked slabs: joint penetrations W/(K_n A) (top) and 2W/(K_n A) (bottom), 1 %."""
+    boxes = [{"id": 1, "center_xy": [0.0, 0.0], "size": SLAB},
+             {"id": 2, "center_xy": [0.0, 0.0], "size": SLAB, "z0": 0.04}]
+    c = case(boxes, [{"type": "gravity", "duration": 1.0, "ramp": 0.4}],
+             contacts=[{"name": "top", "blocks": [1, 2]}, {"name": "bottom", "blocks": [0, 1]}])
+    s, h, spec = run_case(c, outdir)
+    d0 = W / (2e8 * 0.16)
+    assert summ.penetration(spec, h, "top")["penetration_1_2_m"] == pytest.approx(d0, rel=0.01)
+    assert summ.penetration(spec, h, "bottom")["penetration_0_1_m"] == pytest.approx(2 * d0, rel=0.01)
+
+
+def test_drop_comes_to_rest_and_energy_never_grows(outdir):
+    """A slab dropped from 1 mm: kinetic + potential + elastic energy (recorded at the
+    half step) never grows by more than 1e-3 of the drop energy, and the slab comes to
+    rest at its static penetration. The step is 2e-5 s, 1/16 of the automatic one: at
+    the automatic step the slab moves 45 um in the step it touches down, ten times its
+    static penetration, and that first step alone adds ~10 % of the drop energy (the
+    penalty force starts one step late: explicit integration, not the law)."""
+    boxes = [{"id": 1, "center_xy": [0.0, 0.0], "size": SLAB, "z0": 0.001}]
+    c = case(boxes, [{"type": "gravity", "duration": 0.3, "ramp": 0.0}], damping=0.08, interval=2e-4)
+    c["time"] = {"step": 2e-5}
+    s, h, _ = run_case(c, outdir)
+    e = h["kinetic"] + h["potential"] + h["elastic"]
+    scale = W * 0.001
+    assert np.max(np.diff(e)) < 1e-3 * scale
+    assert e[-1] < e[0]
+    assert h["kinetic"][-1] < 1e-6 * scale
+    z = disp(h, 1)[-1, 2]
+    assert z == pytest.approx(-0.001 - W / (2e8 * 0.16), abs=1e-7)
+
+
+def test_stock_law_leaks_shear(outdir):
+    """Characterises YADE 2023.02a's stock law: its single running shear force, shared by
+    all contacts, makes the unloaded neighbour creep when only block 1 is pushed below
+    its friction limit (our law: < 1e-9 m, test above)."""
+    F = 0.4 * W
+    s, h, _ = run_case(case(TWO, SETTLE + [{"type": "rest", "duration": 1.0}],
+                            [{"block": 1, "force": [F, 0.0, 0.0], "start": 0.5}], law="stock_volumetric",
+                            damping=0.0), outdir)
+    assert np.abs(disp(h, 2)[:, 0]).max() > 1e-6
