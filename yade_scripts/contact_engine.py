@@ -67,6 +67,7 @@ class PenaltyCoulomb:
     def __init__(self, pair_props, mass, local_vertices):
         self.pair_props = pair_props
         self.mass = np.asarray(mass, float)
+        self.moving = np.isfinite(self.mass)
         self.vloc = _padded(local_vertices)  # repeated entries leave min/max/argmax unchanged
         self.nloc = _padded([_face_normals(v) for v in local_vertices])
         self._shear: dict[tuple[int, int], np.ndarray] = {}
@@ -117,23 +118,24 @@ class PenaltyCoulomb:
         kn, kt, mu, xi = self._props_arrays(keys)
 
         # contact area from the overlap extent along the joint's face normal
-        fa = np.einsum("kij,kfj->kfi", rot[ia], self.nloc[ia])
-        fb = np.einsum("kij,kfj->kfi", rot[ib], self.nloc[ib])
+        # face normals in the global frame, then vertex projections x.m = x_local.(R^T m) + pos.m
+        fa = np.matmul(self.nloc[ia], rot[ia].transpose(0, 2, 1))
+        fb = np.matmul(self.nloc[ib], rot[ib].transpose(0, 2, 1))
         m, face_of_a = law.projection_direction(n, fa, fb)
-        ga = np.einsum("kij,kvj->kvi", rot[ia], self.vloc[ia]) + pos[ia][:, None, :]
-        gb = np.einsum("kij,kvj->kvi", rot[ib], self.vloc[ib]) + pos[ib][:, None, :]
-        pa = np.einsum("kvj,kj->kv", ga, m)
-        pb = np.einsum("kvj,kj->kv", gb, m)
+        pa = np.matmul(self.vloc[ia], np.matmul(rot[ia].transpose(0, 2, 1), m[:, :, None]))[:, :, 0]
+        pb = np.matmul(self.vloc[ib], np.matmul(rot[ib].transpose(0, 2, 1), m[:, :, None]))[:, :, 0]
+        pa += law.dot(pos[ia], m)[:, None]
+        pb += law.dot(pos[ib], m)[:, None]
         lo = np.maximum(pa.min(1), pb.min(1))
         hi = np.minimum(pa.max(1), pb.max(1))
-        cm = np.einsum("kj,kj->k", c, m)
+        cm = law.dot(c, m)
         # the centroid's distance from the flat face the overlap presses into
         e = np.where(face_of_a, hi - cm, cm - lo)
         area = law.contact_area(vol, hi - lo, e)
 
         ra = c - pos[ia]
         rb = c - pos[ib]
-        v_rel = (vel[ib] + np.cross(angvel[ib], rb)) - (vel[ia] + np.cross(angvel[ia], ra))
+        v_rel = (vel[ib] + law.cross(angvel[ib], rb)) - (vel[ia] + law.cross(angvel[ia], ra))
         ma, mb = self.mass[ia], self.mass[ib]
         with np.errstate(invalid="ignore"):
             m_eff = np.where(np.isinf(ma), mb, np.where(np.isinf(mb), ma, ma * mb / (ma + mb)))
@@ -152,17 +154,15 @@ class PenaltyCoulomb:
                      + np.sum(np.sum(fs_new[ok] ** 2, axis=1) / (2.0 * kt[ok] * area[ok])))
         self.elastic = (self.elastic[1], e_el)
 
-        nb = len(self.mass)
-        F = np.zeros((nb, 3))
-        T = np.zeros((nb, 3))
-        np.add.at(F, ib, f_b)
-        np.add.at(F, ia, -f_b)
-        np.add.at(T, ib, np.cross(rb, f_b))
-        np.add.at(T, ia, -np.cross(ra, f_b))
+        # accumulate per moving body and apply once per body
+        idx = np.concatenate([ib, ia])
+        F = np.concatenate([f_b, -f_b])
+        T = np.concatenate([law.cross(rb, f_b), -law.cross(ra, f_b)])
         V3 = yade.Vector3
-        for i in np.flatnonzero(np.isfinite(self.mass)):
-            O.forces.addF(int(i), V3(*F[i]))
-            O.forces.addT(int(i), V3(*T[i]))
+        for i in np.unique(idx[self.moving[idx]]).tolist():
+            sel = idx == i
+            O.forces.addF(i, V3(*F[sel].sum(axis=0).tolist()))
+            O.forces.addT(i, V3(*T[sel].sum(axis=0).tolist()))
 
 
 def stock_contacts(O) -> ContactState:

@@ -75,6 +75,7 @@ class Driver:
         self.hc = {name: {k: [] for k in ("fn", "ft", "normal", "point", "slipping", "area", "volume")} for name, _, _ in self.named}
         self.w_free = float(np.sum(self.mass[self.dyn])) * spec["gravity"]
         self.collapse = None
+        self.onset = None
         self.stop_at = None
         self.max_contacts = 0
         self.t_wall0 = time.time()
@@ -203,11 +204,25 @@ class Driver:
         self._check_collapse(t, R)
 
     def _check_collapse(self, t, R):
-        """Tilt stages with ``until_collapse``: stop ``after_collapse`` s after the
-        vertical reaction of the moving blocks drops by ``reaction_drop`` of their weight
-        or a block moves more than its collapse threshold."""
+        """Tilt stages with ``until_collapse``. Collapse is detected when the vertical
+        reaction of the moving blocks drops by ``reaction_drop`` of their weight (the
+        paper's Figure 13) or a block moves more than its collapse threshold; the run
+        stops ``after_collapse`` s later. The collapse angle is the tilt at the onset of
+        the motion that led to it: the last time the fastest block went above
+        ``onset_speed`` before the detection (sliding or toppling starts there; the
+        detection itself lags by the time the blocks need to move far)."""
         st = self.prog.stages[self.prog.stage_index(t)]
-        if self.collapse is not None or st.kind != "tilt" or not st.params.get("until_collapse"):
+        if self.collapse is not None or st.kind != "tilt":
+            return
+        speed = np.linalg.norm(self.vel[self.dyn], axis=1)
+        fastest = int(np.argmax(speed))
+        if speed[fastest] > self.spec["onset_speed"]:
+            if self.onset is None:
+                self.onset = {"time_s": t, "angle_deg": self.prog.tilt_deg(t),
+                              "block": int(self.bid[int(self.dyn[fastest])])}
+        elif speed[fastest] < 0.5 * self.spec["onset_speed"]:
+            self.onset = None
+        if not st.params.get("until_collapse"):
             return
         up = self.prog.true_vertical(t)
         rv = -float(R @ up)
@@ -218,11 +233,14 @@ class Driver:
         if drop or moved.any():
             order = np.argsort(-(disp / thr))
             first = [int(self.bid[int(self.dyn[j])]) for j in order[:5] if disp[j] > 0.5 * thr[j]]
-            self.collapse = {"time_s": t, "angle_deg": self.prog.tilt_deg(t),
+            onset = self.onset or {"time_s": t, "angle_deg": self.prog.tilt_deg(t), "block": first[0] if first else None}
+            self.collapse = {"angle_deg": onset["angle_deg"], "time_s": onset["time_s"], "onset_block": onset["block"],
+                             "detected_angle_deg": self.prog.tilt_deg(t), "detected_time_s": t,
                              "criterion": "reaction_drop" if drop else "displacement",
                              "vertical_reaction_N": rv, "first_blocks": first}
-            print(f"[{self.spec['name']}] collapse at {self.collapse['angle_deg']:.2f} deg "
-                  f"(t = {t:.2f} s, {self.collapse['criterion']}), blocks {first}", flush=True)
+            print(f"[{self.spec['name']}] collapse: motion from {onset['angle_deg']:.2f} deg, detected at "
+                  f"{self.collapse['detected_angle_deg']:.2f} deg (t = {t:.2f} s, {self.collapse['criterion']}), "
+                  f"blocks {first}", flush=True)
             self.stop_at = t + st.params["after_collapse"]
 
     # -- run ----------------------------------------------------------------------
