@@ -308,3 +308,10 @@ def describe() -> str:
         for name, k in keys.items():
             row(f"[[stages]] type = \"{kind}\"", name, k)
     return "\n".join(lines)
+
+
+def readme_with_keys(text: str) -> str:
+    """README text with the keys table between its markers replaced by ``describe()``."""
+    start, end = "<!-- keys:start -->", "<!-- keys:end -->"
+    i, j = text.index(start) + len(start), text.index(end)
+    return text[:i] + "\n" + describe() + "\n" + text[j:]

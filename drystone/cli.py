@@ -18,7 +18,8 @@ def main(argv=None) -> int:
     r.add_argument("--out", help="output folder (default results/<case name>)")
     r.add_argument("-j", "--threads", type=int, default=1)
     r.add_argument("-q", "--quiet", action="store_true")
-    sub.add_parser("keys", help="print the table of case-file keys (Markdown)")
+    k = sub.add_parser("keys", help="print the table of case-file keys (Markdown)")
+    k.add_argument("--update-readme", action="store_true", help="write the table into README.md")
     c = sub.add_parser("compare", help="compare finished verification runs with the paper")
     c.add_argument("folders", nargs="+")
     sub.add_parser("bench", help="speed figures for the 40-block running-bond wall")
@@ -30,7 +31,13 @@ def main(argv=None) -> int:
             keys = [k for k in s if k.startswith(("penetration", "slip", "collapse_angle"))]
             print(json.dumps({k: s[k] for k in keys}, indent=1))
         elif a.cmd == "keys":
-            print(casemod.describe())
+            if a.update_readme:
+                from drystone import paths
+                p = paths.ROOT / "README.md"
+                p.write_text(casemod.readme_with_keys(p.read_text()))
+                print(f"updated {p}")
+            else:
+                print(casemod.describe())
         elif a.cmd == "compare":
             from postprocess import compare
             print(compare.report(a.folders))

@@ -238,11 +238,11 @@ def run(case_path, overrides=None, out_dir=None, threads=1, quiet=False) -> dict
     return summary
 
 
-def run_dict(case_dict: dict, case_path: Path, **kw) -> dict:
-    """Write a case dict as a TOML file and run it (used by tests and sweeps)."""
+def run_dict(case_dict: dict, case_path: Path, overrides=None, **kw) -> dict:
+    """Write a case dict as a TOML file and run it (used by tests, sweeps and bench)."""
     case_path = Path(case_path)
     case_path.write_text(to_toml(case_dict))
-    return run(case_path, **kw)
+    return run(case_path, overrides, **kw)
 
 
 def to_toml(d: dict) -> str:

@@ -82,3 +82,10 @@ def test_auto_step_is_safety_times_critical(tmp_path):
     assert spec["dt_critical"] == pytest.approx(2 / w, rel=1e-9)
     assert spec["dt"] == pytest.approx(0.5 * 2 / w, rel=1e-9)
     del timestep
+
+
+def test_readme_documents_every_key():
+    """README's key table is generated from the declarations (python -m drystone keys --update-readme)."""
+    from drystone import paths
+    text = (paths.ROOT / "README.md").read_text()
+    assert casemod.readme_with_keys(text) == text

@@ -81,6 +81,7 @@ class Driver:
         self.t_wall0 = time.time()
         self.t_print = self.t_wall0
         self.done = False
+        self.python_time = 0.0  # s spent in this per-step Python engine
 
     # -- helpers ----------------------------------------------------------------
     def _pair_props(self, ya, yb):
@@ -106,6 +107,7 @@ class Driver:
 
     # -- every step ---------------------------------------------------------------
     def step(self):
+        t_py = time.perf_counter()
         O = self.O
         t = O.time
         self.newton.gravity = yade.Vector3(*self.prog.body_acceleration(t))
@@ -135,6 +137,7 @@ class Driver:
         if self.stop_at is not None and t >= self.stop_at:
             self.done = True
             O.pause()
+        self.python_time += time.perf_counter() - t_py
 
     def _enter_stage(self, k):
         self.stage = k
@@ -272,7 +275,8 @@ class Driver:
                 "max_contacts": int(self.max_contacts), "final_contacts": int(self.h["n_contacts"][-1]),
                 "stopped_early": bool(self.done), "collapse": self.collapse,
                 "yade_version": yade.config.version if hasattr(yade, "config") else "unknown",
-                "us_per_step": 1e6 * wall / max(1, self.O.iter)}
+                "us_per_step": 1e6 * wall / max(1, self.O.iter),
+                "python_us_per_step": 1e6 * self.python_time / max(1, self.O.iter)}
         tmp = self.out / "run_info.tmp.json"
         tmp.write_text(json.dumps(info, indent=1))
         os.replace(tmp, self.out / "run_info.json")
