@@ -179,7 +179,8 @@ def resolve(case: dict, where: str, out: Path) -> dict:
         "materials": mats, "blocks": blocks, "joint_overrides": joint_overrides,
         "control_points": bs.control_points, "stages": stages, "forces": case["forces"],
         "output": {"interval": case["output"]["interval"], "contacts": case["output"]["contacts"]},
-        "collapse_threshold": threshold, "onset_speed": case["output"]["onset_speed"], "stock_shear_area": float(np.mean(free_areas)),
+        "collapse_threshold": threshold, "onset_speed": case["output"]["onset_speed"],
+        "onset_window": case["output"]["onset_window"], "stock_shear_area": float(np.mean(free_areas)),
         "geometry_source": geo_source, "excitations": excitations, "analysis": case["analysis"],
     }
 

@@ -211,20 +211,26 @@ class Driver:
         reaction of the moving blocks drops by ``reaction_drop`` of their weight (the
         paper's Figure 13) or a block moves more than its collapse threshold; the run
         stops ``after_collapse`` s later. The collapse angle is the tilt at the onset of
-        the motion that led to it: the last time the fastest block went above
-        ``onset_speed`` before the detection (sliding or toppling starts there; the
-        detection itself lags by the time the blocks need to move far)."""
+        the motion that led to it: the middle of the first ``onset_window`` over which a
+        block's mean speed went above ``onset_speed`` (and stayed above half of it) before
+        the detection, which itself lags by the time the blocks need to move far."""
         st = self.prog.stages[self.prog.stage_index(t)]
         if self.collapse is not None or st.kind != "tilt":
             return
-        speed = np.linalg.norm(self.vel[self.dyn], axis=1)
-        fastest = int(np.argmax(speed))
-        if speed[fastest] > self.spec["onset_speed"]:
-            if self.onset is None:
-                self.onset = {"time_s": t, "angle_deg": self.prog.tilt_deg(t),
-                              "block": int(self.bid[int(self.dyn[fastest])])}
-        elif speed[fastest] < 0.5 * self.spec["onset_speed"]:
-            self.onset = None
+        # mean speed over the last onset_window s: filters the rocking/rattling vibrations
+        # that ride on the quasi-static lean of a block before it goes
+        ts = self.h["t"]
+        j = int(np.searchsorted(ts, t - self.spec["onset_window"]))
+        if j < len(ts) - 1 and ts[-1] > ts[j]:
+            speed = np.linalg.norm(self.h["pos"][-1] - self.h["pos"][j], axis=1) / (ts[-1] - ts[j])
+            fastest = int(np.argmax(speed))
+            t_mid = 0.5 * (ts[j] + ts[-1])
+            if speed[fastest] > self.spec["onset_speed"]:
+                if self.onset is None:
+                    self.onset = {"time_s": t_mid, "angle_deg": self.prog.tilt_deg(t_mid),
+                                  "block": int(self.bid[int(self.dyn[fastest])])}
+            elif speed[fastest] < 0.5 * self.spec["onset_speed"]:
+                self.onset = None
         if not st.params.get("until_collapse"):
             return
         up = self.prog.true_vertical(t)
