@@ -8,7 +8,7 @@ DEB_PKGS := yade python3-matplotlib python3-venv
 STAMP   := $(VENV)/.setup-stamp
 RUN     := $(PY) -m drystone
 
-.PHONY: setup system-deps test demo run gravity4 settlement4 bench clean help
+.PHONY: setup system-deps test demo run gravity4 settlement4 bench clean help records spectrum
 
 help:
 	@echo "make setup        install Debian's YADE, make .venv, install PyPI dependencies"
@@ -17,6 +17,8 @@ help:
 	@echo "make run CASE=cases/x.toml [SET='key=value ...']   run any case file"
 	@echo "make gravity4 | settlement4   the paper's four-block verification cases"
 	@echo "make bench        speed figures (not a test)"
+	@echo "make records      papers' records (user files or FEMA P695 analogues) -> results/records/catalogue.json"
+	@echo "make spectrum FILE=path [ARGS=...]   PGA, step, duration, predominant frequencies (JSON) + PNG"
 
 setup: system-deps $(STAMP)
 
@@ -55,6 +57,13 @@ demo: setup
 
 bench: setup
 	$(RUN) bench
+
+records: setup
+	$(PY) -m motions records
+
+spectrum: setup
+	@test -n "$(FILE)" || { echo "usage: make spectrum FILE=path/to/record [ARGS='--component EW --units gal --dt 0.01']"; exit 2; }
+	$(PY) -m motions spectrum "$(FILE)" $(ARGS)
 
 clean:
 	rm -rf results

@@ -26,8 +26,6 @@ from geometry import polyhedron as ph
 
 TOWARDS = {"+x": [1.0, 0.0, 0.0], "-x": [-1.0, 0.0, 0.0], "+y": [0.0, 1.0, 0.0], "-y": [0.0, -1.0, 0.0]}
 AXES = {"x": [1.0, 0.0, 0.0], "y": [0.0, 1.0, 0.0], "z": [0.0, 0.0, 1.0]}
-#: sampling step of generated sine motions (s): at least 50 samples per period
-SINE_SAMPLES_PER_PERIOD = 50
 
 
 class RunError(RuntimeError):
@@ -68,26 +66,17 @@ def _materials(case: dict, bs: bf.BlockSet, where: str) -> dict:
 
 
 def _excitation(s: dict, where: str, out: Path, k: int) -> tuple[np.ndarray, float, dict]:
-    """Acceleration samples (m/s^2), their step (s) and metadata for an excitation stage."""
-    if s["motion"] == "sine":
-        f = s["frequency_hz"]
-        dt = 1.0 / (SINE_SAMPLES_PER_PERIOD * f)
-        n = int(round(s["duration"] / dt)) + 1
-        t = np.arange(n) * dt
-        amp = s["amplitude"] if s["pga_g"] is None else s["pga_g"] * 9.80665
-        # Eq. 9: base displacement (amp / omega^2) sin(omega t) -> acceleration -amp sin(omega t)
-        acc = -amp * np.sin(2 * np.pi * f * t)
-        meta = {"motion": "sine", "frequency_hz": f, "amplitude_m_s2": amp, "duration_s": s["duration"],
-                "source": "Sacsayhuaman paper Eq. 9"}
-    else:
-        try:
-            from motions import excitation as mex  # the ground-motion package
-        except ImportError as exc:
-            raise casemod.CaseError(f"{where}: motion {s['motion']!r} needs the motions package ({exc})") from None
+    """Acceleration samples (m/s^2), their step (s) and metadata for an excitation stage
+    (sine, white noise or record: motions/excitation.py), saved beside the run."""
+    from motions import excitation as mex
+
+    try:
         acc, dt, meta = mex.for_stage(s)
+    except (ValueError, FileNotFoundError, KeyError, OSError) as exc:
+        raise casemod.CaseError(f"{where}: [[stages]] #{k + 1} ({s['motion']}): {exc}") from None
     acc = np.asarray(acc, float)
     if not np.all(np.isfinite(acc)):
-        raise casemod.CaseError(f"{where}: the excitation of stage {k + 1} has non-finite samples")
+        raise casemod.CaseError(f"{where}: [[stages]] #{k + 1}: the excitation has non-finite samples")
     name = f"excitation_{k + 1}.npy"
     np.save(out / name, acc)
     meta = dict(meta, acc_file=name, dt_s=dt, pga_m_s2=float(np.abs(acc).max()),
