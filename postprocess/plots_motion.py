@@ -28,8 +28,10 @@ def plot_record(record, path, spec: dict | None = None, summary: dict | None = N
     ax1.set_ylabel("acceleration (m/s$^2$)")
     ax1.set_xlim(record.time[0], record.time[-1])
     ax1.grid(alpha=0.3)
-    ax1.set_title(title or f"{record.event} - {record.station} - {record.component}\n"
-                  f"PGA {summary['pga_g']:.3f} g, dt {record.dt:g} s, {record.duration:.2f} s", fontsize=9)
+    import textwrap
+    head = title or (f"{record.event} - {record.station} - {record.component}\n"
+                     f"PGA {summary['pga_g']:.3f} g, dt {record.dt:g} s, {record.duration:.2f} s")
+    ax1.set_title("\n".join(textwrap.fill(line, 110) for line in head.splitlines()), fontsize=8)
     f, a = spec["freq_hz"], spec["amplitude"]
     m = (f >= spec["fmin_hz"]) & (f <= spec["fmax_hz"])
     ax2.loglog(f[m], a[m], lw=0.4, color="0.6", label="Fourier amplitude")
