@@ -110,14 +110,45 @@ def block_tilt_deg(h: dict, bid: int) -> np.ndarray:
     return np.degrees(np.linalg.norm(rot, axis=1))
 
 
+#: relative sliding (m) of the two blocks of a contact that counts as gross slip
+GROSS_SLIP = 1e-3
+
+
+def relative_sliding(h: dict, a: int, b: int) -> np.ndarray:
+    """Displacement (m) of block b's centroid in block a's frame since the first sample:
+    its norm is the sliding of b over a (rigid rotations of the pair excluded)."""
+    ids = [int(i) for i in h["block_ids"]]
+    jb = ids.index(b)
+    if a in ids:
+        ja = ids.index(a)
+        rot = rotations.to_matrix(h["quat"][:, ja])
+        rel = np.einsum("kji,kj->ki", rot, h["pos"][:, jb] - h["pos"][:, ja])
+    else:  # a non-moving block
+        rel = h["pos"][:, jb].copy()
+    return rel - rel[0]
+
+
 def slip(spec: dict, h: dict, name: str, tilt_block: int | None) -> dict:
-    """First slip of a named contact: time (s), tangential and normal force (N) and, if
-    ``tilt_block`` is given, that block's tilt (deg) at that moment."""
+    """First gross slip of a named contact: the onset of the slipping phase (the contact at
+    its Coulomb limit) that ends with block b sliding more than GROSS_SLIP over block a.
+    A transient touch of the limit that does not lead to sliding (a jolt) is not a slip.
+    Reports time (s), tangential and normal force (N), their ratio and, if ``tilt_block`` is
+    given, that block's tilt (deg) at that moment."""
     c = h["contacts"][name]
-    idx = np.flatnonzero(c["slipping"])
-    if len(idx) == 0:
-        return {"slip_time_s": None, "slip_force_N": None, "slip_normal_force_N": None, "slip_tilt_deg": None}
-    i = int(idx[0])
+    a, b = next(x["blocks"] for x in spec["output"]["contacts"] if x["name"] == name)
+    none = {"slip_time_s": None, "slip_force_N": None, "slip_normal_force_N": None,
+            "slip_force_ratio": None, "slip_tilt_deg": None}
+    if b not in [int(i) for i in h["block_ids"]]:
+        a, b = b, a
+    moved = np.flatnonzero(np.linalg.norm(relative_sliding(h, a, b), axis=1) > GROSS_SLIP)
+    flags = np.asarray(c["slipping"], bool)
+    if len(moved) == 0 or not flags[: moved[0] + 1].any():
+        return none
+    k = int(moved[0])
+    last = int(np.flatnonzero(flags[: k + 1])[-1])  # the slipping phase that leads to it
+    i = last
+    while i > 0 and flags[i - 1]:
+        i -= 1
     ft = float(np.linalg.norm(c["ft"][i]))
     fn = float(c["fn"][i])
     out = {"slip_time_s": float(h["t"][i]), "slip_force_N": ft, "slip_normal_force_N": fn,

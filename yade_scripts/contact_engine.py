@@ -154,15 +154,17 @@ class PenaltyCoulomb:
                      + np.sum(np.sum(fs_new[ok] ** 2, axis=1) / (2.0 * kt[ok] * area[ok])))
         self.elastic = (self.elastic[1], e_el)
 
-        # accumulate per moving body and apply once per body
+        # accumulate per body (bincount) and apply once per moving body in contact
+        nb = len(self.mass)
         idx = np.concatenate([ib, ia])
         F = np.concatenate([f_b, -f_b])
         T = np.concatenate([law.cross(rb, f_b), -law.cross(ra, f_b)])
+        Fs = np.stack([np.bincount(idx, F[:, k], nb) for k in range(3)], 1)
+        Ts = np.stack([np.bincount(idx, T[:, k], nb) for k in range(3)], 1)
         V3 = yade.Vector3
-        for i in np.unique(idx[self.moving[idx]]).tolist():
-            sel = idx == i
-            O.forces.addF(i, V3(*F[sel].sum(axis=0).tolist()))
-            O.forces.addT(i, V3(*T[sel].sum(axis=0).tolist()))
+        for i in np.flatnonzero(self.moving & (np.bincount(idx, minlength=nb) > 0)).tolist():
+            O.forces.addF(i, V3(*Fs[i].tolist()))
+            O.forces.addT(i, V3(*Ts[i].tolist()))
 
 
 def stock_contacts(O) -> ContactState:

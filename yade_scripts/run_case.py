@@ -42,6 +42,7 @@ class Driver:
         self.dyn = np.array(self.tables["dynamic"], int)
         O = self.O
         nb = len(O.bodies)
+        self.states = [O.bodies[i].state for i in range(nb)]
         self.mass = np.array([O.bodies[i].state.mass if O.bodies[i].dynamic else np.inf for i in range(nb)])
         self.blocks = {b["id"]: b for b in spec["blocks"]}
         local_v = [[tuple(v) for v in O.bodies[i].shape.v] for i in range(nb)]
@@ -91,13 +92,9 @@ class Driver:
         return law.pair_properties(mats[a["material"]], mats[b["material"]], joint)
 
     def _read_states(self, ids):
-        B = self.O.bodies
-        for i in ids:
-            s = B[int(i)].state
-            self.pos[i] = tuple(s.pos)
-            self.vel[i] = tuple(s.vel)
-            self.angvel[i] = tuple(s.angVel)
-            self.quat[i] = tuple(s.ori)
+        """Positions, velocities, angular velocities, orientations of bodies ``ids``."""
+        rows = np.array([(*s.pos, *s.vel, *s.angVel, *s.ori) for s in (self.states[i] for i in ids)])
+        self.pos[ids], self.vel[ids], self.angvel[ids], self.quat[ids] = rows[:, :3], rows[:, 3:6], rows[:, 6:9], rows[:, 9:]
         self.rot[ids] = rotations.to_matrix(self.quat[ids])
 
     def _contacts(self) -> ce.ContactState:
