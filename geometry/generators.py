@@ -9,6 +9,7 @@ GENERATORS = {
     "four_blocks": ("geometry.four_blocks", "make"),
     "boxes_on_platform": ("geometry.simple", "boxes_on_platform"),
     "running_bond": ("geometry.running_bond", "make"),
+    "ogawa_blocks": ("geometry.ogawa_blocks", "make"),
     "tilt_wall": ("geometry.tilt_wall", "make"),
     "sacsayhuaman": ("geometry.sacsayhuaman", "make"),
 }

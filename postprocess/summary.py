@@ -56,6 +56,20 @@ def block_table(spec: dict, h: dict) -> dict:
     return out
 
 
+def stage_residuals(spec: dict, h: dict) -> list[dict]:
+    """Displacement (m) of every free block at the end of each stage, relative to the
+    platform: the residuals after each run of a repeated excitation."""
+    disp = h["pos"] - h["pos0"][None]
+    ids = [str(int(i)) for i in h["block_ids"]]
+    out = []
+    for k, st in enumerate(spec["stages"]):
+        i = int(np.searchsorted(h["t"], st["end"] + 1e-9) - 1)
+        i = max(0, min(i, len(h["t"]) - 1))
+        out.append({"stage": k + 1, "kind": st["kind"], "end_s": st["end"], "sample_time_s": float(h["t"][i]),
+                    "displacement_m": {b: disp[i, j].tolist() for j, b in enumerate(ids)}})
+    return out
+
+
 def control_point_table(h: dict) -> dict:
     """Per control point: max |relative displacement| per axis and in norm, and residual."""
     out = {}
@@ -173,6 +187,7 @@ def build(spec: dict, out: Path) -> dict:
                                      "threads", "max_contacts", "final_contacts", "stopped_early", "yade_version")},
         "blocks": block_table(spec, h),
         "control_points": control_point_table(h),
+        "stage_residuals": stage_residuals(spec, h),
         "collapse_angle_deg": None,
         "inputs": {"geometry": spec["geometry_source"], "materials": spec["materials"],
                    "joint_overrides": spec["joint_overrides"], "stages": spec["stages"],
