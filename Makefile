@@ -8,7 +8,7 @@ DEB_PKGS := yade python3-matplotlib python3-venv
 STAMP   := $(VENV)/.setup-stamp
 RUN     := $(PY) -m drystone
 
-.PHONY: setup system-deps test demo run gravity4 settlement4 bench clean help records spectrum
+.PHONY: setup system-deps test demo run gravity4 settlement4 bench clean help records spectrum ogawa3d
 
 help:
 	@echo "make setup        install Debian's YADE, make .venv, install PyPI dependencies"
@@ -17,6 +17,7 @@ help:
 	@echo "make run CASE=cases/x.toml [SET='key=value ...']   run any case file"
 	@echo "make gravity4 | settlement4   the paper's four-block verification cases"
 	@echo "make bench        speed figures (not a test)"
+	@echo "make ogawa3d      Ogawa et al. five blocks under Kobe 1995 x 5, 3D YADE model (about 30 min)"
 	@echo "make records      papers' records (user files or FEMA P695 analogues) -> results/records/catalogue.json"
 	@echo "make spectrum FILE=path [ARGS=...]   PGA, step, duration, predominant frequencies (JSON) + PNG"
 
@@ -49,6 +50,9 @@ gravity4: setup
 
 settlement4: setup
 	$(RUN) run cases/settlement4.toml -j $(JOBS)
+
+ogawa3d: setup
+	$(RUN) run cases/ogawa_kobe_3d.toml -j $(JOBS)
 
 demo: setup
 	$(RUN) run cases/gravity4.toml -j $(JOBS)
