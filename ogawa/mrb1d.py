@@ -48,6 +48,10 @@ class Model:
     restitution: float = 1.0
     names: list[str] = field(default_factory=list)
 
+    def __post_init__(self):
+        self.mass = np.asarray(self.mass, float)
+        self.masses = self.mass.tolist()  # plain floats for the scalar loops
+
 
 @dataclass
 class Result:
@@ -66,16 +70,14 @@ def friction_forces(model: Model, v_star: np.ndarray, half_h: float, iters: int 
     """Interface forces f (N, on the upper block; the lower one gets -f) such that the
     velocities v = v_star + half_h f_net / m satisfy Coulomb's law (module docstring).
     ``f0``: a starting guess (the previous step's forces). Returns (f, sticking)."""
-    m = model.mass
+    m = model.masses
     n_if = len(model.interfaces)
-    f = np.zeros(n_if) if f0 is None else np.array(f0, float)
-    v = v_star.copy()
+    f = [0.0] * n_if if f0 is None else list(f0)
+    v = [float(x) for x in v_star]
     for k, (i, j, _) in enumerate(model.interfaces):  # the velocities the guess implies
         v[i] += half_h * f[k] / m[i]
         if j >= 0:
             v[j] -= half_h * f[k] / m[j]
-    v = v.tolist()
-    f = f.tolist()
     for _ in range(iters):
         change = 0.0
         for k, (i, j, lim) in enumerate(model.interfaces):
@@ -91,13 +93,13 @@ def friction_forces(model: Model, v_star: np.ndarray, half_h: float, iters: int 
                 change = max(change, abs(d) / max(lim, 1e-300))
         if change < tol:
             break
-    sticking = np.array([abs(f[k]) < lim * (1 - 1e-9) for k, (_, _, lim) in enumerate(model.interfaces)])
-    return np.array(f), sticking
+    sticking = [abs(f[k]) < lim * (1 - 1e-9) for k, (_, _, lim) in enumerate(model.interfaces)]
+    return f, sticking
 
 
-def _impacts(model: Model, u: np.ndarray, v: np.ndarray, sweeps: int = 50) -> None:
+def _impacts(model: Model, u: list, v: list, sweeps: int = 50) -> None:
     """Resolve impacts and overlaps between neighbours in place (module docstring)."""
-    m, e = model.mass, model.restitution
+    m, e = model.masses, model.restitution
     for _ in range(sweeps):
         hit = False
         for i, j in model.neighbours:
@@ -116,50 +118,48 @@ def _impacts(model: Model, u: np.ndarray, v: np.ndarray, sweeps: int = 50) -> No
             u[j] -= gap * wj / (wi + wj)
 
 
+def _net(model: Model, f) -> list:
+    """Net friction force on each block (N) from the interface forces."""
+    out = [0.0] * len(model.mass)
+    for k, (i, j, _) in enumerate(model.interfaces):
+        out[i] += f[k]
+        if j >= 0:
+            out[j] -= f[k]
+    return out
+
+
 def simulate(model: Model, acc: np.ndarray, dt: float, substeps: int = 1, u0=None, v0=None,
              record_every: int = 1) -> Result:
     """Integrate under base acceleration samples ``acc`` (m/s^2, step ``dt`` s), linearly
-    interpolated on ``substeps`` sub-steps per sample. Starts from u0, v0 (default rest)."""
+    interpolated on ``substeps`` sub-steps per sample. Starts from u0, v0 (default rest).
+    (Plain Python floats in the loop: five unknowns are faster so than as numpy arrays.)"""
     n = len(model.mass)
-    m = model.mass
+    m = model.mass.tolist()
     h = dt / substeps
-    u = np.zeros(n) if u0 is None else np.array(u0, float)
-    v = np.zeros(n) if v0 is None else np.array(v0, float)
+    u = [0.0] * n if u0 is None else [float(x) for x in u0]
+    v = [0.0] * n if v0 is None else [float(x) for x in v0]
     acc = np.asarray(acc, float)
-    ag = np.interp(np.arange((len(acc) - 1) * substeps + 1) * h, np.arange(len(acc)) * dt, acc)
-    a, stick = _accel(model, v, ag[0], h)
-    f = None
-    ts, us, vs, ss = [0.0], [u.copy()], [v.copy()], [stick]
+    ag = np.interp(np.arange((len(acc) - 1) * substeps + 1) * h, np.arange(len(acc)) * dt, acc).tolist()
+    f, stick = friction_forces(model, [x - 0.5 * h * ag[0] for x in v], 0.5 * h)
+    fn = _net(model, f)
+    a = [-ag[0] + fn[i] / m[i] for i in range(n)]
+    ts, us, vs, ss = [0.0], [list(u)], [list(v)], [stick]
+    hh = 0.5 * h * h
     for s in range(1, len(ag)):
-        u = u + h * v + 0.5 * h * h * a
-        v_star = v + 0.5 * h * a - 0.5 * h * ag[s]
+        u = [u[i] + h * v[i] + hh * a[i] for i in range(n)]
+        v_star = [v[i] + 0.5 * h * (a[i] - ag[s]) for i in range(n)]
         f, stick = friction_forces(model, v_star, 0.5 * h, f0=f)
-        fnet = np.zeros(n)
-        for k, (i, j, _) in enumerate(model.interfaces):
-            fnet[i] += f[k]
-            if j >= 0:
-                fnet[j] -= f[k]
-        a_new = -ag[s] + fnet / m
-        v = v + 0.5 * h * (a + a_new)
+        fn = _net(model, f)
+        a_new = [-ag[s] + fn[i] / m[i] for i in range(n)]
+        v = [v[i] + 0.5 * h * (a[i] + a_new[i]) for i in range(n)]
         _impacts(model, u, v)
         a = a_new
         if s % record_every == 0 or s == len(ag) - 1:
             ts.append(s * h)
-            us.append(u.copy())
-            vs.append(v.copy())
+            us.append(list(u))
+            vs.append(list(v))
             ss.append(stick)
     return Result(np.array(ts), np.array(us), np.array(vs), np.array(ss))
-
-
-def _accel(model: Model, v: np.ndarray, ag: float, h: float):
-    """Consistent initial acceleration: the friction that keeps velocities unchanged."""
-    f, stick = friction_forces(model, v - 0.5 * h * ag, 0.5 * h)
-    fnet = np.zeros(len(model.mass))
-    for k, (i, j, _) in enumerate(model.interfaces):
-        fnet[i] += f[k]
-        if j >= 0:
-            fnet[j] -= f[k]
-    return -ag + fnet / model.mass, stick
 
 
 # -- the paper's five-block model --------------------------------------------------
