@@ -8,7 +8,7 @@ DEB_PKGS := yade python3-matplotlib python3-venv
 STAMP   := $(VENV)/.setup-stamp
 RUN     := $(PY) -m drystone
 
-.PHONY: setup system-deps test demo run gravity4 settlement4 bench clean help records spectrum ogawa3d
+.PHONY: setup system-deps test demo run gravity4 settlement4 bench clean help records spectrum ogawa3d ogawa
 
 help:
 	@echo "make setup        install Debian's YADE, make .venv, install PyPI dependencies"
@@ -17,7 +17,8 @@ help:
 	@echo "make run CASE=cases/x.toml [SET='key=value ...']   run any case file"
 	@echo "make gravity4 | settlement4   the paper's four-block verification cases"
 	@echo "make bench        speed figures (not a test)"
-	@echo "make ogawa3d      Ogawa et al. five blocks under Kobe 1995 x 5, 3D YADE model (about 30 min)"
+	@echo "make ogawa        Ogawa et al.: Tables 1-3 check and figure, 1D friction studies and report (~15 min)"
+	@echo "make ogawa3d      the same five blocks in 3D (YADE) for the named friction sets (~25 min per set)"
 	@echo "make records      papers' records (user files or FEMA P695 analogues) -> results/records/catalogue.json"
 	@echo "make spectrum FILE=path [ARGS=...]   PGA, step, duration, predominant frequencies (JSON) + PNG"
 
@@ -51,8 +52,13 @@ gravity4: setup
 settlement4: setup
 	$(RUN) run cases/settlement4.toml -j $(JOBS)
 
+ogawa: setup
+	$(PY) -m ogawa insitu
+	$(PY) -m ogawa study
+
 ogawa3d: setup
-	$(RUN) run cases/ogawa_kobe_3d.toml -j $(JOBS)
+	$(PY) -m ogawa study3d --workers $(JOBS)
+	$(PY) -m ogawa refresh
 
 demo: setup
 	$(RUN) run cases/gravity4.toml -j $(JOBS)

@@ -1,5 +1,7 @@
-"""python -m ogawa study [--random N] [--runs R] [--substeps K] [--quick]
-python -m ogawa insitu          check Tables 1-2 averages, draw the Table 3 figure"""
+"""python -m ogawa study [--random N] [--runs R] [--substeps K]   1D friction studies
+python -m ogawa study3d [--workers N]   3D YADE model for the named sets (long)
+python -m ogawa refresh                 attach 3D results, rewrite the report
+python -m ogawa insitu                  check Tables 1-2 averages, draw the Table 3 figure"""
 from __future__ import annotations
 
 import argparse
@@ -17,12 +19,21 @@ def main(argv=None) -> int:
     s.add_argument("--substeps", type=int, default=10, help="Newmark sub-steps per record sample (10: 1e-3 s)")
     s.add_argument("--workers", type=int, default=None)
     sub.add_parser("insitu", help="Tables 1-3: averages and figure")
+    t = sub.add_parser("study3d", help="the 3D YADE model for the named friction sets (~25 min each)")
+    t.add_argument("--workers", type=int, default=None)
+    sub.add_parser("refresh", help="attach finished 3D runs to results/ogawa/summary.json, rewrite the report")
     a = ap.parse_args(argv)
     if a.cmd == "study":
         from ogawa import study
         summ = study.run(a.random, a.runs, a.substeps, workers=a.workers)
         print(json.dumps(summ["random_study"], indent=1))
         print(f"report: {study.OUT / 'report.md'}")
+    elif a.cmd == "study3d":
+        from ogawa import study
+        study.run_3d(workers=a.workers)
+    elif a.cmd == "refresh":
+        from ogawa import study
+        study.refresh()
     else:
         from ogawa import insitu
         for q, site, mine, paper, ok in insitu.check_averages():
