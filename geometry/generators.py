@@ -10,8 +10,8 @@ GENERATORS = {
     "boxes_on_platform": ("geometry.simple", "boxes_on_platform"),
     "running_bond": ("geometry.running_bond", "make"),
     "ogawa_blocks": ("geometry.ogawa_blocks", "make"),
-    "tilt_wall": ("geometry.tilt_wall", "make"),
-    "sacsayhuaman": ("geometry.sacsayhuaman", "make"),
+    "irregular_wall": ("geometry.irregular_wall", "make"),
+    "tilt_wall": ("geometry.irregular_wall", "tilt_wall"),
 }
 
 

@@ -1,0 +1,131 @@
+"""Seeded generator of irregular dry-stone walls (convex polyhedral stones).
+
+The wall face (x along the wall, z up) is cut into courses by bed joints that are
+straight lines with a small random slope (the bottom one z = 0 and the top one z = H are
+level); each course is cut into stones by straight head joints from bed joint to bed joint
+that lean by a random amount, so that stones are convex quadrilaterals with non-vertical
+joints. Neighbours share exact edge coordinates, so joints are exact (no gap, no overlap).
+Head joints of consecutive courses are offset by at least ``stagger`` x the mean stone
+length along their shared bed joint. Each stone is extruded through the thickness
+(y from -T/2 to T/2; the wall tilts out of plane towards +y). The first course is fixed to
+the platform, a 0.05 m slab under the wall (top at z = 0) one stone length wider on each
+side. Blocks are numbered course by course from the bottom, left to right, from 1; the
+platform is block 0. Units: m, kg.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+import drystone
+from . import blockfile as bf
+from . import polyhedron as ph
+
+PLATFORM_THICKNESS = 0.05  # m
+G = 9.81
+
+
+def thickness_for_weight(weight: float, density: float, length: float, height: float, g: float = G) -> float:
+    """Wall thickness (m) that gives ``weight`` (N): the stones tile the L x H face."""
+    return weight / (density * g * length * height)
+
+
+def _bed_joints(rng, length, height, n_courses, slope_max, min_course, irregularity):
+    """Bed joints as (z at x = 0, slope) per boundary, bottom and top level."""
+    mean = height / n_courses
+    for _ in range(1000):
+        z0 = np.array([k * mean + (rng.uniform(-0.2, 0.2) * irregularity * mean if 0 < k < n_courses else 0.0)
+                       for k in range(n_courses + 1)])
+        slope = np.array([rng.uniform(-slope_max, slope_max) if 0 < k < n_courses else 0.0
+                          for k in range(n_courses + 1)])
+        lo = np.minimum(np.diff(z0), np.diff(z0) + np.diff(slope) * length)
+        if lo.min() >= min_course:
+            return list(zip(z0, slope))
+    raise ValueError("could not place bed joints: lower the irregularity or the number of courses")
+
+
+def _head_joints(rng, length, lmin, lmax, avoid, gap):
+    """Joint positions along a bed joint: 0, ..., length, stones in [lmin, lmax] where
+    possible, no joint within ``gap`` of any position in ``avoid``."""
+    for _ in range(2000):
+        xs = [0.0]
+        ok = True
+        while length - xs[-1] > lmax:
+            for _try in range(50):
+                x = xs[-1] + rng.uniform(lmin, lmax)
+                if length - x >= lmin and all(abs(x - a) >= gap for a in avoid):
+                    xs.append(x)
+                    break
+            else:
+                ok = False
+                break
+        if ok:
+            xs.append(length)
+            return xs
+    raise ValueError("could not stagger the head joints: widen the stone length range or lower the stagger")
+
+
+def make(length=1.5, height=0.375, thickness=0.108, courses=7, stone_length=(0.10, 0.20), irregularity=0.3,
+         stagger=0.25, seed=0, density=2300.0, kn=2e8, kt=1e8, mu=0.4, damping=0.8, first_course="fixed",
+         name="irregular_wall") -> dict:
+    """An irregular wall as a block-file dict.
+
+    ``irregularity`` in [0, 1): 0 gives level bed joints and vertical head joints (running
+    bond); otherwise head joints lean by up to irregularity x 0.5 course height, bed joints
+    rise by up to irregularity x 0.4 course height over the wall's length and their heights
+    move by up to irregularity x 0.2 course height.
+    """
+    if not 0 <= irregularity < 1:
+        raise ValueError(f"irregularity must be in [0, 1), got {irregularity}")
+    lmin, lmax = stone_length
+    if not 0 < lmin < lmax <= length:
+        raise ValueError(f"stone_length must be 0 < min < max <= length, got {stone_length}")
+    rng = np.random.default_rng(seed)
+    ch = height / courses
+    beds = _bed_joints(rng, length, height, courses, 0.4 * irregularity * ch / length, 0.5 * ch, irregularity)
+    lean_max = 0.5 * irregularity * ch
+    gap = stagger * 0.5 * (lmin + lmax)
+    y0, y1 = -thickness / 2, thickness / 2
+
+    def z_at(k, x):
+        z0, s = beds[k]
+        return z0 + s * x
+
+    blocks = [{"id": 0, "role": "platform", "material": "stone",
+               "vertices": bf.box_vertices((length / 2, 0.0, -PLATFORM_THICKNESS / 2),
+                                           (length + 2 * lmax, thickness + 2 * lmax, PLATFORM_THICKNESS))}]
+    bid = 1
+    previous_top: list[float] = []
+    for k in range(courses):
+        xb = _head_joints(rng, length, lmin, lmax, previous_top[1:-1], gap)
+        lean = [0.0] + [rng.uniform(-lean_max, lean_max) for _ in xb[1:-1]] + [0.0]
+        xt = [x + d for x, d in zip(xb, lean)]
+        for j in range(len(xb) - 1):
+            quad = [(xb[j], z_at(k, xb[j])), (xb[j + 1], z_at(k, xb[j + 1])),
+                    (xt[j + 1], z_at(k + 1, xt[j + 1])), (xt[j], z_at(k + 1, xt[j]))]
+            verts = [[x, y, z] for x, z in quad for y in (y0, y1)]
+            if ph.inner_vertices(verts, 1e-12):
+                raise ValueError(f"stone {bid} came out non-convex; lower the irregularity")
+            blocks.append({"id": bid, "role": first_course if k == 0 else "free", "material": "stone",
+                           "vertices": verts, "label": f"course {k + 1}"})
+            bid += 1
+        previous_top = xt
+    params = dict(length=length, height=height, thickness=thickness, courses=courses,
+                  stone_length=list(stone_length), irregularity=irregularity, stagger=stagger, seed=seed,
+                  density=density, kn=kn, kt=kt, mu=mu, damping=damping, first_course=first_course)
+    return {"format": bf.FORMAT, "version": bf.VERSION, "name": name,
+            "description": f"irregular dry-stone wall, seed {seed} (geometry/irregular_wall.py)",
+            "units": {"length": "m", "mass": "kg"},
+            "materials": {"stone": {"density": density, "kn": kn, "kt": kt, "mu": mu, "damping": damping}},
+            "blocks": blocks,
+            "generator": dict(params, name="irregular_wall", drystone_version=drystone.__version__)}
+
+
+def tilt_wall(seed=0, weight=1371.0, density=2300.0, kn=2e8, kt=1e8, mu=0.4, damping=0.8, **over) -> dict:
+    """The Santa-Cruz et al. tilt-table wall of the Sacsayhuaman paper §3.2: 1500 mm long,
+    375 mm high, stones about 150 mm long (x) and 50 mm high (7 courses of 53.6 mm), about
+    100 mm deep; the thickness is chosen so the wall weighs ``weight`` = 1371 N at
+    ``density`` = 2300 kg/m^3: 0.1080 m. Contact properties: Table 1, FEM column."""
+    length, height = 1.5, 0.375
+    t = thickness_for_weight(weight, density, length, height)
+    return make(length=length, height=height, thickness=t, courses=7, stone_length=(0.10, 0.20), seed=seed,
+                density=density, kn=kn, kt=kt, mu=mu, damping=damping, name="tilt_wall", **over)

@@ -1,0 +1,65 @@
+"""Irregular wall generator (geometry/irregular_wall.py)."""
+import numpy as np
+import pytest
+
+from geometry import blockfile as bf
+from geometry import irregular_wall as iw
+
+
+def stones(d):
+    return [b for b in d["blocks"] if b["role"] != "platform"]
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_tilt_wall_valid_tiles_and_weighs_1371(seed):
+    """Convex, no overlaps (blockfile.parse), the stones tile L x H x T exactly (1e-9) and
+    the wall weighs 1371 N at 2300 kg/m^3 (paper §3.2)."""
+    d = iw.tilt_wall(seed=seed)
+    bs = bf.parse(d)
+    vol = sum(b.volume for b in bs.blocks if b.role != "platform")
+    t = d["generator"]["thickness"]
+    assert vol == pytest.approx(1.5 * 0.375 * t, rel=1e-9)
+    assert vol * 2300 * 9.81 == pytest.approx(1371, rel=1e-6)
+    assert t == pytest.approx(0.1080, abs=5e-5)
+    first = [b for b in bs.blocks if b.role == "fixed"]
+    assert first and all(np.min(b.vertices[:, 2]) == pytest.approx(0.0) for b in first)
+
+
+def test_reproducible_and_seeded():
+    assert iw.tilt_wall(seed=3) == iw.tilt_wall(seed=3)
+    assert iw.tilt_wall(seed=3)["blocks"] != iw.tilt_wall(seed=4)["blocks"]
+
+
+def test_joints_not_vertical_and_staggered():
+    """Irregular walls have leaning head joints; head joints of consecutive courses are at
+    least stagger x mean stone length apart along their shared bed joint."""
+    d = iw.make(seed=5, irregularity=0.5, stagger=0.25)
+    bf.parse(d)
+    leans, per_course = [], {}
+    for b in stones(d):
+        v = np.asarray(b["vertices"])[::2]  # the front face (y = -T/2)
+        xs = sorted(v[:, 0])
+        leans.append(abs(v[3, 0] - v[0, 0]))
+        per_course.setdefault(int(b["label"].split()[1]), []).append(v)
+    assert max(leans) > 1e-3
+    courses = [per_course[k] for k in sorted(per_course)]
+    gap = 0.25 * 0.15
+    for below, above in zip(courses[:-1], courses[1:]):
+        tops = [q[3, 0] for q in below if 1e-9 < q[3, 0] < 1.5 - 1e-9]
+        bottoms = [q[0, 0] for q in above if 1e-9 < q[0, 0] < 1.5 - 1e-9]
+        for x in bottoms:
+            assert min(abs(x - t) for t in tops) >= gap - 1e-12
+
+
+def test_zero_irregularity_is_level_and_vertical():
+    d = iw.make(seed=0, irregularity=0.0)
+    for b in stones(d):
+        v = np.asarray(b["vertices"])
+        assert len(set(np.round(v[:, 0], 12))) == 2  # two vertical head joints
+
+
+def test_bad_parameters():
+    with pytest.raises(ValueError, match="irregularity"):
+        iw.make(irregularity=1.5)
+    with pytest.raises(ValueError, match="stone_length"):
+        iw.make(stone_length=(0.3, 0.2))
