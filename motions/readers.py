@@ -77,6 +77,16 @@ def _floats(tokens, path, lineno) -> list[float]:
         raise RecordFormatError(path, lineno, f"not a number in {' '.join(tokens)!r}") from None
 
 
+
+def _append_row(rows: list, tok: list, line: str, path, k: int) -> None:
+    """Append a data row of numbers, refusing text or a row of a different width."""
+    if not _is_numeric_row(tok):
+        raise RecordFormatError(path, k, f"expected {len(rows[0]) if rows else 3} numbers, got {line.strip()!r}")
+    vals = _floats(tok, path, k)
+    if rows and len(vals) != len(rows[0]):
+        raise RecordFormatError(path, k, f"expected {len(rows[0])} values, got {len(vals)}")
+    rows.append(vals)
+
 def _is_numeric_row(tokens) -> bool:
     if not tokens:
         return False
@@ -190,12 +200,7 @@ def read_jma(path, units: str | None = None, dt: float | None = None, **_) -> li
             else:
                 labels = [normalise_component(t) for t in tok]
                 continue
-        if not _is_numeric_row(tok):
-            raise RecordFormatError(path, k, f"expected {len(rows[0]) if rows else 3} numbers, got {line.strip()!r}")
-        vals = _floats(tok, path, k)
-        if rows and len(vals) != len(rows[0]):
-            raise RecordFormatError(path, k, f"expected {len(rows[0])} values, got {len(vals)}")
-        rows.append(vals)
+        _append_row(rows, tok, line, path, k)
     if not rows:
         raise RecordFormatError(path, None, "no data rows")
     data = np.asarray(rows)
@@ -270,12 +275,7 @@ def read_cismid(path, units: str | None = None, dt: float | None = None, **_) ->
                 if {"NS", "EW", "UD"} <= set(up):
                     labels = [t for t in up if t in ("NS", "EW", "UD", "T", "TIEMPO", "TIME", "T(S)")]
                 continue
-        if not _is_numeric_row(tok):
-            raise RecordFormatError(path, k, f"expected {len(rows[0]) if rows else 3} numbers, got {line.strip()!r}")
-        vals = _floats(tok, path, k)
-        if rows and len(vals) != len(rows[0]):
-            raise RecordFormatError(path, k, f"expected {len(rows[0])} values, got {len(vals)}")
-        rows.append(vals)
+        _append_row(rows, tok, line, path, k)
     if not rows:
         raise RecordFormatError(path, None, "no data rows (3 or 4 numeric columns) after the header")
     data = np.asarray(rows)
