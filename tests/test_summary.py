@@ -42,3 +42,11 @@ def test_relative_rotation_vectors():
     assert rotations.relative_rotation_vectors(q, q0) == pytest.approx([0, 0, 0.5])
     r = rotations.to_matrix(q)
     assert r @ np.array([1.0, 0, 0]) == pytest.approx([np.cos(0.5), np.sin(0.5), 0])
+
+
+def test_block_faces_of_a_box():
+    """A box has 6 quadrilateral faces."""
+    from geometry import blockfile as bf
+    from postprocess import snapshots
+    faces = snapshots.block_faces(np.asarray(bf.box_vertices((0, 0, 0), (1, 2, 3)), float))
+    assert len(faces) == 6 and all(len(f) == 4 for f in faces)
