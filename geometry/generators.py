@@ -12,6 +12,7 @@ GENERATORS = {
     "ogawa_blocks": ("geometry.ogawa_blocks", "make"),
     "irregular_wall": ("geometry.irregular_wall", "make"),
     "tilt_wall": ("geometry.irregular_wall", "tilt_wall"),
+    "sacsayhuaman": ("geometry.sacsayhuaman", "make"),
 }
 
 

@@ -64,11 +64,28 @@ def _head_joints(rng, length, lmin, lmax, avoid, gap):
     raise ValueError("could not stagger the head joints: widen the stone length range or lower the stagger")
 
 
+def _counted_joints(rng, length, n, avoid, gap, min_fraction=0.5):
+    """Joint positions for exactly n stones: random lengths (Dirichlet, concentration 4)
+    of at least ``min_fraction`` x length / n, no joint within ``gap`` of ``avoid``."""
+    lmin = min_fraction * length / n
+    for _ in range(20000):
+        w = rng.dirichlet(np.full(n, 4.0)) * length
+        if w.min() < lmin:
+            continue
+        xs = np.concatenate([[0.0], np.cumsum(w)])
+        xs[-1] = length
+        if all(abs(x - a) >= gap for x in xs[1:-1] for a in avoid):
+            return xs.tolist()
+    raise ValueError(f"could not place {n} staggered stones in a course: lower the stagger")
+
+
 def make(length=1.5, height=0.375, thickness=0.108, courses=7, stone_length=(0.10, 0.20), irregularity=0.3,
          stagger=0.25, seed=0, density=2300.0, kn=2e8, kt=1e8, mu=0.4, damping=0.8, first_course="fixed",
-         name="irregular_wall") -> dict:
+         name="irregular_wall", stones_per_course=None) -> dict:
     """An irregular wall as a block-file dict.
 
+    ``stones_per_course``: optional list of stone counts per course (bottom first); it
+    sets the number of courses and replaces ``stone_length``.
     ``irregularity`` in [0, 1): 0 gives level bed joints and vertical head joints (running
     bond); otherwise head joints lean by up to irregularity x 0.5 course height, bed joints
     rise by up to irregularity x 0.4 course height over the wall's length and their heights
@@ -80,6 +97,8 @@ def make(length=1.5, height=0.375, thickness=0.108, courses=7, stone_length=(0.1
     if not 0 < lmin < lmax <= length:
         raise ValueError(f"stone_length must be 0 < min < max <= length, got {stone_length}")
     rng = np.random.default_rng(seed)
+    if stones_per_course is not None:
+        courses = len(stones_per_course)
     ch = height / courses
     beds = _bed_joints(rng, length, height, courses, 0.4 * irregularity * ch / length, 0.5 * ch, irregularity)
     lean_max = 0.5 * irregularity * ch
@@ -96,7 +115,11 @@ def make(length=1.5, height=0.375, thickness=0.108, courses=7, stone_length=(0.1
     bid = 1
     previous_top: list[float] = []
     for k in range(courses):
-        xb = _head_joints(rng, length, lmin, lmax, previous_top[1:-1], gap)
+        if stones_per_course is not None:
+            gap = stagger * length / stones_per_course[k]
+            xb = _counted_joints(rng, length, stones_per_course[k], previous_top[1:-1], gap)
+        else:
+            xb = _head_joints(rng, length, lmin, lmax, previous_top[1:-1], gap)
         lean = [0.0] + [rng.uniform(-lean_max, lean_max) for _ in xb[1:-1]] + [0.0]
         xt = [x + d for x, d in zip(xb, lean)]
         for j in range(len(xb) - 1):
@@ -111,7 +134,8 @@ def make(length=1.5, height=0.375, thickness=0.108, courses=7, stone_length=(0.1
         previous_top = xt
     params = dict(length=length, height=height, thickness=thickness, courses=courses,
                   stone_length=list(stone_length), irregularity=irregularity, stagger=stagger, seed=seed,
-                  density=density, kn=kn, kt=kt, mu=mu, damping=damping, first_course=first_course)
+                  density=density, kn=kn, kt=kt, mu=mu, damping=damping, first_course=first_course,
+                  stones_per_course=stones_per_course)
     return {"format": bf.FORMAT, "version": bf.VERSION, "name": name,
             "description": f"irregular dry-stone wall, seed {seed} (geometry/irregular_wall.py)",
             "units": {"length": "m", "mass": "kg"},

@@ -63,3 +63,28 @@ def test_bad_parameters():
         iw.make(irregularity=1.5)
     with pytest.raises(ValueError, match="stone_length"):
         iw.make(stone_length=(0.3, 0.2))
+
+
+def test_sacsayhuaman_numbering_roles_control_points(tmp_path):
+    """40 stones numbered 1..40 (+ platform 0); 1-7 fixed on the platform; side blocks 8,
+    9, 14, 15, 24, 25, 34 at the wall's ends with blocked_dofs 'xYZ'; A-D on top of 35, 38,
+    39, 40 at z = 4 m; the stones tile 8.64 x 4 x 0.8 m."""
+    from geometry import sacsayhuaman as sw
+    from postprocess import snapshots
+    d = sw.make(seed=1)
+    bs = bf.parse(d)
+    assert sorted(bs.ids()) == list(range(41))
+    assert bs.ids("fixed") == list(range(1, 8))
+    assert all(np.min(bs.block(b).vertices[:, 2]) == pytest.approx(0.0) for b in range(1, 8))
+    side = sorted(b.id for b in bs.blocks if b.blocked_dofs)
+    assert side == [8, 9, 14, 15, 24, 25, 34] and all(bs.block(b).blocked_dofs == "xYZ" for b in side)
+    for b in side:
+        x = bs.block(b).vertices[:, 0]
+        assert x.min() == pytest.approx(0.0) or x.max() == pytest.approx(8.64)
+    cps = {c["name"]: c for c in d["control_points"]}
+    assert {k: c["block"] for k, c in cps.items()} == {"A": 35, "B": 38, "C": 39, "D": 40}
+    assert all(c["position"][2] == pytest.approx(4.0) for c in cps.values())
+    vol = sum(b.volume for b in bs.blocks if b.role != "platform")
+    assert vol == pytest.approx(8.64 * 4.0 * 0.8, rel=1e-9)
+    bf.write(d, tmp_path / "s.json")
+    assert snapshots.elevation(tmp_path / "s.json", tmp_path / "s.png").stat().st_size > 10_000
