@@ -3,6 +3,7 @@ SHELL   := /bin/bash
 VENV    := .venv
 PY      := $(VENV)/bin/python
 JOBS    ?= 2
+PYTEST_ARGS ?= -n $(JOBS)
 SUDO    := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 DEB_PKGS := yade python3-matplotlib python3-venv
 STAMP   := $(VENV)/.setup-stamp
