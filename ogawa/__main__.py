@@ -21,6 +21,7 @@ def main(argv=None) -> int:
     sub.add_parser("insitu", help="Tables 1-3: averages and figure")
     t = sub.add_parser("study3d", help="the 3D YADE model for the named friction sets (~25 min each)")
     t.add_argument("--workers", type=int, default=None)
+    t.add_argument("--sets", nargs="*", default=None, help="named sets (default: all of ogawa.study.NAMED)")
     sub.add_parser("refresh", help="attach finished 3D runs to results/ogawa/summary.json, rewrite the report")
     a = ap.parse_args(argv)
     if a.cmd == "study":
@@ -30,7 +31,7 @@ def main(argv=None) -> int:
         print(f"report: {study.OUT / 'report.md'}")
     elif a.cmd == "study3d":
         from ogawa import study
-        study.run_3d(workers=a.workers)
+        study.run_3d(a.sets or study.NAMED, workers=a.workers)
     elif a.cmd == "refresh":
         from ogawa import study
         study.refresh()
