@@ -9,7 +9,8 @@ DEB_PKGS := yade python3-matplotlib python3-venv
 STAMP   := $(VENV)/.setup-stamp
 RUN     := $(PY) -m drystone
 
-.PHONY: setup system-deps test demo run gravity4 settlement4 bench clean help records spectrum ogawa3d ogawa
+.PHONY: setup system-deps test demo run gravity4 settlement4 bench clean help records spectrum ogawa3d ogawa \
+        sweep tilt tilt-rate tilt-sensitivity tilt-report
 
 help:
 	@echo "make setup        install Debian's YADE, make .venv, install PyPI dependencies"
@@ -22,6 +23,10 @@ help:
 	@echo "make ogawa3d      the same five blocks in 3D (YADE) for the named friction sets (~25 min per set)"
 	@echo "make records      papers' records (user files or FEMA P695 analogues) -> results/records/catalogue.json"
 	@echo "make spectrum FILE=path [ARGS=...]   PGA, step, duration, predominant frequencies (JSON) + PNG"
+	@echo "make sweep SWEEP=cases/sweeps/x.toml [DASK=tcp://host:8786|local]   a sweep, parallel and resumable"
+	@echo "make tilt         tilt-table validation: 5 generated walls (~30 min each, JOBS in parallel) + report"
+	@echo "make tilt-rate    the paper's 0.2 deg/s protocol on wall seed 0 (~90 min) + report"
+	@echo "make tilt-sensitivity   mu, K_n and Table 1's DEM calibration on wall seed 0 (7 runs) + report"
 
 setup: system-deps $(STAMP)
 
@@ -75,6 +80,25 @@ records: setup
 spectrum: setup
 	@test -n "$(FILE)" || { echo "usage: make spectrum FILE=path/to/record [ARGS='--component EW --units gal --dt 0.01']"; exit 2; }
 	$(PY) -m motions spectrum "$(FILE)" $(ARGS)
+
+sweep: setup
+	@test -n "$(SWEEP)" || { echo "usage: make sweep SWEEP=cases/sweeps/x.toml [DASK=tcp://host:8786|local]"; exit 2; }
+	$(RUN) sweep $(SWEEP) --workers $(JOBS) $(if $(DASK),--dask $(DASK))
+
+tilt: setup
+	$(RUN) sweep cases/sweeps/tilt_seeds.toml --workers $(JOBS)
+	$(PY) -m postprocess.tilt
+
+tilt-rate: setup
+	$(RUN) sweep cases/sweeps/tilt_rate.toml --workers $(JOBS)
+	$(PY) -m postprocess.tilt
+
+tilt-sensitivity: setup
+	$(RUN) sweep cases/sweeps/tilt_sensitivity.toml --workers $(JOBS)
+	$(PY) -m postprocess.tilt
+
+tilt-report: setup
+	$(PY) -m postprocess.tilt
 
 clean:
 	rm -rf results

@@ -1,4 +1,4 @@
-"""Command line: python -m drystone {run, keys, compare, bench}."""
+"""Command line: python -m drystone {run, sweep, keys, compare, bench}."""
 from __future__ import annotations
 
 import argparse
@@ -23,6 +23,14 @@ def main(argv=None) -> int:
     c = sub.add_parser("compare", help="compare finished verification runs with the paper")
     c.add_argument("folders", nargs="+")
     sub.add_parser("bench", help="speed figures for the 40-block running-bond wall")
+    w = sub.add_parser("sweep", help="run a sweep file (many overrides of one case) in parallel, resumably")
+    w.add_argument("sweep")
+    w.add_argument("--workers", type=int, default=None, help="parallel runs (default: number of cores)")
+    w.add_argument("--backend", choices=("local", "dask"), default="local")
+    w.add_argument("--dask", metavar="ADDRESS", default=None,
+                   help="Dask scheduler address (tcp://host:8786); 'local' starts a LocalCluster (implies --backend dask)")
+    w.add_argument("--only", nargs="*", default=None, metavar="RUN", help="run only these runs of the sweep")
+    w.add_argument("-j", "--threads", type=int, default=1, help="YADE threads per run (1)")
     a = ap.parse_args(argv)
     try:
         if a.cmd == "run":
@@ -41,6 +49,11 @@ def main(argv=None) -> int:
         elif a.cmd == "compare":
             from postprocess import compare
             print(compare.report(a.folders))
+        elif a.cmd == "sweep":
+            from drystone import sweep
+            backend = "dask" if a.dask else a.backend
+            res = sweep.run(a.sweep, a.workers, backend, a.dask, a.threads, a.only)
+            return 1 if res["failed"] else 0
         elif a.cmd == "bench":
             from drystone import bench
             bench.main()

@@ -210,6 +210,7 @@ def run(case_path, overrides=None, out_dir=None, threads=1, quiet=False) -> dict
                                 stderr=subprocess.STDOUT, text=True, env=env, cwd=paths.ROOT)
         for line in proc.stdout:
             log.write(line)
+            log.flush()  # sweeps read the progress of running jobs from log.txt
             if not quiet and not line.startswith(NOISE) and "verletDist is set to 0" not in line:
                 print(line, end="", flush=True)
         rc = proc.wait()

@@ -1,0 +1,307 @@
+"""Sweeps: one base case run many times with different overrides, in parallel, resumable.
+
+A sweep file (TOML) names a base case and the runs as tables of overrides (the
+``--set key=value`` of ``python -m drystone run``):
+
+    [sweep]
+    name = "tilt_seeds"              # results/<name>/<run>/ (default: file stem)
+    case = "../tilt_wall.toml"       # base case, relative to this file
+    set = ["output.interval=0.05"]   # overrides common to every run (optional)
+
+    [grid]                           # Cartesian product: one run per combination (optional)
+    "case.geometry.seed" = [0, 1, 2, 3, 4]
+
+    [[runs]]                         # and/or explicit runs (optional)
+    name = "dem"
+    set = ["contact.kn=5e7", "contact.kt=2.5e7", "contact.mu=0.7"]
+
+Every run is validated (case keys, geometry, time step) before any of them starts. A run
+whose folder holds a ``summary.json`` made with the same overrides is finished and
+skipped, so an interrupted sweep continues where it stopped; a failed run leaves
+``FAILED.txt`` (the error and its log's tail) and does not stop the others. The status of
+every run is in ``results/<name>/sweep.json``.
+
+Backends: ``local`` (default: a process pool on this machine's cores) or ``dask`` (a Dask
+distributed scheduler: ``--dask ADDRESS`` for an existing cluster, e.g. started by
+dask-jobqueue on SLURM; ``--dask local`` starts a LocalCluster here). Workers of a remote
+cluster must see this repository and ``results/`` at the same path (shared filesystem)
+and have run ``make setup``.
+"""
+from __future__ import annotations
+
+import itertools
+import json
+import os
+import re
+import threading
+import time
+import tomllib
+import traceback
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+from drystone import case as casemod
+from drystone import paths
+
+SWEEP_KEYS = {"name", "case", "set"}
+RUN_KEYS = {"name", "set"}
+
+
+@dataclass
+class Job:
+    """One run of a sweep: base case file, overrides, output folder."""
+
+    name: str
+    case: str
+    overrides: list[str]
+    out_dir: str
+    threads: int = 1
+    params: dict = field(default_factory=dict)  # the swept values, for tables
+
+
+def _run_name(params: dict) -> str:
+    parts = [f"{k.split('.')[-1]}_{v}" for k, v in params.items()]
+    return re.sub(r"[^A-Za-z0-9_.+-]", "", "-".join(parts)) or "run"
+
+
+def load(path, results: Path | None = None, threads: int = 1) -> tuple[str, list[Job]]:
+    """Read a sweep file; returns (sweep name, jobs). Raises CaseError naming the file and
+    key for unknown keys, a missing base case, duplicate run names or an empty sweep."""
+    p = Path(path)
+    where = str(p)
+    if not p.is_file():
+        raise casemod.CaseError(f"{where}: sweep file not found")
+    try:
+        raw = tomllib.loads(p.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise casemod.CaseError(f"{where}: not valid TOML: {exc}") from None
+    unknown = sorted(set(raw) - {"sweep", "grid", "runs"})
+    if unknown:
+        raise casemod.CaseError(f"{where}: unknown table(s) {unknown}; allowed: sweep, grid, runs")
+    sw = raw.get("sweep", {})
+    bad = sorted(set(sw) - SWEEP_KEYS)
+    if bad:
+        raise casemod.CaseError(f"{where}: [sweep]: unknown key(s) {bad}; allowed: {sorted(SWEEP_KEYS)}")
+    if "case" not in sw:
+        raise casemod.CaseError(f"{where}: [sweep]: missing required key 'case'")
+    base = (p.parent / sw["case"]).resolve()
+    if not base.is_file():
+        raise casemod.CaseError(f"{where}: [sweep] 'case': base case {base} not found")
+    name = sw.get("name", p.stem)
+    common = list(sw.get("set", []))
+    root = (results or paths.RESULTS) / name
+    runs: list[tuple[str, list[str], dict]] = []
+    grid = raw.get("grid", {})
+    for key, values in grid.items():
+        if not isinstance(values, list) or not values:
+            raise casemod.CaseError(f"{where}: [grid] '{key}' must be a non-empty list of values")
+    if grid:
+        keys = list(grid)
+        for combo in itertools.product(*(grid[k] for k in keys)):
+            params = dict(zip(keys, combo))
+            runs.append((_run_name(params), [f"{k}={_toml(v)}" for k, v in params.items()], params))
+    for k, r in enumerate(raw.get("runs", [])):
+        bad = sorted(set(r) - RUN_KEYS)
+        if bad or "name" not in r:
+            raise casemod.CaseError(f"{where}: [[runs]] #{k + 1}: keys must be 'name' and optional 'set' (got "
+                                    f"{sorted(r)})")
+        params = dict(item.split("=", 1) for item in r.get("set", []))
+        runs.append((r["name"], list(r.get("set", [])), params))
+    if not runs:
+        raise casemod.CaseError(f"{where}: the sweep has no runs (add [grid] or [[runs]])")
+    names = [r[0] for r in runs]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise casemod.CaseError(f"{where}: duplicate run name(s) {dup}")
+    jobs = [Job(n, str(base), common + over + [f"case.name={name}/{n}"], str(root / n), threads, params)
+            for n, over, params in runs]
+    return name, jobs
+
+
+def _toml(v) -> str:
+    if isinstance(v, str):
+        return json.dumps(v)
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    return repr(v)
+
+
+def validate(jobs: list[Job]) -> None:
+    """Check every run before anything runs: case keys and values, overrides, geometry
+    (generated or read), stages, records and time step (``runner.resolve`` into a scratch
+    folder). Raises CaseError or GeometryError naming the run."""
+    import tempfile
+
+    from drystone import runner
+    from geometry.blockfile import GeometryError
+
+    with tempfile.TemporaryDirectory() as tmp:
+        for j in jobs:
+            try:
+                runner.resolve(casemod.load(j.case, j.overrides), j.case, Path(tmp))
+            except (casemod.CaseError, GeometryError) as exc:
+                raise casemod.CaseError(f"run {j.name!r}: {exc}") from None
+
+
+def finished(job: Job) -> bool:
+    """True when the job's folder holds a complete run made with the same overrides."""
+    out = Path(job.out_dir)
+    s = out / "summary.json"
+    if not s.is_file():
+        return False
+    try:
+        done = json.loads(s.read_text())["inputs"]["provenance"]["overrides"]
+    except (KeyError, ValueError):
+        return False
+    return done == job.overrides
+
+
+def run_job(job: Job) -> dict:
+    """Run one job (in a worker process); never raises: returns a status dict."""
+    from drystone import runner
+
+    out = Path(job.out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "FAILED.txt").unlink(missing_ok=True)
+    t0 = time.time()
+    try:
+        s = runner.run(job.case, job.overrides, out_dir=out, threads=job.threads, quiet=True)
+        return {"name": job.name, "status": "done", "wall_s": time.time() - t0,
+                "collapse_angle_deg": s.get("collapse_angle_deg")}
+    except Exception as exc:  # noqa: BLE001 - one failed run must not stop the sweep
+        msg = f"{type(exc).__name__}: {exc}\n\n{traceback.format_exc()}"
+        (out / "FAILED.txt").write_text(msg)
+        return {"name": job.name, "status": "failed", "wall_s": time.time() - t0, "error": str(exc)[-2000:],
+                "log": str(out / "log.txt")}
+
+
+def _progress_line(job: Job) -> str:
+    """The last progress line of a running job's YADE log (simulated time and percent)."""
+    log = Path(job.out_dir) / "log.txt"
+    try:
+        lines = [ln for ln in log.read_text(errors="replace").splitlines() if "%)" in ln]
+    except OSError:
+        return f"{job.name}: starting"
+    if not lines:
+        return f"{job.name}: starting"
+    m = re.search(r"t =\s*([\d.]+) /\s*([\d.]+) s \(\s*([\d.]+) %\).*?tilt\s+([-\d.]+) deg", lines[-1])
+    return f"{job.name}: {m.group(3)} % (t {m.group(1)} s, tilt {m.group(4)} deg)" if m else f"{job.name}: running"
+
+
+class _Heartbeat(threading.Thread):
+    """Prints the progress of the running jobs every ``every`` s."""
+
+    def __init__(self, name, jobs, every=60.0):
+        super().__init__(daemon=True)
+        self.sweep, self.jobs, self.every = name, jobs, every
+        self.running: set[str] = set()
+        self.stop = threading.Event()
+
+    def run(self):
+        while not self.stop.wait(self.every):
+            live = [j for j in self.jobs if j.name in self.running]
+            if live:
+                print(f"[{self.sweep}] running: " + "; ".join(_progress_line(j) for j in live), flush=True)
+
+
+def run(path, workers: int | None = None, backend: str = "local", dask_address: str | None = None,
+        threads: int = 1, only: list[str] | None = None, results: Path | None = None,
+        heartbeat_s: float = 60.0) -> dict:
+    """Run (or continue) the sweep in ``path``; returns the status dict written to
+    ``results/<name>/sweep.json``."""
+    name, jobs = load(path, results, threads)
+    if only:
+        missing = sorted(set(only) - {j.name for j in jobs})
+        if missing:
+            raise casemod.CaseError(f"{path}: no run(s) named {missing}; runs: {[j.name for j in jobs]}")
+        jobs = [j for j in jobs if j.name in only]
+    validate(jobs)
+    root = Path(jobs[0].out_dir).parent
+    root.mkdir(parents=True, exist_ok=True)
+    status = {j.name: {"name": j.name, "status": "pending", "params": j.params, "out_dir": j.out_dir} for j in jobs}
+    todo = []
+    for j in jobs:
+        if finished(j):
+            status[j.name]["status"] = "skipped (finished earlier)"
+        else:
+            todo.append(j)
+    workers = max(1, min(workers or os.cpu_count() or 1, len(todo) or 1))
+    print(f"[{name}] {len(jobs)} runs: {len(jobs) - len(todo)} finished earlier, {len(todo)} to run on "
+          f"{workers} {'Dask' if backend == 'dask' else 'local'} worker(s); results in {root}", flush=True)
+    beat = _Heartbeat(name, todo, heartbeat_s)
+    beat.running = {j.name for j in todo[:workers]}
+    beat.start()
+    t0 = time.time()
+    done = 0
+    try:
+        for res in _execute(todo, workers, backend, dask_address):
+            done += 1
+            status[res["name"]].update(res)
+            beat.running.discard(res["name"])
+            waiting = [j.name for j in todo if status[j.name]["status"] == "pending" and j.name not in beat.running]
+            if waiting:
+                beat.running.add(waiting[0])
+            el = time.time() - t0
+            eta = el / done * (len(todo) - done)
+            extra = f"  log {res['log']}: {res['error'].splitlines()[0][:200]}" if res["status"] == "failed" else ""
+            print(f"[{name}] {done}/{len(todo)} {res['name']}: {res['status']} in {res['wall_s']:.0f} s "
+                  f"(elapsed {el:.0f} s, ETA {eta:.0f} s){extra}", flush=True)
+            _write_status(root, name, path, status)
+    finally:
+        beat.stop.set()
+        _write_status(root, name, path, status)
+    failed = [n for n, s in status.items() if s["status"] == "failed"]
+    if failed:
+        print(f"[{name}] {len(failed)} run(s) failed: {failed}; see FAILED.txt and log.txt in their folders",
+              flush=True)
+    return {"name": name, "root": str(root), "runs": status, "failed": failed}
+
+
+def _write_status(root: Path, name: str, path, status: dict) -> None:
+    tmp = root / "sweep.tmp.json"
+    tmp.write_text(json.dumps({"sweep": name, "file": str(Path(path).resolve()), "runs": list(status.values())},
+                              indent=1, default=str))
+    os.replace(tmp, root / "sweep.json")
+
+
+def _execute(jobs: list[Job], workers: int, backend: str, address: str | None):
+    """Yield each job's status dict as it completes."""
+    if not jobs:
+        return
+    if backend == "local":
+        with ProcessPoolExecutor(max_workers=workers) as ex:
+            futures = [ex.submit(run_job, j) for j in jobs]
+            for f in as_completed(futures):
+                yield f.result()
+    elif backend == "dask":
+        yield from _execute_dask(jobs, workers, address)
+    else:
+        raise ValueError(f"unknown sweep backend {backend!r}: local or dask")
+
+
+def _execute_dask(jobs: list[Job], workers: int, address: str | None):
+    try:
+        from dask.distributed import Client, LocalCluster, as_completed as dask_completed
+    except ImportError as exc:  # pragma: no cover - installed by make setup
+        raise RuntimeError("the dask backend needs dask.distributed (make setup installs it)") from exc
+    cluster = None
+    if address in (None, "local"):
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+        client = Client(cluster)
+    else:
+        client = Client(address)
+    try:
+        # each run is a separate YADE process started by the worker: one task per worker slot
+        futures = [client.submit(run_job, j, pure=False, key=f"drystone-{Path(j.out_dir).parent.name}-{j.name}")
+                   for j in jobs]
+        for f in dask_completed(futures):
+            yield f.result()
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def jobs_as_dicts(jobs: list[Job]) -> list[dict]:
+    return [asdict(j) for j in jobs]

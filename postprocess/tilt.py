@@ -1,0 +1,284 @@
+"""Tilt-table validation report (Sacsayhuaman paper §3.2; issue 5), plain Python.
+
+Reads the finished runs of three sweeps (drystone/sweep.py; cases/sweeps/):
+
+* ``results/tilt_seeds/<run>/``: generated walls (one per seed), FEM calibration;
+* ``results/tilt_rate/<run>/``: the paper's protocol (0.2 deg/s) on seed 0, to check the
+  faster protocol of the seeds (the collapse angle may change by at most 0.2 deg);
+* ``results/tilt_sensitivity/<run>/``: mu, K_n and the DEM calibration of Table 1.
+
+and writes ``results/tilt/summary.json`` (``collapse_angles_deg``: one per seed, with the
+parameters), ``results/tilt/report.md`` and figures: the wall at the paper's Figure 12
+angles and the vertical reaction against time and tilt for every seed (Figure 13).
+Missing sweeps are reported as missing, never filled in. Angles in degrees.
+"""
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from drystone import paths
+from postprocess import compare
+
+OUT = paths.RESULTS / "tilt"
+RATE_TOLERANCE_DEG = 0.2  # issue 5 §2: a faster rate may not move the collapse angle more than this
+
+
+def runs(root: Path) -> list[dict]:
+    """One row per finished run of a sweep folder (runs without summary.json are listed
+    under ``missing``), in the sweep's order."""
+    root = Path(root)
+    status = json.loads((root / "sweep.json").read_text())["runs"] if (root / "sweep.json").is_file() else []
+    names = [r["name"] for r in status] or sorted(p.name for p in root.iterdir() if p.is_dir())
+    rows = []
+    for name in names:
+        p = root / name / "summary.json"
+        if not p.is_file():
+            rows.append({"name": name, "finished": False})
+            continue
+        s = json.loads(p.read_text())
+        col = s.get("collapse") or {}
+        mat = next(iter(s["inputs"]["materials"].values()))
+        tilts = [st for st in s["inputs"]["stages"] if st["kind"] == "tilt"]
+        rows.append({
+            "name": name, "finished": True, "folder": str(root / name),
+            "collapse_angle_deg": s.get("collapse_angle_deg"),
+            "detected_angle_deg": col.get("detected_angle_deg"),
+            "criterion": col.get("criterion"), "first_blocks": col.get("first_blocks"),
+            "onset_block": col.get("onset_block"),
+            "seed": s["inputs"]["geometry"].get("generator", {}).get("seed"),
+            "materials": mat, "rates_deg_s": [st["params"]["rate_deg_s"] for st in tilts],
+            "overrides": s["inputs"]["provenance"]["overrides"],
+            "wall_time_s": s["run"]["wall_time_s"], "steps": s["run"]["steps"], "dt_s": s["run"]["dt_s"],
+            "simulated_time_s": s["run"]["simulated_time_s"],
+        })
+    return rows
+
+
+def seed_statistics(rows: list[dict]) -> dict:
+    """Mean, sample standard deviation and range of the collapse angles of finished runs;
+    runs that did not collapse are counted, not averaged."""
+    done = [r for r in rows if r["finished"]]
+    angles = [r["collapse_angle_deg"] for r in done if r["collapse_angle_deg"] is not None]
+    p = compare.paper("sacsayhuaman")["tilt"]
+    lo = p["experiment_collapse_deg"] - p["experiment_collapse_sd_deg"]
+    hi = p["experiment_collapse_deg"] + p["experiment_collapse_sd_deg"]
+    out = {"n_runs": len(rows), "n_finished": len(done), "n_collapsed": len(angles),
+           "experiment_deg": p["experiment_collapse_deg"], "experiment_sd_deg": p["experiment_collapse_sd_deg"],
+           "experiment_range_deg": [lo, hi], "paper_model_deg": p["model_collapse_deg"]}
+    if angles:
+        a = np.asarray(angles, float)
+        out.update(mean_deg=float(a.mean()), sd_deg=float(a.std(ddof=1)) if len(a) > 1 else None,
+                   min_deg=float(a.min()), max_deg=float(a.max()),
+                   mean_within_experiment_sd=bool(lo <= a.mean() <= hi),
+                   n_within_experiment_sd=int(np.sum((a >= lo) & (a <= hi))))
+    return out
+
+
+def rate_check(seed_rows: list[dict], rate_rows: list[dict]) -> dict | None:
+    """The paper-protocol run against the faster-protocol run of the same seed."""
+    paper_run = next((r for r in rate_rows if r["finished"]), None)
+    if paper_run is None:
+        return None
+    fast = next((r for r in seed_rows if r["finished"] and r["seed"] == paper_run["seed"]), None)
+    if fast is None or fast["collapse_angle_deg"] is None or paper_run["collapse_angle_deg"] is None:
+        return {"seed": paper_run["seed"], "complete": False}
+    diff = fast["collapse_angle_deg"] - paper_run["collapse_angle_deg"]
+    return {"seed": paper_run["seed"], "complete": True,
+            "paper_protocol": {"rates_deg_s": paper_run["rates_deg_s"], "angle_deg": paper_run["collapse_angle_deg"],
+                               "wall_time_s": paper_run["wall_time_s"]},
+            "fast_protocol": {"rates_deg_s": fast["rates_deg_s"], "angle_deg": fast["collapse_angle_deg"],
+                              "wall_time_s": fast["wall_time_s"]},
+            "difference_deg": diff, "tolerance_deg": RATE_TOLERANCE_DEG,
+            "within_tolerance": bool(abs(diff) <= RATE_TOLERANCE_DEG)}
+
+
+def _fmt(v, spec=".2f"):
+    return "-" if v is None else format(v, spec)
+
+
+def report_md(summary: dict) -> str:
+    st = summary["seeds"]
+    lines = ["# Tilt-table validation (Sacsayhuaman paper §3.2)", "",
+             f"Walls: {summary['wall']}", "",
+             f"Experiment (Santa-Cruz et al.): {st['experiment_deg']} ± {st['experiment_sd_deg']} deg; "
+             f"paper's model {st['paper_model_deg']} deg.", "",
+             "## Collapse angle per generated wall (FEM calibration of Table 1)", "",
+             "| run | seed | collapse angle (deg) | detected at (deg) | criterion | first blocks | wall time (s) |",
+             "|---|---|---|---|---|---|---|"]
+    for r in summary["seed_runs"]:
+        if not r["finished"]:
+            lines.append(f"| {r['name']} | | not run | | | | |")
+            continue
+        lines.append(f"| {r['name']} | {r['seed']} | {_fmt(r['collapse_angle_deg'])} | {_fmt(r['detected_angle_deg'])} "
+                     f"| {r['criterion'] or 'no collapse'} | {r['first_blocks']} | {r['wall_time_s']:.0f} |")
+    if "mean_deg" in st:
+        lines += ["", f"Mean {st['mean_deg']:.2f} deg, standard deviation {_fmt(st['sd_deg'])} deg, range "
+                      f"{st['min_deg']:.2f}-{st['max_deg']:.2f} deg over {st['n_collapsed']} walls; "
+                      f"the mean is {'within' if st['mean_within_experiment_sd'] else 'outside'} one standard "
+                      f"deviation of the experiment ({st['experiment_range_deg'][0]:.2f}-"
+                      f"{st['experiment_range_deg'][1]:.2f} deg); {st['n_within_experiment_sd']} of "
+                      f"{st['n_collapsed']} walls are."]
+    rc = summary.get("rate_check")
+    lines += ["", "## Tilt rate", ""]
+    if rc and rc.get("complete"):
+        lines.append(f"Seed {rc['seed']}: paper protocol {rc['paper_protocol']['rates_deg_s']} deg/s "
+                     f"-> {rc['paper_protocol']['angle_deg']:.2f} deg; faster protocol "
+                     f"{rc['fast_protocol']['rates_deg_s']} deg/s -> {rc['fast_protocol']['angle_deg']:.2f} deg; "
+                     f"difference {rc['difference_deg']:+.2f} deg (tolerance ±{rc['tolerance_deg']} deg: "
+                     f"{'within' if rc['within_tolerance'] else 'OUTSIDE'}).")
+    else:
+        lines.append("Not available: run `make tilt-rate` (the paper's 0.2 deg/s protocol on seed 0).")
+    sens = summary.get("sensitivity") or []
+    lines += ["", "## Sensitivity (seed 0)", ""]
+    if sens:
+        lines += ["| run | density (kg/m³) | K_n (N/m³) | K_t (N/m³) | mu | collapse angle (deg) | first blocks |",
+                  "|---|---|---|---|---|---|---|"]
+        for r in sens:
+            if not r["finished"]:
+                lines.append(f"| {r['name']} | | | | | not run | |")
+                continue
+            m = r["materials"]
+            lines.append(f"| {r['name']} | {m['density']:g} | {m['kn']:.3g} | {m['kt']:.3g} | {m['mu']:g} | "
+                         f"{_fmt(r['collapse_angle_deg'])} | {r['first_blocks']} |")
+    else:
+        lines.append("Not available: run `make tilt-sensitivity`.")
+    if summary.get("figures"):
+        lines += ["", "## Figures", ""] + [f"![{Path(f).stem}]({Path(f).name})" for f in summary["figures"]]
+    return "\n".join(lines) + "\n"
+
+
+def reaction_figure(rows: list[dict], path: Path) -> Path | None:
+    """Vertical reaction of the moving blocks against time and tilt, every finished run
+    (the paper's Figure 13), collapse angles marked."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from drystone.loading import LoadProgramme, Stage
+    from postprocess import summary as summ
+
+    done = [r for r in rows if r["finished"]]
+    if not done:
+        return None
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4))
+    for r in done:
+        out = Path(r["folder"])
+        spec = json.loads((out / "spec.json").read_text())
+        h = summ.load_histories(out)
+        prog = LoadProgramme([Stage(s["kind"], s["start"], s["end"], s["params"]) for s in spec["stages"]],
+                             spec["gravity"])
+        up = np.array([prog.true_vertical(t) for t in h["t"]])
+        rv = -np.einsum("ij,ij->i", h["reaction"], up)
+        label = f"{r['name']}: {_fmt(r['collapse_angle_deg'])} deg"
+        line, = a1.plot(h["t"], rv, lw=0.9, label=label)
+        a2.plot(h["tilt_deg"], rv, lw=0.9, color=line.get_color())
+        if r["collapse_angle_deg"] is not None:
+            a2.axvline(r["collapse_angle_deg"], color=line.get_color(), ls=":", lw=0.8)
+    p = compare.paper("sacsayhuaman")["tilt"]
+    a2.axvspan(p["experiment_collapse_deg"] - p["experiment_collapse_sd_deg"],
+               p["experiment_collapse_deg"] + p["experiment_collapse_sd_deg"], color="0.85", zorder=0,
+               label="experiment ±1 sd")
+    a1.set_xlabel("time (s)")
+    a2.set_xlabel("platform tilt (deg)")
+    for a in (a1, a2):
+        a.set_ylabel("vertical reaction of the moving stones (N)")
+        a.grid(alpha=0.3)
+    a1.legend(fontsize=7)
+    a2.legend(fontsize=7, loc="lower left")
+    fig.suptitle("Tilt-table walls: vertical reaction on the platform and fixed course (cf. paper Fig. 13)",
+                 fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return Path(path)
+
+
+def snapshot_figure(run: dict, path: Path) -> Path:
+    """The wall (world frame) at the paper's Figure 12 angles, at our collapse angle and
+    at the end of the run."""
+    from postprocess import snapshots
+
+    p = compare.paper("sacsayhuaman")["tilt"]
+    angles = [a for a in p["figure12_angles_deg"][:4]]
+    if run.get("collapse_angle_deg") is not None:
+        angles.append(round(run["collapse_angle_deg"], 2))
+    times = snapshots.times_at_angles(run["folder"], angles) + [1e9]
+    titles = [f"{a:g} deg" for a in angles] + ["end of run"]
+    if run.get("collapse_angle_deg") is not None:
+        titles[len(angles) - 1] = f"{angles[-1]:g} deg (our collapse onset)"
+    return snapshots.render(run["folder"], times, path, world=True, elev=12, azim=-35, titles=titles)
+
+
+def build(seeds=None, rate=None, sensitivity=None, out: Path = OUT, figures: bool = True) -> dict:
+    seeds = Path(seeds or paths.RESULTS / "tilt_seeds")
+    rate = Path(rate or paths.RESULTS / "tilt_rate")
+    sensitivity = Path(sensitivity or paths.RESULTS / "tilt_sensitivity")
+    if not seeds.is_dir():
+        raise FileNotFoundError(f"{seeds}: no tilt runs (run `make tilt` first)")
+    seed_rows = runs(seeds)
+    rate_rows = runs(rate) if rate.is_dir() else []
+    sens_rows = runs(sensitivity) if sensitivity.is_dir() else []
+    done = [r for r in seed_rows if r["finished"]]
+    ref = next((r for r in done if r["seed"] == 0), None)
+    if sens_rows and ref is not None:  # the FEM calibration itself is the seed-0 run of the seed sweep
+        sens_rows = [dict(ref, name=f"fem_calibration ({seeds.name}/{ref['name']})")] + sens_rows
+    out.mkdir(parents=True, exist_ok=True)
+    p = compare.paper("sacsayhuaman")["tilt"]
+    summary = {
+        "units": "angles in deg, stiffness N/m^3, density kg/m^3, times s",
+        "wall": (f"generated irregular dry-stone walls {p['wall_length_m']} x {p['wall_height_m']} m weighing "
+                 f"{p['wall_weight_N']} N (geometry/irregular_wall.py: tilt_wall), first course fixed"),
+        "collapse_angles_deg": [r["collapse_angle_deg"] for r in done],
+        "seeds": seed_statistics(seed_rows),
+        "seed_values": [r["seed"] for r in done],
+        "parameters": {"materials": done[0]["materials"] if done else None,
+                       "tilt_rates_deg_s": done[0]["rates_deg_s"] if done else None,
+                       "overrides": done[0]["overrides"] if done else None},
+        "seed_runs": seed_rows,
+        "rate_check": rate_check(seed_rows, rate_rows),
+        "sensitivity": sens_rows,
+        "paper": p,
+        "figures": [],
+    }
+    summary["seeds"]["collapse_angles_deg"] = summary["collapse_angles_deg"]
+    if figures and done:
+        f = reaction_figure(seed_rows + [r for r in rate_rows if r["finished"]], out / "reaction.png")
+        summary["figures"].append(str(f))
+        show = next((r for r in rate_rows if r["finished"]), done[0])
+        summary["figures"].append(str(snapshot_figure(show, out / "snapshots.png")))
+    (out / "summary.json").write_text(json.dumps(summary, indent=1, default=_json_default))
+    (out / "report.md").write_text(report_md(summary))
+    return summary
+
+
+def _json_default(v):
+    if isinstance(v, (np.floating, np.integer)):
+        return v.item()
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    return str(v)
+
+
+def main(argv=None) -> int:
+    import argparse
+
+    ap = argparse.ArgumentParser(prog="python -m postprocess.tilt", description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--seeds", help="folder of the seed sweep (results/tilt_seeds)")
+    ap.add_argument("--rate", help="folder of the rate check (results/tilt_rate)")
+    ap.add_argument("--sensitivity", help="folder of the sensitivity sweep (results/tilt_sensitivity)")
+    ap.add_argument("--out", default=str(OUT))
+    a = ap.parse_args(argv)
+    s = build(a.seeds, a.rate, a.sensitivity, Path(a.out))
+    print((Path(a.out) / "report.md").read_text())
+    print(f"written {Path(a.out) / 'summary.json'}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,103 @@
+"""Sweep runner (drystone/sweep.py): parsing, validation before any run, parallel local
+and Dask execution, resumption, failures that do not stop the others."""
+import json
+from pathlib import Path
+
+import pytest
+
+from conftest import requires_yade
+from drystone import case as casemod
+from drystone import runner, sweep
+
+# one 0.2 m cube settling on a platform for 0.1 s: a run of a few seconds
+BASE = {
+    "case": {"name": "cube", "geometry": {"generator": "boxes_on_platform", "mu": 0.5, "damping": 0.5,
+                                          "kn": 2e8, "kt": 1e8,
+                                          "boxes": [{"id": 1, "center_xy": [0.0, 0.0], "size": [0.2, 0.2, 0.2]}]}},
+    "stages": [{"type": "gravity", "duration": 0.1, "ramp": 0.05}],
+    "output": {"interval": 0.01},
+}
+
+
+def write_sweep(tmp: Path, body: str) -> Path:
+    (tmp / "cube.toml").write_text(runner.to_toml(BASE))
+    p = tmp / "s.toml"
+    p.write_text('[sweep]\nname = "s"\ncase = "cube.toml"\n' + body)
+    return p
+
+
+def test_grid_and_runs_make_named_jobs(tmp_path):
+    p = write_sweep(tmp_path, '[grid]\n"contact.kn" = [1e8, 2e8]\n"contact.mu" = [0.3]\n'
+                              '[[runs]]\nname = "dem"\nset = ["contact.kn=5e7"]\n')
+    name, jobs = sweep.load(p, results=tmp_path / "res")
+    assert name == "s"
+    assert [j.name for j in jobs] == ["kn_100000000.0-mu_0.3", "kn_200000000.0-mu_0.3", "dem"]
+    assert jobs[0].overrides[:2] == ["contact.kn=100000000.0", "contact.mu=0.3"]
+    assert all(Path(j.out_dir).parent == tmp_path / "res" / "s" for j in jobs)
+    sweep.validate(jobs)  # all three are valid cases
+
+
+@pytest.mark.parametrize("body, match", [
+    ('[grid]\n"contact.kn" = []\n', "non-empty list"),
+    ('[sweep2]\n', "unknown table"),
+    ('[[runs]]\nname = "a"\n[[runs]]\nname = "a"\n', "duplicate run name"),
+    ('', "no runs"),
+    ('[[runs]]\nname = "a"\nsett = []\n', "keys must be"),
+])
+def test_bad_sweep_files(tmp_path, body, match):
+    with pytest.raises(casemod.CaseError, match=match):
+        sweep.load(write_sweep(tmp_path, body))
+
+
+def test_every_run_is_checked_before_any_starts(tmp_path):
+    """An unknown key or an unstable step in one run stops the sweep before anything runs,
+    naming the run and the key."""
+    p = write_sweep(tmp_path, '[[runs]]\nname = "ok"\n[[runs]]\nname = "bad"\nset = ["time.step=1.0"]\n')
+    with pytest.raises(casemod.CaseError, match=r"run 'bad'.*'step'.*critical"):
+        sweep.run(p, results=tmp_path / "res")
+    assert not (tmp_path / "res" / "s" / "ok").exists()
+    p = write_sweep(tmp_path, '[[runs]]\nname = "bad"\nset = ["contact.kk=1"]\n')
+    with pytest.raises(casemod.CaseError, match="kk"):
+        sweep.run(p, results=tmp_path / "res")
+
+
+@requires_yade
+@pytest.mark.yade
+def test_local_sweep_resumes_and_survives_a_failure(tmp_path, monkeypatch):
+    p = write_sweep(tmp_path, '[grid]\n"contact.mu" = [0.3, 0.6]\n')
+    res = sweep.run(p, workers=2, results=tmp_path / "res", heartbeat_s=1.0)
+    assert res["failed"] == []
+    root = Path(res["root"])
+    for n in ("mu_0.3", "mu_0.6"):
+        s = json.loads((root / n / "summary.json").read_text())
+        assert s["inputs"]["materials"]["stone"]["mu"] == float(n.split("_")[1])
+    status = json.loads((root / "sweep.json").read_text())
+    assert {r["status"] for r in status["runs"]} == {"done"}
+    # second call: nothing to do
+    res = sweep.run(p, workers=2, results=tmp_path / "res")
+    assert {r["status"] for r in res["runs"].values()} == {"skipped (finished earlier)"}
+    # an interrupted sweep (one run lost its summary) runs only what is missing
+    (root / "mu_0.6" / "summary.json").unlink()
+    res = sweep.run(p, workers=2, results=tmp_path / "res")
+    assert res["runs"]["mu_0.6"]["status"] == "done"
+    assert res["runs"]["mu_0.3"]["status"].startswith("skipped")
+    # a run that fails while running is reported with its log and the others still run
+    p2 = write_sweep(tmp_path, '[[runs]]\nname = "good"\n[[runs]]\nname = "broken"\nset = ["time.step=1.0"]\n')
+    monkeypatch.setattr(sweep, "validate", lambda jobs: None)  # let the bad run reach the runner
+    res = sweep.run(p2, workers=2, results=tmp_path / "res2")
+    assert res["failed"] == ["broken"]
+    assert res["runs"]["good"]["status"] == "done"
+    assert "critical" in (Path(res["root"]) / "broken" / "FAILED.txt").read_text()
+
+
+@requires_yade
+@pytest.mark.yade
+def test_dask_local_cluster_runs_and_resumes(tmp_path):
+    """The distributed path: a Dask LocalCluster of two worker processes."""
+    pytest.importorskip("distributed")
+    p = write_sweep(tmp_path, '[grid]\n"contact.mu" = [0.3, 0.6]\n')
+    res = sweep.run(p, workers=2, backend="dask", dask_address="local", results=tmp_path / "res")
+    assert res["failed"] == [] and {r["status"] for r in res["runs"].values()} == {"done"}
+    (Path(res["root"]) / "mu_0.3" / "summary.json").unlink()
+    res = sweep.run(p, workers=2, backend="dask", dask_address="local", results=tmp_path / "res")
+    assert res["runs"]["mu_0.3"]["status"] == "done" and res["runs"]["mu_0.6"]["status"].startswith("skipped")

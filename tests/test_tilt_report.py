@@ -1,0 +1,65 @@
+"""Tilt-table report (postprocess/tilt.py) on synthetic sweep folders: statistics, the
+rate check and the tables, without YADE."""
+import json
+
+import pytest
+
+from postprocess import tilt
+
+
+def fake_run(root, name, seed, angle, rates=(2.0, 1.0), mu=0.4, kn=2e8):
+    d = root / name
+    d.mkdir(parents=True)
+    s = {"collapse_angle_deg": angle,
+         "collapse": None if angle is None else {"detected_angle_deg": angle + 0.3, "criterion": "reaction_drop",
+                                                 "first_blocks": [60, 61], "onset_block": 60},
+         "inputs": {"materials": {"stone": {"density": 2300.0, "kn": kn, "kt": kn / 2, "mu": mu, "damping": 0.8}},
+                    "geometry": {"generator": {"generator": "tilt_wall", "seed": seed}},
+                    "stages": [{"kind": "gravity", "params": {}}]
+                    + [{"kind": "tilt", "params": {"rate_deg_s": r}} for r in rates],
+                    "provenance": {"overrides": [f"case.geometry.seed={seed}"]}},
+         "run": {"wall_time_s": 100.0, "steps": 1000, "dt_s": 1e-4, "simulated_time_s": 0.1}}
+    (d / "summary.json").write_text(json.dumps(s))
+
+
+def sweep_json(root, names):
+    (root / "sweep.json").write_text(json.dumps({"runs": [{"name": n} for n in names]}))
+
+
+def test_statistics_rate_check_and_report(tmp_path):
+    seeds, rate, sens = tmp_path / "seeds", tmp_path / "rate", tmp_path / "sens"
+    angles = [14.0, 14.5, 15.0, None]  # the last wall did not collapse: counted, not averaged
+    for k, a in enumerate(angles):
+        fake_run(seeds, f"seed_{k}", k, a)
+    sweep_json(seeds, [f"seed_{k}" for k in range(5)])  # seed_4 never finished
+    fake_run(rate, "paper_seed_0", 0, 14.15, rates=(1.0, 0.2))
+    fake_run(sens, "mu_0.7", 0, 19.0, mu=0.7)
+    sweep_json(sens, ["mu_0.7", "kn_5e8"])
+    s = tilt.build(seeds, rate, sens, tmp_path / "out", figures=False)
+    st = s["seeds"]
+    assert s["collapse_angles_deg"] == [14.0, 14.5, 15.0, None]
+    assert (st["n_runs"], st["n_finished"], st["n_collapsed"]) == (5, 4, 3)
+    assert st["mean_deg"] == pytest.approx(14.5) and st["sd_deg"] == pytest.approx(0.5)
+    assert st["experiment_range_deg"] == pytest.approx([13.57, 15.09])
+    assert st["mean_within_experiment_sd"] and st["n_within_experiment_sd"] == 3
+    rc = s["rate_check"]
+    assert rc["difference_deg"] == pytest.approx(-0.15) and rc["within_tolerance"]
+    assert [r["name"] for r in s["sensitivity"]] == ["fem_calibration (seeds/seed_0)", "mu_0.7", "kn_5e8"]
+    md = (tmp_path / "out" / "report.md").read_text()
+    assert "| seed_4 | | not run |" in md and "| kn_5e8 | | | | | not run |" in md
+    assert "Mean 14.50 deg" in md and "difference -0.15 deg" in md
+    saved = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert saved["collapse_angles_deg"] == [14.0, 14.5, 15.0, None]
+
+
+def test_rate_check_outside_tolerance_is_flagged(tmp_path):
+    fake_run(tmp_path / "s", "seed_0", 0, 14.6)
+    fake_run(tmp_path / "r", "paper_seed_0", 0, 14.3, rates=(1.0, 0.2))
+    s = tilt.build(tmp_path / "s", tmp_path / "r", tmp_path / "none", tmp_path / "o", figures=False)
+    assert s["rate_check"]["difference_deg"] == pytest.approx(0.3) and not s["rate_check"]["within_tolerance"]
+    assert "OUTSIDE" in (tmp_path / "o" / "report.md").read_text()
+
+
+def test_missing_seed_folder_is_an_error(tmp_path):
+    with pytest.raises(FileNotFoundError, match="make tilt"):
+        tilt.build(tmp_path / "nothing", out=tmp_path / "o")
