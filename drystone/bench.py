@@ -1,7 +1,8 @@
 """make bench: speed of the 40-block running-bond wall (8.64 x 4 x 0.8 m, 5 courses of 8,
-K_n = 2e8 N/m^3, 2300 kg/m^3, on a fixed platform) under gravity, for YADE's stock law
-and ours, on 1 and 2 threads. Prints milliseconds per step, steps per second, active
-contacts and the share of the step spent in our per-step Python engine. Not a test."""
+K_n = 2e8 N/m^3, 2300 kg/m^3, on a fixed platform) under gravity, for YADE's stock law and
+ours (on YADE's contact geometry and on the native one), on 1 and 2 threads. Prints
+milliseconds per step, steps per second, active contacts and the share of the step spent
+in our per-step Python engine. Not a test."""
 from __future__ import annotations
 
 import json
@@ -17,13 +18,16 @@ CASE = {
 }
 
 
-def measure(law: str, threads: int, workdir: Path) -> dict:
-    out = workdir / f"{law}_{threads}"
-    s = runner.run_dict(CASE, workdir / f"{law}_{threads}.toml", out_dir=out, threads=threads, quiet=True,
-                        overrides=[f"contact.law={law}"])
+VARIANTS = (("stock_volumetric", "yade"), ("penalty_coulomb", "yade"), ("penalty_coulomb", "native"))
+
+
+def measure(law: str, detection: str, threads: int, workdir: Path) -> dict:
+    out = workdir / f"{law}_{detection}_{threads}"
+    s = runner.run_dict(CASE, workdir / f"{law}_{detection}_{threads}.toml", out_dir=out, threads=threads,
+                        quiet=True, overrides=[f"contact.law={law}", f"contact.detection={detection}"])
     r = s["run"]
     info = json.loads((out / "run_info.json").read_text())
-    return {"law": law, "threads": threads, "ms_per_step": r["us_per_step"] / 1e3,
+    return {"law": law, "detection": detection, "threads": threads, "ms_per_step": r["us_per_step"] / 1e3,
             "steps_per_s": 1e6 / r["us_per_step"], "contacts": info["max_contacts"],
             "python_ms_per_step": r["python_us_per_step"] / 1e3, "steps": r["steps"], "dt_s": r["dt_s"]}
 
@@ -31,11 +35,12 @@ def measure(law: str, threads: int, workdir: Path) -> dict:
 def main() -> list[dict]:
     rows = []
     with tempfile.TemporaryDirectory(dir=paths.ROOT) as tmp:
-        for law in ("stock_volumetric", "penalty_coulomb"):
+        for law, detection in VARIANTS:
             for threads in (1, 2):
-                rows.append(measure(law, threads, Path(tmp)))
+                rows.append(measure(law, detection, threads, Path(tmp)))
                 r = rows[-1]
-                print(f"{law:17s} {threads} thread(s): {r['ms_per_step']:7.2f} ms/step  {r['steps_per_s']:7.1f} steps/s  "
+                print(f"{law:17s} {detection:6s} {threads} thread(s): {r['ms_per_step']:7.2f} ms/step  "
+                      f"{r['steps_per_s']:7.1f} steps/s  "
                       f"{r['contacts']:4d} contacts  python {r['python_ms_per_step']:6.2f} ms/step  "
                       f"({r['steps']} steps of {r['dt_s']:.2e} s)", flush=True)
     out = paths.RESULTS / "bench"

@@ -42,6 +42,10 @@ SECTIONS: dict[str, dict[str, Key]] = {
         "law": Key("penalty_coulomb", "-", "penalty_coulomb (the paper's law, per-contact shear and "
                    "damping) or stock_volumetric (YADE's law: shared shear, no damping)", str,
                    ("penalty_coulomb", "stock_volumetric")),
+        "detection": Key("auto", "-", "contact geometry: native (drystone/overlap.py: exact overlap volume, "
+                         "normal and area from its gradient, compiled; penalty_coulomb only), yade (YADE's "
+                         "polyhedra intersection, CGAL) or auto (native with penalty_coulomb, yade with the "
+                         "stock law)", str, ("auto", "native", "yade")),
         "kn": Key(None, "N/m^3", "override K_n of every material", float, positive=True),
         "kt": Key(None, "N/m^3", "override K_t of every material", float, positive=True),
         "mu": Key(None, "-", "override the friction coefficient of every material", float, nonneg=True),

@@ -97,6 +97,12 @@ def resolve(case: dict, where: str, out: Path) -> dict:
     for f in case["forces"]:
         if f["block"] not in free:
             raise casemod.CaseError(f"{where}: [[forces]] block {f['block']} is not a free block")
+    detection = case["contact"]["detection"]
+    if detection == "native" and case["contact"]["law"] != "penalty_coulomb":
+        raise casemod.CaseError(f"{where}: [contact] 'detection' = 'native' needs law = 'penalty_coulomb' "
+                                f"(the stock law runs on YADE's own contact geometry)")
+    if detection == "auto":
+        detection = "native" if case["contact"]["law"] == "penalty_coulomb" else "yade"
     tb = case["analysis"]["tilt_block"]
     if tb is not None and tb not in free:
         raise casemod.CaseError(f"{where}: [analysis] 'tilt_block' {tb} is not a free block")
@@ -164,6 +170,7 @@ def resolve(case: dict, where: str, out: Path) -> dict:
     free_areas = [timestep.largest_face_area(b["vertices"]) for b in blocks if b["role"] == "free"]
     return {
         "name": case["case"]["name"], "out_dir": str(out), "law": case["contact"]["law"],
+        "detection": detection,
         "dt": dt, "dt_critical": dt_crit, "dt_critical_detail": crit, "gravity": case["physics"]["gravity"],
         "materials": mats, "blocks": blocks, "joint_overrides": joint_overrides,
         "control_points": bs.control_points, "stages": stages, "forces": case["forces"],

@@ -86,3 +86,31 @@ def overlap_thickness(va, vb) -> float:
     if not res.success:
         raise HullError(f"overlap test failed: {res.message}")
     return float(2.0 * res.x[3])
+
+
+def faces(vertices) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+    """The hull's faces as polygons: outward unit normals N (f, 3), offsets d (f,) with
+    N @ x + d <= 0 inside, and per face the indices of its vertices ordered counter-
+    clockwise seen from outside (coplanar hull triangles merged)."""
+    v = np.asarray(vertices, dtype=float)
+    h = hull(v)
+    groups: dict[tuple, set] = {}
+    eqs: dict[tuple, np.ndarray] = {}
+    for simplex, eq in zip(h.simplices, h.equations):
+        key = tuple(np.round(eq, 8))
+        groups.setdefault(key, set()).update(int(i) for i in simplex)
+        eqs.setdefault(key, eq)
+    normals, offsets, polys = [], [], []
+    for key, idx in groups.items():
+        eq = eqs[key]
+        n = eq[:3]
+        idx = np.array(sorted(idx))
+        p = v[idx]
+        c = p.mean(axis=0)
+        a = np.cross(n, [1.0, 0, 0] if abs(n[0]) < 0.9 else [0, 1.0, 0])
+        a /= np.linalg.norm(a)
+        b = np.cross(n, a)  # (a, b, n) right-handed: increasing angle is counter-clockwise about n
+        polys.append(idx[np.argsort(np.arctan2((p - c) @ b, (p - c) @ a))])
+        normals.append(n)
+        offsets.append(eq[3])
+    return np.array(normals), np.array(offsets), polys

@@ -16,30 +16,16 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
-from scipy.spatial import ConvexHull  # noqa: E402
 
 from drystone import rotations  # noqa: E402
+from geometry import polyhedron as ph  # noqa: E402
 from drystone.loading import LoadProgramme, Stage  # noqa: E402
 from postprocess import summary as summ  # noqa: E402
 
 
 def block_faces(vertices: np.ndarray) -> list[np.ndarray]:
     """Polygons (ordered vertices) of the convex hull's faces (coplanar triangles merged)."""
-    h = ConvexHull(vertices)
-    faces = {}
-    for simplex, eq in zip(h.simplices, h.equations):
-        faces.setdefault(tuple(np.round(eq, 8)), set()).update(simplex.tolist())
-    polys = []
-    for eq, idx in faces.items():
-        p = vertices[list(idx)]
-        c = p.mean(axis=0)
-        n = np.array(eq[:3])
-        a = np.cross(n, [1.0, 0, 0] if abs(n[0]) < 0.9 else [0, 1.0, 0])
-        a /= np.linalg.norm(a)
-        b = np.cross(n, a)
-        ang = np.arctan2((p - c) @ b, (p - c) @ a)
-        polys.append(p[np.argsort(ang)])
-    return polys
+    return [vertices[idx] for idx in ph.faces(vertices)[2]]
 
 
 def positions_at(out: Path, times: list[float], world: bool = True) -> list[tuple[float, dict]]:

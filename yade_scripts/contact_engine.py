@@ -13,6 +13,7 @@ import numpy as np
 import yade
 
 from drystone import contact as law
+from drystone import overlap as ov
 from drystone import rotations
 
 
@@ -62,12 +63,22 @@ class PenaltyCoulomb:
 
     ``pairs(id1, id2) -> dict(kn, kt, mu, damping)`` gives joint properties by YADE ids;
     ``mass`` (n_bodies,) kg with inf for non-moving bodies.
+
+    Contact geometry (``detection``): ``native`` computes every overlap itself
+    (``drystone.overlap``: exact volume and centroid, normal and area from the volume's
+    gradient) and applies the normal force K_n V too, so YADE only integrates the motion;
+    ``yade`` reads the overlaps of YADE's ``Ig2_Polyhedra_Polyhedra_PolyhedraGeom`` (CGAL)
+    and YADE's volumetric law applies K_n V along YADE's normal, A_c being estimated from
+    the overlap's extent (``drystone.contact.contact_area``).
     """
 
-    def __init__(self, pair_props, mass, local_vertices):
+    def __init__(self, pair_props, mass, local_vertices, detection="yade"):
         self.pair_props = pair_props
         self.mass = np.asarray(mass, float)
         self.moving = np.isfinite(self.mass)
+        self.native = detection == "native"
+        if self.native:
+            self.shapes = ov.Shapes(local_vertices)
         self.vloc = _padded(local_vertices)  # repeated entries leave min/max/argmax unchanged
         self.nloc = _padded([_face_normals(v) for v in local_vertices])
         self._shear: dict[tuple[int, int], np.ndarray] = {}
@@ -98,25 +109,17 @@ class PenaltyCoulomb:
             rows.append((i.id1, i.id2, v) + tuple(g.normal) + tuple(g.contactPoint))
         return np.array(rows, float).reshape(-1, 9)
 
-    def step(self, O, bodies_state):
-        """Compute and apply this step's forces. ``bodies_state``: (pos, vel, angvel, R)
-        arrays over all bodies (m, m/s, rad/s, rotation matrices)."""
+    def _yade_geometry(self, O, bodies_state):
+        """Overlaps from YADE's interactions: (ia, ib, volume, normal, point, area)."""
         rows = self.gather(O)
-        st = self.state
-        if len(rows) == 0:
-            st.clear()
-            self._shear = {}
-            self.elastic = (self.elastic[1], 0.0)
-            return
         pos, vel, angvel, rot = bodies_state
         ia = rows[:, 0].astype(int)
         ib = rows[:, 1].astype(int)
         vol = rows[:, 2]
         n = rows[:, 3:6]
         c = rows[:, 6:9]
-        keys = list(zip(ia.tolist(), ib.tolist()))
-        kn, kt, mu, xi = self._props_arrays(keys)
-
+        if len(rows) == 0:
+            return ia, ib, vol, n, c, np.zeros(0)
         # contact area from the overlap extent along the joint's face normal
         # face normals in the global frame, then vertex projections x.m = x_local.(R^T m) + pos.m
         fa = np.matmul(self.nloc[ia], rot[ia].transpose(0, 2, 1))
@@ -131,7 +134,32 @@ class PenaltyCoulomb:
         cm = law.dot(c, m)
         # the centroid's distance from the flat face the overlap presses into
         e = np.where(face_of_a, hi - cm, cm - lo)
-        area = law.contact_area(vol, hi - lo, e)
+        return ia, ib, vol, n, c, law.contact_area(vol, hi - lo, e)
+
+    def _native_geometry(self, bodies_state):
+        """Overlaps computed here (drystone.overlap): (ia, ib, volume, normal, point, area)."""
+        pos, _, _, rot = bodies_state
+        s = self.shapes
+        ia, ib, vol, c, n, area = ov.all_contacts(s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk,
+                                                  pos, rot, self.moving, ov.TOL)
+        return ia, ib, vol, n, c, area
+
+    def step(self, O, bodies_state):
+        """Compute and apply this step's forces. ``bodies_state``: (pos, vel, angvel, R)
+        arrays over all bodies (m, m/s, rad/s, rotation matrices)."""
+        if self.native:
+            ia, ib, vol, n, c, area = self._native_geometry(bodies_state)
+        else:
+            ia, ib, vol, n, c, area = self._yade_geometry(O, bodies_state)
+        st = self.state
+        if len(ia) == 0:
+            st.clear()
+            self._shear = {}
+            self.elastic = (self.elastic[1], 0.0)
+            return
+        pos, vel, angvel, rot = bodies_state
+        keys = list(zip(ia.tolist(), ib.tolist()))
+        kn, kt, mu, xi = self._props_arrays(keys)
 
         ra = c - pos[ia]
         rb = c - pos[ib]
@@ -154,11 +182,13 @@ class PenaltyCoulomb:
                      + np.sum(np.sum(fs_new[ok] ** 2, axis=1) / (2.0 * kt[ok] * area[ok])))
         self.elastic = (self.elastic[1], e_el)
 
+        # the force applied here: with native detection the elastic normal force too
+        f_apply = f_b + fn[:, None] * n if self.native else f_b
         # accumulate per body (bincount) and apply once per moving body in contact
         nb = len(self.mass)
         idx = np.concatenate([ib, ia])
-        F = np.concatenate([f_b, -f_b])
-        T = np.concatenate([law.cross(rb, f_b), -law.cross(ra, f_b)])
+        F = np.concatenate([f_apply, -f_apply])
+        T = np.concatenate([law.cross(rb, f_apply), -law.cross(ra, f_apply)])
         Fs = np.stack([np.bincount(idx, F[:, k], nb) for k in range(3)], 1)
         Ts = np.stack([np.bincount(idx, T[:, k], nb) for k in range(3)], 1)
         V3 = yade.Vector3

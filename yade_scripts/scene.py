@@ -64,15 +64,20 @@ def build(spec: dict) -> dict:
         if moving:
             dynamic.append(i)
     newton = yade.NewtonIntegrator(damping=0.0, gravity=(0, 0, 0), label="newton")
-    O.engines = [
-        yade.ForceResetter(),
-        yade.InsertionSortCollider([yade.Bo1_Polyhedra_Aabb()], avoidSelfInteractionMask=0b10,
-                                   verletDist=spec.get("verlet_dist", 0.0)),
-        yade.InteractionLoop([yade.Ig2_Polyhedra_Polyhedra_PolyhedraGeom()],
-                             [yade.Ip2_PolyhedraMat_PolyhedraMat_PolyhedraPhys()],
-                             [yade.Law2_PolyhedraGeom_PolyhedraPhys_Volumetric()]),
-        yade.PyRunner(iterPeriod=1, command="_drystone_step()", label="drystone_step"),
-        newton,
-    ]
+    step = yade.PyRunner(iterPeriod=1, command="_drystone_step()", label="drystone_step")
+    if spec.get("detection", "yade") == "native":
+        # contacts and all their forces come from contact_engine.PenaltyCoulomb (native)
+        O.engines = [yade.ForceResetter(), step, newton]
+    else:
+        O.engines = [
+            yade.ForceResetter(),
+            yade.InsertionSortCollider([yade.Bo1_Polyhedra_Aabb()], avoidSelfInteractionMask=0b10,
+                                       verletDist=spec.get("verlet_dist", 0.0)),
+            yade.InteractionLoop([yade.Ig2_Polyhedra_Polyhedra_PolyhedraGeom()],
+                                 [yade.Ip2_PolyhedraMat_PolyhedraMat_PolyhedraPhys()],
+                                 [yade.Law2_PolyhedraGeom_PolyhedraPhys_Volumetric()]),
+            step,
+            newton,
+        ]
     O.dt = spec["dt"]
     return {"yid": yid, "bid": bid, "dynamic": dynamic, "newton": newton}

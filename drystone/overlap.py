@@ -1,0 +1,281 @@
+"""Exact overlap of convex polyhedra, compiled with numba (no YADE import).
+
+For two convex blocks A and B (half-spaces N x + d <= 0), the overlap I = A ∩ B is
+bounded by the faces of A clipped to B and the faces of B clipped to A (each clipped face
+keeps its block's outward normal, which is outward for I too). From these polygons:
+
+* volume V and centroid of I (tetrahedra from a point of I to each polygon's fan);
+* the gradient of V with respect to a translation of B:  dV/dx_B = sum over the faces of B
+  inside A of (area x outward normal) = -(the same sum over the faces of A inside B).
+
+The project's normal force F_n = K_n V (Sacsayhuaman paper Eq. 5 in YADE's volumetric form)
+then acts along  n = -dV/dx_B / |dV/dx_B|  (from A to B), the direction in which the
+overlap shrinks fastest, and |dV/dx_B| is the contact area A_c: the overlap's footprint,
+exact for a flat joint (A_c delta = V) and for a block rocking on an edge (a wedge) alike.
+
+Coplanar faces of A and B with the same outward normal (two stones side by side, their
+front faces in one plane) bound I on the same plane; to count that boundary once, such a
+face of B (its plane within ``tol`` = 1e-11 m of A's: far above round-off at wall scale) is
+left out. Exactly touching faces (opposite normals, one plane) give two polygons that
+cancel: V = 0.
+
+Units: metres. Arrays: per body, local vertices (nv, 3), face planes (nf, 3) + (nf,),
+faces as vertex indices padded with -1, counter-clockwise seen from outside.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+TOL = 1e-11  # m
+MAXV = 96  # vertices of a clipped face polygon (a face of k vertices clipped by p planes has <= k + p)
+
+
+class Shapes:
+    """The blocks' local geometry as padded arrays for the kernels (from vertex lists)."""
+
+    def __init__(self, local_vertices: list):
+        from geometry import polyhedron as ph
+
+        nb = len(local_vertices)
+        geo = [ph.faces(v) for v in local_vertices]
+        maxv = max(len(v) for v in local_vertices)
+        maxf = max(len(g[0]) for g in geo)
+        maxk = max(len(p) for g in geo for p in g[2])
+        self.verts = np.zeros((nb, maxv, 3))
+        self.nv = np.zeros(nb, np.int64)
+        self.normals = np.zeros((nb, maxf, 3))
+        self.offsets = np.zeros((nb, maxf))
+        self.nf = np.zeros(nb, np.int64)
+        self.faces = -np.ones((nb, maxf, maxk), np.int64)
+        self.fk = np.zeros((nb, maxf), np.int64)
+        for i, (v, (n, d, polys)) in enumerate(zip(local_vertices, geo)):
+            v = np.asarray(v, float)
+            self.verts[i, :len(v)] = v
+            self.verts[i, len(v):] = v[0]
+            self.nv[i] = len(v)
+            self.normals[i, :len(n)] = n
+            self.offsets[i, :len(n)] = d
+            self.nf[i] = len(n)
+            for k, p in enumerate(polys):
+                self.faces[i, k, :len(p)] = p
+                self.fk[i, k] = len(p)
+        if maxk + maxf > MAXV // 2:
+            raise ValueError(f"blocks with {maxk}-gon faces and {maxf} faces exceed the overlap kernel's "
+                             f"polygon buffer ({MAXV}); simplify the blocks")
+
+
+@njit(cache=True)
+def _clip(P, k, n0, n1, n2, d, Q):
+    """Sutherland-Hodgman: keep the part of polygon P[:k] with n.x + d <= 0; into Q."""
+    m = 0
+    for i in range(k):
+        j = i + 1 if i + 1 < k else 0
+        sa = n0 * P[i, 0] + n1 * P[i, 1] + n2 * P[i, 2] + d
+        sb = n0 * P[j, 0] + n1 * P[j, 1] + n2 * P[j, 2] + d
+        if sa <= 0.0:
+            Q[m, 0] = P[i, 0]
+            Q[m, 1] = P[i, 1]
+            Q[m, 2] = P[i, 2]
+            m += 1
+        if (sa < 0.0 < sb) or (sb < 0.0 < sa):
+            t = sa / (sa - sb)
+            Q[m, 0] = P[i, 0] + t * (P[j, 0] - P[i, 0])
+            Q[m, 1] = P[i, 1] + t * (P[j, 1] - P[i, 1])
+            Q[m, 2] = P[i, 2] + t * (P[j, 2] - P[i, 2])
+            m += 1
+    return m
+
+
+@njit(cache=True)
+def _faces_inside(V, F, FK, nf, N1, D1, N2, D2, nf2, dedup, tol, polys, counts, start):
+    """Clip every face of one body (global vertices V, planes N1, D1) to the other body's
+    half-spaces (N2 x + D2 <= 0); store the non-empty polygons from index ``start``.
+    With ``dedup``, a face lying in a plane of the other body with the same outward
+    normal (within ``tol``) is skipped: the other body's face already bounds the overlap
+    there."""
+    A = np.empty((MAXV, 3))
+    B = np.empty((MAXV, 3))
+    c = start
+    for f in range(nf):
+        if dedup:
+            dup = False
+            for p in range(nf2):
+                if N1[f, 0] * N2[p, 0] + N1[f, 1] * N2[p, 1] + N1[f, 2] * N2[p, 2] > 1.0 - 1e-12 \
+                        and abs(D1[f] - D2[p]) < tol:
+                    dup = True
+                    break
+            if dup:
+                continue
+        k = FK[f]
+        for q in range(k):
+            A[q] = V[F[f, q]]
+        for p in range(nf2):
+            k = _clip(A, k, N2[p, 0], N2[p, 1], N2[p, 2], D2[p], B)
+            if k < 3:
+                break
+            for q in range(k):
+                A[q] = B[q]
+        if k >= 3:
+            for q in range(k):
+                polys[c, q] = A[q]
+            counts[c] = k
+            c += 1
+    return c
+
+
+@njit(cache=True)
+def pair(VA, FA, FKA, nfa, NA, DA, VB, FB, FKB, nfb, NB, DB, tol):
+    """Overlap of bodies A and B (global frame). Returns (V, centroid (3,), g (3,)) with
+    g = dV/dx_B (m^2); V = 0 when they do not overlap."""
+    polys = np.empty((nfa + nfb, MAXV, 3))
+    counts = np.zeros(nfa + nfb, np.int64)
+    na = _faces_inside(VA, FA, FKA, nfa, NA, DA, NB, DB, nfb, False, tol, polys, counts, 0)
+    nt = _faces_inside(VB, FB, FKB, nfb, NB, DB, NA, DA, nfa, True, tol, polys, counts, na)
+    cen = np.zeros(3)
+    g = np.zeros(3)
+    if nt == 0:
+        return 0.0, cen, g
+    r = np.zeros(3)
+    npts = 0
+    for s in range(nt):
+        for q in range(counts[s]):
+            r += polys[s, q]
+            npts += 1
+    r /= npts
+    vol = 0.0
+    for s in range(nt):
+        k = counts[s]
+        P = polys[s]
+        ax = 0.0
+        ay = 0.0
+        az = 0.0
+        for q in range(k):
+            j = q + 1 if q + 1 < k else 0
+            ax += P[q, 1] * P[j, 2] - P[q, 2] * P[j, 1]
+            ay += P[q, 2] * P[j, 0] - P[q, 0] * P[j, 2]
+            az += P[q, 0] * P[j, 1] - P[q, 1] * P[j, 0]
+        if s >= na:  # a face of B inside A
+            g[0] += 0.5 * ax
+            g[1] += 0.5 * ay
+            g[2] += 0.5 * az
+        u = P[0] - r
+        for q in range(1, k - 1):
+            v = P[q] - r
+            w = P[q + 1] - r
+            v6 = u[0] * (v[1] * w[2] - v[2] * w[1]) + u[1] * (v[2] * w[0] - v[0] * w[2]) \
+                + u[2] * (v[0] * w[1] - v[1] * w[0])
+            vol += v6
+            cen += v6 * (u + v + w)
+    if vol <= 0.0:
+        return 0.0, np.zeros(3), np.zeros(3)
+    cen = r + cen / (4.0 * vol)
+    return vol / 6.0, cen, g
+
+
+@njit(cache=True)
+def _to_global(verts, nv, normals, offsets, nf, pos, rot, i, V, N, D):
+    for q in range(nv[i]):
+        for a in range(3):
+            V[q, a] = pos[i, a] + rot[i, a, 0] * verts[i, q, 0] + rot[i, a, 1] * verts[i, q, 1] \
+                + rot[i, a, 2] * verts[i, q, 2]
+    for f in range(nf[i]):
+        for a in range(3):
+            N[f, a] = rot[i, a, 0] * normals[i, f, 0] + rot[i, a, 1] * normals[i, f, 1] + rot[i, a, 2] * normals[i, f, 2]
+        D[f] = offsets[i, f] - (N[f, 0] * pos[i, 0] + N[f, 1] * pos[i, 1] + N[f, 2] * pos[i, 2])
+
+
+@njit(cache=True)
+def all_contacts(verts, nv, normals, offsets, nf, faces, fk, pos, rot, moving, tol):
+    """Every overlapping pair with at least one moving body. ``pos`` (nb, 3) and ``rot``
+    (nb, 3, 3) place each body's local geometry. Returns arrays over contacts: id1, id2
+    (id1 < id2), volume (m^3), centroid (m), normal (A->B), area A_c = |dV/dx_B| (m^2)."""
+    nb = len(nv)
+    maxv = verts.shape[1]
+    maxf = normals.shape[1]
+    GV = np.empty((nb, maxv, 3))
+    GN = np.empty((nb, maxf, 3))
+    GD = np.empty((nb, maxf))
+    lo = np.empty((nb, 3))
+    hi = np.empty((nb, 3))
+    for i in range(nb):
+        _to_global(verts, nv, normals, offsets, nf, pos, rot, i, GV[i], GN[i], GD[i])
+        for a in range(3):
+            lo[i, a] = GV[i, :nv[i], a].min()
+            hi[i, a] = GV[i, :nv[i], a].max()
+    cap = 16 * nb + 16
+    id1 = np.empty(cap, np.int64)
+    id2 = np.empty(cap, np.int64)
+    vol = np.empty(cap)
+    cen = np.empty((cap, 3))
+    nrm = np.empty((cap, 3))
+    area = np.empty(cap)
+    m = 0
+    for i in range(nb):
+        for j in range(i + 1, nb):
+            if not (moving[i] or moving[j]):
+                continue
+            if lo[i, 0] > hi[j, 0] or lo[j, 0] > hi[i, 0] or lo[i, 1] > hi[j, 1] or lo[j, 1] > hi[i, 1] \
+                    or lo[i, 2] > hi[j, 2] or lo[j, 2] > hi[i, 2]:
+                continue
+            v, c, g = pair(GV[i], faces[i], fk[i], nf[i], GN[i], GD[i], GV[j], faces[j], fk[j], nf[j], GN[j], GD[j],
+                           tol)
+            if v <= 0.0:
+                continue
+            ga = np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
+            if ga <= 0.0:
+                continue
+            if m == cap:  # grow
+                cap *= 2
+                id1 = _grow_i(id1, cap)
+                id2 = _grow_i(id2, cap)
+                vol = _grow_f(vol, cap)
+                area = _grow_f(area, cap)
+                cen = _grow_3(cen, cap)
+                nrm = _grow_3(nrm, cap)
+            id1[m] = i
+            id2[m] = j
+            vol[m] = v
+            cen[m] = c
+            nrm[m] = -g / ga
+            area[m] = ga
+            m += 1
+    return id1[:m], id2[:m], vol[:m], cen[:m], nrm[:m], area[:m]
+
+
+@njit(cache=True)
+def _grow_i(a, cap):
+    b = np.empty(cap, np.int64)
+    b[:len(a)] = a
+    return b
+
+
+@njit(cache=True)
+def _grow_f(a, cap):
+    b = np.empty(cap)
+    b[:len(a)] = a
+    return b
+
+
+@njit(cache=True)
+def _grow_3(a, cap):
+    b = np.empty((cap, 3))
+    b[:len(a)] = a
+    return b
+
+
+def overlap(va, vb, tol: float = TOL) -> tuple[float, np.ndarray, np.ndarray]:
+    """Overlap of two convex blocks given by their vertices in one frame (convenience for
+    tests and tools): (volume m^3, centroid m, dV/dx_B m^2)."""
+    s = Shapes([np.asarray(va, float), np.asarray(vb, float)])
+    i = np.eye(3)
+    pos = np.zeros((2, 3))
+    out = []
+    for b in range(2):
+        V = np.empty((s.verts.shape[1], 3))
+        N = np.empty((s.normals.shape[1], 3))
+        D = np.empty(s.normals.shape[1])
+        _to_global(s.verts, s.nv, s.normals, s.offsets, s.nf, pos, np.stack([i, i]), b, V, N, D)
+        out.append((V, N, D))
+    (VA, NA, DA), (VB, NB, DB) = out
+    return pair(VA, s.faces[0], s.fk[0], s.nf[0], NA, DA, VB, s.faces[1], s.fk[1], s.nf[1], NB, DB, tol)
