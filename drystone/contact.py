@@ -15,10 +15,15 @@ The law
 Eq. 8 of the paper writes F_d = mu_0 A_c v_rel, but mu_0 = 0.08 or 0.8 as a coefficient in
 N s/m^3 would be no damping at all; Abaqus defines contact damping as a fraction of
 critical damping, which is how we read mu_0 = xi: the normal dashpot is c_n = 2 xi
-sqrt(K_n A_c m_eff) and the tangential one (acting only while the contact sticks) is
-c_t = 2 xi sqrt(K_t A_c m_eff), with m_eff = m_A m_B / (m_A + m_B) (the moving body's
-mass against a fixed one). The normal dashpot never pulls: F_n + F_dn >= 0. The total
-tangential force (spring + dashpot) never exceeds mu F_n.
+sqrt(K_n A_c m_n) and the tangential one (acting only while the contact sticks) is
+c_t = 2 xi sqrt(K_t A_c m_t), with m_n, m_t the effective masses of the two bodies at the
+contact point along the normal and along the sliding direction (``effective_mass``:
+1/m = sum over the moving bodies of 1/m_i + (r_i x u).I_i^-1 (r_i x u); a fixed body adds
+nothing). At a contact away from the centroid's axis (a block rocking on an edge) that
+mass is a fraction of the block's: taking the whole mass would overdamp the contact's own
+mode and make the explicit dashpot unstable (a step-to-step oscillation). The normal
+dashpot never pulls: F_n + F_dn >= 0. The total tangential force (spring + dashpot) never
+exceeds mu F_n.
 
 A_c, the contact area, is estimated from the overlap volume, its extent along the joint's
 face normal (``projection_direction``, from both blocks' vertices) and the depth of its
@@ -107,6 +112,20 @@ def contact_area(volume, extent, centroid_depth) -> np.ndarray:
     return np.where(ok, 2.0 * v / (d1 + d2s), 0.0)
 
 
+def effective_mass(u, ra, rb, inv_mass_a, inv_mass_b, inv_inertia_a, inv_inertia_b) -> np.ndarray:
+    """Effective mass (kg) of a contact along unit directions u (m, 3): the inverse of the
+    relative acceleration along u per unit pair of opposite forces along u applied at the
+    contact point, r_a, r_b (m, 3) from each body's centre. ``inv_mass_*`` (m,) 1/kg (0 for
+    a non-moving body), ``inv_inertia_*`` (m, 3, 3) global inverse inertia tensors
+    (1/(kg m^2); zeros for a non-moving body)."""
+    wa = cross(ra, u)
+    wb = cross(rb, u)
+    qa = dot(wa, np.matmul(inv_inertia_a, wa[:, :, None])[:, :, 0])
+    qb = dot(wb, np.matmul(inv_inertia_b, wb[:, :, None])[:, :, 0])
+    inv = inv_mass_a + inv_mass_b + qa + qb
+    return np.divide(1.0, inv, out=np.full_like(inv, np.inf), where=inv > 0)
+
+
 def rotate_into_plane(fs, n) -> np.ndarray:
     """Carry stored shear forces into the current tangent plane, keeping their magnitude."""
     fs = np.asarray(fs, dtype=float)
@@ -123,7 +142,8 @@ def forces(n, v_rel, fn_el, fs_prev, area, kt, mu, xi, m_eff, dt):
     Parameters (arrays over contacts): n (m,3) unit normals A->B; v_rel (m,3) m/s;
     fn_el (m,) elastic normal force magnitude N (>= 0, from the volumetric law);
     fs_prev (m,3) stored elastic shear force on B, N; area (m,) A_c m^2; kt (m,) N/m^3;
-    mu (m,); xi (m,) fraction of critical damping; m_eff (m,) kg; dt s.
+    mu (m,); xi (m,) fraction of critical damping; m_eff (m,) kg, the contact's effective
+    mass along the sliding direction; dt s.
 
     Returns (f_on_b (m,3) the force this law adds on B: normal dashpot + shear spring +
     shear dashpot; fs_new (m,3) the elastic shear force to store; slipping (m,) bool).

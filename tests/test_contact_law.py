@@ -88,3 +88,17 @@ def test_pair_properties_series_and_overrides():
     b = {"kn": 2e8, "kt": 1e8, "mu": 0.4, "damping": 0.0}
     p = law.pair_properties(a, b, {"mu": 0.5})
     assert p["kn"] == 2e8 and p["kt"] == 1e8 and p["mu"] == 0.5 and p["damping"] == 0.4
+
+
+def test_effective_mass_at_a_contact_point():
+    """A free block (m, principal inertia I) against a fixed one: the effective mass along
+    the normal is m at a point on the normal through the centre, and 1/(1/m + r^2/I)
+    at a lever arm r (the rocking edge); a fixed body adds nothing."""
+    m, inertia, r = 10.0, np.array([0.5, 0.2, 0.3]), 0.1
+    u = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 1.0]])
+    ra = np.zeros((2, 3))
+    rb = np.array([[0.0, 0.0, -0.2], [r, 0.0, -0.2]])  # on the axis, then offset along x
+    inv_i_b = np.repeat(np.diag(1.0 / inertia)[None], 2, axis=0)
+    me = law.effective_mass(u, ra, rb, np.zeros(2), np.full(2, 1.0 / m), np.zeros((2, 3, 3)), inv_i_b)
+    # offset along x, force along z: rotation about y (inertia 0.2)
+    assert me == pytest.approx([m, 1.0 / (1.0 / m + r * r / 0.2)], rel=1e-12)

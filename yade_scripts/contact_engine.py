@@ -72,10 +72,14 @@ class PenaltyCoulomb:
     the overlap's extent (``drystone.contact.contact_area``).
     """
 
-    def __init__(self, pair_props, mass, local_vertices, detection="yade"):
+    def __init__(self, pair_props, mass, local_vertices, detection="yade", inertia=None):
         self.pair_props = pair_props
         self.mass = np.asarray(mass, float)
         self.moving = np.isfinite(self.mass)
+        # principal moments (kg m^2) in the body frame; non-moving bodies: no inverse
+        inertia = np.ones((len(self.mass), 3)) if inertia is None else np.asarray(inertia, float)
+        self.inv_inertia_local = np.where(self.moving[:, None], 1.0 / inertia, 0.0)
+        self.inv_mass = np.where(self.moving, 1.0 / self.mass, 0.0)
         self.native = detection == "native"
         if self.native:
             self.shapes = ov.Shapes(local_vertices)
@@ -164,14 +168,20 @@ class PenaltyCoulomb:
         ra = c - pos[ia]
         rb = c - pos[ib]
         v_rel = (vel[ib] + law.cross(angvel[ib], rb)) - (vel[ia] + law.cross(angvel[ia], ra))
-        ma, mb = self.mass[ia], self.mass[ib]
-        with np.errstate(invalid="ignore"):
-            m_eff = np.where(np.isinf(ma), mb, np.where(np.isinf(mb), ma, ma * mb / (ma + mb)))
+        # effective masses at the contact point along the normal and the sliding direction
+        ia_inv = np.matmul(rot[ia] * self.inv_inertia_local[ia][:, None, :], rot[ia].transpose(0, 2, 1))
+        ib_inv = np.matmul(rot[ib] * self.inv_inertia_local[ib][:, None, :], rot[ib].transpose(0, 2, 1))
+        masses = (ra, rb, self.inv_mass[ia], self.inv_mass[ib], ia_inv, ib_inv)
+        m_n = law.effective_mass(n, *masses)
+        vt = v_rel - law.dot(v_rel, n)[:, None] * n
+        vt_mag = np.linalg.norm(vt, axis=1)
+        t_dir = np.where(vt_mag[:, None] > 0, vt / np.where(vt_mag > 0, vt_mag, 1.0)[:, None], 0.0)
+        m_t = np.where(vt_mag > 0, law.effective_mass(t_dir, *masses), m_n)
         fn = kn * vol
 
         fs_prev = np.array([self._shear.get(k, (0.0, 0.0, 0.0)) for k in keys], float).reshape(-1, 3)
-        f_t, fs_new, slipping = law.forces(n, v_rel, fn, fs_prev, area, kt, mu, xi, m_eff, O.dt)
-        f_nd = law.normal_damping(n, v_rel, fn, kn, area, xi, m_eff)
+        f_t, fs_new, slipping = law.forces(n, v_rel, fn, fs_prev, area, kt, mu, xi, m_t, O.dt)
+        f_nd = law.normal_damping(n, v_rel, fn, kn, area, xi, m_n)
         f_b = f_t + f_nd
         self._shear = dict(zip(keys, fs_new))
 
