@@ -10,11 +10,11 @@ STAMP   := $(VENV)/.setup-stamp
 RUN     := $(PY) -m drystone
 
 .PHONY: setup system-deps test demo run gravity4 settlement4 bench clean help records spectrum ogawa3d ogawa \
-        sweep tilt tilt-rate tilt-sensitivity tilt-report
+        sweep tilt tilt-rate tilt-sensitivity tilt-report sacsayhuaman sacsayhuaman-report
 
 help:
 	@echo "make setup        install Debian's YADE, make .venv, install PyPI dependencies"
-	@echo "make demo         the main job (see README)"
+	@echo "make demo         the main job: verification cases + the 40-stone wall under one record at two PGAs (~8 min)"
 	@echo "make test         the test suite"
 	@echo "make run CASE=cases/x.toml [SET='key=value ...']   run any case file"
 	@echo "make gravity4 | settlement4   the paper's four-block verification cases"
@@ -27,6 +27,8 @@ help:
 	@echo "make tilt         tilt-table validation: 5 generated walls (~30 min each, JOBS in parallel) + report"
 	@echo "make tilt-rate    the paper's 0.2 deg/s protocol on wall seed 0 (~90 min) + report"
 	@echo "make tilt-sensitivity   mu, K_n and Table 1's DEM calibration on wall seed 0 (7 runs) + report"
+	@echo "make sacsayhuaman [DASK=...]   40-stone wall: white noise, sine sweeps, resonance PGAs, Table 3 (~1 h on 2 cores)"
+	@echo "make sacsayhuaman-report       rewrite results/sacsayhuaman/ from the runs made so far"
 
 setup: system-deps $(STAMP)
 
@@ -70,6 +72,7 @@ demo: setup
 	$(RUN) run cases/gravity4.toml -j $(JOBS)
 	$(RUN) run cases/settlement4.toml -j $(JOBS)
 	$(RUN) compare results/gravity4 results/settlement4
+	$(PY) -m sacsayhuaman demo --workers $(JOBS)
 
 bench: setup
 	$(RUN) bench
@@ -96,6 +99,12 @@ tilt-rate: setup
 tilt-sensitivity: setup
 	$(RUN) sweep cases/sweeps/tilt_sensitivity.toml --workers $(JOBS)
 	$(PY) -m postprocess.tilt
+
+sacsayhuaman: setup
+	$(PY) -m sacsayhuaman all --workers $(JOBS) $(if $(DASK),--dask $(DASK))
+
+sacsayhuaman-report: setup
+	$(PY) -m sacsayhuaman report
 
 tilt-report: setup
 	$(PY) -m postprocess.tilt

@@ -1,0 +1,1 @@
+"""The Sacsayhuaman wall-section study (paper §4-5): analysis, figures, study driver."""
