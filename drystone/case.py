@@ -227,6 +227,11 @@ def validate(raw: dict, where: str, base_dir: Path, stem: str = "case") -> dict:
         case["case"]["geometry"] = str(gp.resolve())
     elif "generator" not in geo:
         raise CaseError(f"{where}: [case] 'geometry' table needs a 'generator' key")
+    elif isinstance(geo.get("folder"), str):  # generators reading files (outlines): relative to the case
+        fp = (base_dir / geo["folder"]) if not Path(geo["folder"]).is_absolute() else Path(geo["folder"])
+        if not fp.is_dir():
+            raise CaseError(f"{where}: [case] geometry 'folder': {fp} is not a folder")
+        case["case"]["geometry"] = dict(geo, folder=str(fp.resolve()))
     if isinstance(case["time"]["step"], str) and case["time"]["step"] != "auto":
         raise CaseError(f"{where}: [time] 'step' must be a number (s) or 'auto', got {case['time']['step']!r}")
     if isinstance(case["time"]["step"], float) and case["time"]["step"] <= 0:

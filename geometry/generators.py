@@ -13,6 +13,7 @@ GENERATORS = {
     "irregular_wall": ("geometry.irregular_wall", "make"),
     "tilt_wall": ("geometry.irregular_wall", "tilt_wall"),
     "sacsayhuaman": ("geometry.sacsayhuaman", "make"),
+    "outlines": ("geometry.outlines", "make"),
 }
 
 

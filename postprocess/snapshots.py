@@ -53,12 +53,15 @@ def positions_at(out: Path, times: list[float], world: bool = True) -> list[tupl
 
 
 def render(out: Path, times: list[float], path: Path, world: bool = True, elev: float = 15, azim: float = -60,
-           titles: list[str] | None = None) -> Path:
-    """One panel per time; moving blocks in stone colour, fixed ones grey, platform dark."""
+           titles: list[str] | None = None, frame_on_first: bool = False) -> Path:
+    """One panel per time; moving blocks in stone colour, fixed ones grey, platform dark.
+    The axes span every frame's blocks, or with ``frame_on_first`` the first frame's (so
+    that stones thrown far after a collapse do not shrink the wall to a dot)."""
     out = Path(out)
     roles = {b["id"]: b["role"] for b in json.loads((out / "geometry.json").read_text())["blocks"]}
     frames = positions_at(out, times, world)
-    allv = np.vstack([v for _, verts, _ in frames for bid, v in verts.items() if roles[bid] != "platform"])
+    framed = frames[:1] if frame_on_first else frames
+    allv = np.vstack([v for _, verts, _ in framed for bid, v in verts.items() if roles[bid] != "platform"])
     lo, hi = allv.min(axis=0), allv.max(axis=0)
     span = (hi - lo).max()
     mid = 0.5 * (lo + hi)

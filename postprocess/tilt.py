@@ -211,7 +211,8 @@ def snapshot_figure(run: dict, path: Path) -> Path:
     titles = [f"{a:g} deg" for a in angles] + ["end of run"]
     if run.get("collapse_angle_deg") is not None:
         titles[len(angles) - 1] = f"{angles[-1]:g} deg (our collapse onset)"
-    return snapshots.render(run["folder"], times, path, world=True, elev=12, azim=-35, titles=titles)
+    return snapshots.render(run["folder"], times, path, world=True, elev=12, azim=-35, titles=titles,
+                            frame_on_first=True)
 
 
 def build(seeds=None, rate=None, sensitivity=None, out: Path = OUT, figures: bool = True) -> dict:

@@ -1,0 +1,57 @@
+"""User outlines extruded to blocks (geometry/outlines.py)."""
+import numpy as np
+import pytest
+
+from geometry import blockfile as bf
+from geometry import outlines as ol
+from geometry import sacsayhuaman as sw
+
+
+def write(folder, name, text):
+    folder.mkdir(exist_ok=True)
+    (folder / name).write_text(text)
+
+
+def test_two_stones_extruded_with_platform(tmp_path):
+    d = tmp_path / "w"
+    write(d, "1.csv", "x,z\n0,0\n1,0\n1,0.5\n0,0.5\n")
+    write(d, "2.txt", "# top stone, clockwise on purpose\n0 0.5\n0 1\n1 1\n1 0.5\n")
+    data = ol.make(d, thickness=0.4)
+    bs = bf.parse(data)
+    assert bs.ids("fixed") == [1] and bs.ids("free") == [2]
+    assert bs.block(2).volume == pytest.approx(0.5 * 0.4)
+    v = bs.block(2).vertices
+    assert v[:, 1].min() == pytest.approx(-0.2) and v[:, 1].max() == pytest.approx(0.2)
+    assert bs.block(0).role == "platform" and bs.block(0).vertices[:, 2].max() == pytest.approx(0.0)
+
+
+@pytest.mark.parametrize("name, text, match", [
+    ("3.csv", "0 0\n1 0\n0.5 0.2\n1 1\n0 1\n", "not convex"),
+    ("3.csv", "0 0\n1 0\nabc def\n", r"3\.csv:3"),
+    ("3.csv", "0 0\n1 0\n", "at least 3"),
+    ("x.csv", "0 0\n1 0\n1 1\n", "named by the stone's id"),
+])
+def test_bad_outlines_name_the_file(tmp_path, name, text, match):
+    write(tmp_path / "w", name, text)
+    with pytest.raises(ol.OutlineError, match=match):
+        ol.make(tmp_path / "w", thickness=0.5)
+
+
+def test_sacsayhuaman_layout_round_trip(tmp_path):
+    """The generated section's front faces written as outline files come back as the same
+    40 stones with the paper's roles and control points."""
+    ref = sw.make(seed=2)
+    d = tmp_path / "stones"
+    for b in ref["blocks"][1:]:
+        v = np.asarray(b["vertices"])
+        front = v[np.isclose(v[:, 1], v[:, 1].min())][:, [0, 2]]
+        c = front.mean(axis=0)
+        front = front[np.argsort(np.arctan2(front[:, 1] - c[1], front[:, 0] - c[0]))]
+        write(d, f"{b['id']}.csv", "\n".join(f"{x:.12f},{z:.12f}" for x, z in front))
+    data = ol.make(d, thickness=0.8, layout="sacsayhuaman")
+    got, want = bf.parse(data), bf.parse(ref)
+    for bid in range(1, 41):
+        assert got.block(bid).volume == pytest.approx(want.block(bid).volume, rel=1e-9)
+        assert got.block(bid).role == want.block(bid).role
+        assert got.block(bid).blocked_dofs == want.block(bid).blocked_dofs
+    assert {c["name"]: c["block"] for c in data["control_points"]} == {"A": 35, "B": 38, "C": 39, "D": 40}
