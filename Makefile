@@ -20,7 +20,7 @@ help:
 	@echo "make gravity4 | settlement4   the paper's four-block verification cases"
 	@echo "make bench        speed figures (not a test)"
 	@echo "make ogawa        Ogawa et al.: Tables 1-3 check and figure, 1D friction studies and report (~15 min)"
-	@echo "make ogawa3d      the same five blocks in 3D (YADE) for the named friction sets (~25 min per set)"
+	@echo "make ogawa3d      the same five blocks in 3D (YADE) for the named friction sets (~4 min per set)"
 	@echo "make records      papers' records (user files or FEMA P695 analogues) -> results/records/catalogue.json"
 	@echo "make spectrum FILE=path [ARGS=...]   PGA, step, duration, predominant frequencies (JSON) + PNG"
 	@echo "make sweep SWEEP=cases/sweeps/x.toml [DASK=tcp://host:8786|local]   a sweep, parallel and resumable"

@@ -19,7 +19,7 @@ def main(argv=None) -> int:
     s.add_argument("--substeps", type=int, default=10, help="Newmark sub-steps per record sample (10: 1e-3 s)")
     s.add_argument("--workers", type=int, default=None)
     sub.add_parser("insitu", help="Tables 1-3: averages and figure")
-    t = sub.add_parser("study3d", help="the 3D YADE model for the named friction sets (~25 min each)")
+    t = sub.add_parser("study3d", help="the 3D YADE model for the named friction sets (~4 min each)")
     t.add_argument("--workers", type=int, default=None)
     t.add_argument("--sets", nargs="*", default=None, help="named sets (default: all of ogawa.study.NAMED)")
     sub.add_parser("refresh", help="attach finished 3D runs to results/ogawa/summary.json, rewrite the report")

@@ -148,7 +148,7 @@ def _run_3d(name: str) -> str:
 
 def run_3d(names=NAMED, workers: int | None = None) -> None:
     """The 3D YADE model for the named friction sets (one YADE process per set, in
-    parallel); about 25 min per set on one core. Then refresh summary.json and the report."""
+    parallel); about 4 min per set on one core. Then refresh summary.json and the report."""
     todo = [n for n in names if not (folder_3d(n) / "summary.json").is_file()]
     with ProcessPoolExecutor(max_workers=workers or os.cpu_count() or 1) as ex:
         for name in ex.map(_run_3d, todo):
