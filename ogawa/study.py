@@ -27,6 +27,7 @@ import numpy as np
 
 import drystone
 from drystone import paths
+from geometry.ogawa_blocks import H2 as FALL_HEIGHT_M  # m, the height of the top blocks
 from ogawa import mrb1d
 
 OUT = paths.RESULTS / "ogawa"
@@ -57,10 +58,12 @@ def kobe(pga_g: float | None = 0.818):
 
 
 def experimental_pattern(residual_mm) -> bool:
-    """Blocks 3 and 4 move most, block 2 least (|residual| after the last run)."""
-    d = np.abs(np.asarray(residual_mm, float))
-    order = np.argsort(-d)
-    return set(order[:2].tolist()) == {2, 3} and int(np.argmin(d)) == 1
+    """Blocks 3 and 4 move most, block 2 least (|residual| after the last run; a block
+    that fell (None) counts as the largest)."""
+    d = np.abs(np.array([np.inf if x is None else x for x in residual_mm], float))
+    order = np.argsort(-d, kind="stable")
+    distinct = d[order[1]] > d[order[2]] and d[1] < np.sort(d)[1]  # no ties at the top two or the bottom
+    return bool(distinct and set(order[:2].tolist()) == {2, 3} and int(np.argmin(d)) == 1)
 
 
 def _run_set(args):
@@ -134,7 +137,11 @@ def _attach_3d(summary: dict) -> None:
             continue
         s3 = json.loads(p.read_text())
         runs = [st for st in s3["stage_residuals"] if st["kind"] == "rest"]
-        summary["sets"][name]["3d"] = [[1e3 * st["displacement_m"][str(b)][0] for b in range(1, 6)] for st in runs]
+        # a block that dropped by more than half its height has fallen off the stack:
+        # its residual is not a sliding distance (None in the tables, "fell" in the report)
+        summary["sets"][name]["3d"] = [[None if st["displacement_m"][str(b)][2] < -0.5 * FALL_HEIGHT_M
+                                        else 1e3 * st["displacement_m"][str(b)][0] for b in range(1, 6)]
+                                       for st in runs]
 
 
 def _run_3d(name: str) -> str:
@@ -175,10 +182,13 @@ def bar_chart(name: str, res: dict, path: Path, title: str) -> Path:
     models = [m for m in ("1d", "3d") if m in res]
     fig, axes = plt.subplots(1, len(models), figsize=(5.5 * len(models), 3.8), squeeze=False)
     for ax, model in zip(axes[0], models):
-        data = np.asarray(res[model])
+        data = np.array([[np.nan if x is None else x for x in row] for row in res[model]], float)
         w = 0.8 / len(data)
         for r, row in enumerate(data):
-            ax.bar(np.arange(1, 6) + (r - (len(data) - 1) / 2) * w, row, w, label=f"run{r + 1}")
+            x = np.arange(1, 6) + (r - (len(data) - 1) / 2) * w
+            ax.bar(x, np.nan_to_num(row), w, label=f"run{r + 1}")
+            for xi in x[np.isnan(row)]:
+                ax.text(xi, 0, "fell", rotation=90, fontsize=6, ha="center", va="bottom")
         ax.set_xticks(range(1, 6))
         ax.set_xlabel("block")
         ax.set_ylabel("residual displacement (mm)")
@@ -208,7 +218,7 @@ def report(summary: dict, out: Path) -> Path:
                   "|---|---|---|---|---|---|---|---|"]
         for model in ("1d", "3d"):
             for r, row in enumerate(s.get(model, []), 1):
-                lines.append(f"| {model} | {r} | " + " | ".join(f"{x:.2f}" for x in row)
+                lines.append(f"| {model} | {r} | " + " | ".join("fell" if x is None else f"{x:.2f}" for x in row)
                              + f" | {'yes' if experimental_pattern(row) else 'no'} |")
         lines += ["", f"![{name}]({png.name})", ""]
     lines += ["## Random sets with large variation", "",

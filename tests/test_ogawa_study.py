@@ -36,3 +36,12 @@ def test_sets_reproducible_and_table4():
 def test_experimental_pattern():
     assert study.experimental_pattern([10, 2, 25, 20, 8])
     assert not study.experimental_pattern([30, 2, 25, 20, 8])
+
+
+def test_experimental_pattern_with_fallen_blocks():
+    """A block that fell off (None) counts as moving most; ties at the top are no pattern."""
+    from ogawa.study import experimental_pattern
+    assert experimental_pattern([1.0, 0.5, 5.0, 4.0, 2.0])
+    assert experimental_pattern([1.0, 0.5, None, None, 2.0])
+    assert not experimental_pattern([1.0, 0.5, None, None, None])  # block 5 fell too: no order among them
+    assert not experimental_pattern([1.0, 1.0, 5.0, 4.0, 2.0])  # block 2 not the least alone
