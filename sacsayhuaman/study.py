@@ -58,7 +58,8 @@ def identification() -> dict:
 
 def sine(workers=None, backend="local", address=None) -> dict:
     sweep.run(SWEEPS / "sacsayhuaman_sine.toml", workers, backend, address)
-    peaks = identification()["control_points"]["A"]["peaks_hz"]
+    cps = identification()["control_points"].values()
+    peaks = sorted({round(f, 3) for cp in cps for f in cp["peaks_hz"]})  # the peaks of A-D
     runs = [(f"f_{f:.3f}", [f"stages.1.frequency_hz={f:.6g}"]) for f in peaks]
     p = _write_sweep(OUT / "sweeps" / "sine_peaks.toml", "sacsayhuaman_sine_peaks", SINE_CASE, runs)
     sweep.run(p, workers, backend, address)
