@@ -170,9 +170,10 @@ def report(out: Path = OUT) -> Path:
     lines += ["", "## Resonance sine scaled to PGA 0.1-0.9 g (§4.3, Figure 24)", ""]
     res = resonance_table()
     if res:
-        lines += ["| PGA (g) | max residual (mm) | stones that moved (> 0.1 mm) | collapsed |", "|---|---|---|---|"]
-        lines += [f"| {r['pga_g']:g} | {r['max_residual_mm']:.2f} | {r['moved']} | {r['collapsed'] or '-'} |"
-                  for r in res]
+        lines += ["| PGA (g) | max residual (mm) | carried by | stones moved > 0.1 mm | collapsed stones |",
+                  "|---|---|---|---|---|"]
+        lines += [f"| {r['pga_g']:g} | {r['max_residual_mm']:.2f} | {', '.join(map(str, r['stones']))} | "
+                  f"{len(r['moved'])} | {', '.join(map(str, r['collapsed'])) or '-'} |" for r in res]
         lines.append(f"![resonance]({fig.final_states(res, 'pga_g', out / 'resonance_final_states.png').name})")
     else:
         lines.append("Not run: python -m sacsayhuaman resonance")
