@@ -287,7 +287,7 @@ def _execute_dask(jobs: list[Job], workers: int, address: str | None):
         raise RuntimeError("the dask backend needs dask.distributed (make setup installs it)") from exc
     cluster = None
     if address in (None, "local"):
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0")
         client = Client(cluster)
     else:
         client = Client(address)
