@@ -123,9 +123,8 @@ def write_table3(rows: list[dict], path: Path) -> Path:
     return path
 
 
-def table3_markdown(rows: list[dict], paper: dict) -> str:
+def table3_markdown(rows: list[dict], paper: dict, records=("paruro2014", "cusco2023", "ancash1970")) -> str:
     """Table 3 laid out as the paper's (one column pair per record), ours beside theirs."""
-    records = ["paruro2014", "cusco2023", "ancash1970"]
     by = {(r["record"], round(r["pga_g"], 6)): r for r in rows}
     pgas = sorted({round(r["pga_g"], 6) for r in rows} | set(paper["pga_g"]))
     head = "| PGA | " + " | ".join(f"{r}: ours (mm, stones) | {r}: paper" for r in records) + " |"

@@ -209,7 +209,7 @@ def demo(workers=None) -> Path:
     lines = ["# Demo: Sacsayhuaman wall section under one record at two PGAs", "",
              "Generated 40-stone section (seed 0), Table 1 FEM properties, record from the catalogue "
              "(user file or FEMA P695 analogue). Residuals relative to the base, after 2 s of rest.", "",
-             an.table3_markdown(rows, p["table3"]), ""]
+             an.table3_markdown(rows, p["table3"], sorted({r["record"] for r in rows})), ""]
     for r in rows:
         s = json.loads((Path(r["folder"]) / "summary.json").read_text())
         lines.append(f"- {r['record']} at {r['pga_g']:g} g ({r['station']}, {r['component']}, scale "
