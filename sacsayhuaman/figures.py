@@ -102,7 +102,7 @@ def final_states(rows: list[dict], key: str, path: Path) -> Path:
     for ax in list(axes.flat)[n:]:
         ax.axis("off")
     sm = plt.cm.ScalarMappable(norm=norm, cmap=cmap)
-    fig.colorbar(sm, ax=axes.ravel().tolist(), shrink=0.8, label="residual displacement (mm); red: collapsed")
+    fig.colorbar(sm, ax=axes.ravel().tolist(), shrink=0.8, label="residual (mm); red: collapsed")
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return Path(path)
