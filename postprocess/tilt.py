@@ -275,7 +275,7 @@ def main(argv=None) -> int:
     ap.add_argument("--sensitivity", help="folder of the sensitivity sweep (results/tilt_sensitivity)")
     ap.add_argument("--out", default=str(OUT))
     a = ap.parse_args(argv)
-    s = build(a.seeds, a.rate, a.sensitivity, Path(a.out))
+    build(a.seeds, a.rate, a.sensitivity, Path(a.out))
     print((Path(a.out) / "report.md").read_text())
     print(f"written {Path(a.out) / 'summary.json'}")
     return 0

@@ -2,7 +2,7 @@
 independent half-space intersection (scipy/qhull) and finite differences."""
 import numpy as np
 import pytest
-from scipy.spatial import ConvexHull, HalfspaceIntersection
+from scipy.spatial import HalfspaceIntersection
 
 from drystone import overlap as ov
 from geometry import polyhedron as ph

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from conftest import requires_yade
-from drystone import paths, sweep
+from drystone import sweep
 from postprocess import compare
 from sacsayhuaman import analysis as an
 from sacsayhuaman import figures as fig

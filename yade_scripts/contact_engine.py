@@ -14,7 +14,6 @@ import yade
 
 from drystone import contact as law
 from drystone import overlap as ov
-from drystone import rotations
 
 
 def _padded(rows) -> np.ndarray:
