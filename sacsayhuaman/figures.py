@@ -15,6 +15,19 @@ import numpy as np  # noqa: E402
 from sacsayhuaman import analysis as an  # noqa: E402
 
 
+def _finish(fig, ax, path, xlabel: str, ylabel: str, title: str) -> Path:
+    """Labels, log grid, legend; save as PNG and close."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=10)
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return Path(path)
+
+
 def identification(wn: dict, paper: dict, path: Path) -> Path:
     fig, ax = plt.subplots(figsize=(9, 4.5))
     for name, cp in wn["control_points"].items():
@@ -25,15 +38,8 @@ def identification(wn: dict, paper: dict, path: Path) -> Path:
             ax.plot(pk, np.interp(pk, f, a), "v", color=line.get_color(), ms=5)
     for k, pk in enumerate(paper["identification"]["white_noise_peaks_hz"]):
         ax.axvline(pk, color="0.6", ls=":", lw=0.8, label="paper's peaks" if k == 0 else None)
-    ax.set_xlabel("frequency (Hz)")
-    ax.set_ylabel("Fourier amplitude of relative displacement (m s)")
-    ax.set_title("White noise out of plane: spectra of A-D relative to the base (cf. paper Fig. 21)", fontsize=10)
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return Path(path)
+    return _finish(fig, ax, path, "frequency (Hz)", "Fourier amplitude of relative displacement (m s)",
+                   "White noise out of plane: spectra of A-D relative to the base (cf. paper Fig. 21)")
 
 
 def sine_sweep(sr: dict, paper: dict, path: Path) -> Path:
@@ -47,15 +53,8 @@ def sine_sweep(sr: dict, paper: dict, path: Path) -> Path:
     if sr["dominant_frequency_hz"]:
         ax.axvline(sr["dominant_frequency_hz"], color="r", ls="--", lw=0.8,
                    label=f"ours: {sr['dominant_frequency_hz']:.3f} Hz")
-    ax.set_xlabel("sine frequency (Hz)")
-    ax.set_ylabel("max out-of-plane displacement relative to the base (mm)")
-    ax.set_title("Eq. 9 sines, 0.5 m/s², 10 s (cf. paper Figs. 22-23)", fontsize=10)
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return Path(path)
+    return _finish(fig, ax, path, "sine frequency (Hz)", "max out-of-plane displacement relative to the base (mm)",
+                   "Eq. 9 sines, 0.5 m/s², 10 s (cf. paper Figs. 22-23)")
 
 
 def _front(v: np.ndarray) -> np.ndarray:
