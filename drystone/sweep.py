@@ -38,7 +38,7 @@ import time
 import tomllib
 import traceback
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from drystone import case as casemod
@@ -301,7 +301,3 @@ def _execute_dask(jobs: list[Job], workers: int, address: str | None):
         client.close()
         if cluster is not None:
             cluster.close()
-
-
-def jobs_as_dicts(jobs: list[Job]) -> list[dict]:
-    return [asdict(j) for j in jobs]

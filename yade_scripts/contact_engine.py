@@ -82,8 +82,9 @@ class PenaltyCoulomb:
         self.native = detection == "native"
         if self.native:
             self.shapes = ov.Shapes(local_vertices)
-        self.vloc = _padded(local_vertices)  # repeated entries leave min/max/argmax unchanged
-        self.nloc = _padded([_face_normals(v) for v in local_vertices])
+        else:  # for the contact-area estimate on YADE's geometry
+            self.vloc = _padded(local_vertices)  # repeated entries leave min/max/argmax unchanged
+            self.nloc = _padded([_face_normals(v) for v in local_vertices])
         self._shear: dict[tuple[int, int], np.ndarray] = {}
         self._props: dict[tuple[int, int], tuple] = {}
         self.state = ContactState()
