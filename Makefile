@@ -10,7 +10,7 @@ STAMP   := $(VENV)/.setup-stamp
 RUN     := $(PY) -m drystone
 
 .PHONY: setup system-deps test demo run gravity4 settlement4 bench clean help records spectrum ogawa3d ogawa \
-        sweep tilt tilt-rate tilt-sensitivity tilt-report sacsayhuaman sacsayhuaman-report
+        sweep tilt tilt-rate tilt-sensitivity tilt-report sacsayhuaman sacsayhuaman-report vtk
 
 help:
 	@echo "make setup        install Debian's YADE, make .venv, install PyPI dependencies"
@@ -24,11 +24,12 @@ help:
 	@echo "make records      papers' records (user files or FEMA P695 analogues) -> results/records/catalogue.json"
 	@echo "make spectrum FILE=path [ARGS=...]   PGA, step, duration, predominant frequencies (JSON) + PNG"
 	@echo "make sweep SWEEP=cases/sweeps/x.toml [DASK=tcp://host:8786|local]   a sweep, parallel and resumable"
-	@echo "make tilt         tilt-table validation: 5 generated walls (~30 min each, JOBS in parallel) + report"
-	@echo "make tilt-rate    the paper's 0.2 deg/s protocol on wall seed 0 (~90 min) + report"
+	@echo "make tilt         tilt-table validation: 5 generated walls + the same 5 with a constant section (~20 min) + report"
+	@echo "make tilt-rate    the paper's 0.2 deg/s protocol on wall seed 0 (~10 min) + report"
 	@echo "make tilt-sensitivity   mu, K_n and Table 1's DEM calibration on wall seed 0 (7 runs) + report"
 	@echo "make sacsayhuaman [DASK=...]   40-stone wall: white noise, sine sweeps, resonance PGAs, Table 3 (~1 h on 2 cores)"
 	@echo "make sacsayhuaman-report       rewrite results/sacsayhuaman/ from the runs made so far"
+	@echo "make vtk DIR=results/<run> [EVERY=5]   VTK files of a finished run for ParaView (<run>/vtk/blocks.pvd)"
 
 setup: system-deps $(STAMP)
 
@@ -90,6 +91,7 @@ sweep: setup
 
 tilt: setup
 	$(RUN) sweep cases/sweeps/tilt_seeds.toml --workers $(JOBS)
+	$(RUN) sweep cases/sweeps/tilt_seeds_extruded.toml --workers $(JOBS)
 	$(PY) -m postprocess.tilt
 
 tilt-rate: setup
@@ -108,6 +110,10 @@ sacsayhuaman-report: setup
 
 tilt-report: setup
 	$(PY) -m postprocess.tilt
+
+vtk: setup
+	@test -n "$(DIR)" || { echo "usage: make vtk DIR=results/<run folder> [EVERY=5]"; exit 2; }
+	$(PY) -m postprocess.vtk $(DIR) --every $(or $(EVERY),1)
 
 clean:
 	rm -rf results

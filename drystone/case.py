@@ -12,6 +12,8 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
+from drystone import collapse
+
 REQUIRED = object()
 
 
@@ -66,11 +68,12 @@ SECTIONS: dict[str, dict[str, Key]] = {
         "contacts": Key([], "-", "named contacts to record: list of {name, blocks = [a, b]}", list),
         "collapse_displacement": Key("auto", "m", "a block that moves more than this has collapsed; "
                                      "'auto' = half the block's smallest dimension", (float, str)),
-        "onset_speed": Key(5e-3, "m/s", "in a tilt, a block whose mean speed over onset_window exceeds "
-                           "this is moving: the collapse angle is the tilt where the motion that led to "
-                           "collapse began", float, positive=True),
-        "onset_window": Key(0.2, "s", "averaging window of the onset speed (filters vibrations)", float,
-                            positive=True),
+        "onset_rate": Key(collapse.RATE_M_PER_DEG, "m/deg", "in a tilt, a block that moves more than this "
+                          "per degree of tilt (over onset_window) is moving: the collapse angle is the tilt "
+                          "where the motion that led to collapse began (drystone/collapse.py)", float,
+                          positive=True),
+        "onset_window": Key(collapse.WINDOW_DEG, "deg", "tilt over which the onset rate is measured (filters "
+                            "vibrations)", float, positive=True),
     },
     "analysis": {
         "penetration": Key(None, "-", "name of a recorded contact whose final normal penetration is "

@@ -175,10 +175,30 @@ def resolve(case: dict, where: str, out: Path) -> dict:
         "materials": mats, "blocks": blocks, "joint_overrides": joint_overrides,
         "control_points": bs.control_points, "stages": stages, "forces": case["forces"],
         "output": {"interval": case["output"]["interval"], "contacts": case["output"]["contacts"]},
-        "collapse_threshold": threshold, "onset_speed": case["output"]["onset_speed"],
-        "onset_window": case["output"]["onset_window"], "stock_shear_area": float(np.mean(free_areas)),
+        "collapse_threshold": threshold, "onset_rate": case["output"]["onset_rate"],
+        "onset_window_deg": case["output"]["onset_window"], "stock_shear_area": float(np.mean(free_areas)),
         "geometry_source": geo_source, "excitations": excitations, "analysis": case["analysis"],
     }
+
+
+PHYSICS_KEYS = ("law", "detection", "dt", "gravity", "materials", "blocks", "joint_overrides", "forces",
+                "collapse_threshold")  # the onset keys only date a collapse afterwards (postprocess)
+
+
+def fingerprint(spec: dict) -> str:
+    """SHA-256 of what a run simulates: geometry, materials, law, time step and the stages
+    (an excitation by the content of its samples, not by its file's path). Two specs with
+    the same fingerprint give the same run whatever their names and folders."""
+    stages = []
+    for st in spec["stages"]:
+        params = dict(st["params"])
+        if "acc_file" in params:
+            acc = Path(spec["out_dir"]) / params["acc_file"]  # saved beside the run
+            params["acc_file"] = hashlib.sha256(acc.read_bytes()).hexdigest()
+        stages.append({"kind": st["kind"], "start": st["start"], "end": st["end"], "params": params})
+    data = {k: spec.get(k) for k in PHYSICS_KEYS}
+    data["stages"] = stages
+    return hashlib.sha256(json.dumps(data, sort_keys=True, default=str).encode()).hexdigest()
 
 
 def _yade_command(spec_path: Path, threads: int) -> list[str]:
@@ -233,6 +253,20 @@ def run(case_path, overrides=None, out_dir=None, threads=1, quiet=False) -> dict
     if not quiet:
         print(f"[{spec['name']}] results in {out}: summary.json, histories.npz, "
               + ", ".join(f.name for f in figures), flush=True)
+    return summary
+
+
+def resummarise(out) -> dict:
+    """Rebuild a finished run's summary.json from its spec, histories and run info with
+    the current post-processing (e.g. the collapse onset rule); the figures are kept."""
+    from postprocess import summary as summ
+
+    out = Path(out)
+    old = json.loads((out / "summary.json").read_text())
+    summary = summ.build(json.loads((out / "spec.json").read_text()), out)
+    if "wall_time_total_s" in old:
+        summary["wall_time_total_s"] = old["wall_time_total_s"]
+    summ.write(summary, out)
     return summary
 
 

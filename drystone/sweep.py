@@ -16,8 +16,10 @@ A sweep file (TOML) names a base case and the runs as tables of overrides (the
     set = ["contact.kn=5e7", "contact.kt=2.5e7", "contact.mu=0.7"]
 
 Every run is validated (case keys, geometry, time step) before any of them starts. A run
-whose folder holds a ``summary.json`` made with the same overrides is finished and
-skipped, so an interrupted sweep continues where it stopped; a failed run leaves
+whose folder holds a ``summary.json`` made with the same overrides and the same inputs
+(geometry, materials, stages: ``runner.fingerprint``) is finished and skipped, so an
+interrupted sweep continues where it stopped (a skipped run's summary is rebuilt with
+the current post-processing); a failed run leaves
 ``FAILED.txt`` (the error and its log's tail) and does not stop the others. The status of
 every run is in ``results/<name>/sweep.json``.
 
@@ -127,34 +129,56 @@ def _toml(v) -> str:
     return repr(v)
 
 
-def validate(jobs: list[Job]) -> None:
+def validate(jobs: list[Job]) -> dict[str, str]:
     """Check every run before anything runs: case keys and values, overrides, geometry
     (generated or read), stages, records and time step (``runner.resolve`` into a scratch
-    folder). Raises CaseError or GeometryError naming the run."""
+    folder). Raises CaseError or GeometryError naming the run. Returns each run's
+    fingerprint (``runner.fingerprint``: what it would simulate)."""
     import tempfile
 
     from drystone import runner
     from geometry.blockfile import GeometryError
 
+    prints = {}
     with tempfile.TemporaryDirectory() as tmp:
         for j in jobs:
             try:
-                runner.resolve(casemod.load(j.case, j.overrides), j.case, Path(tmp))
+                spec = runner.resolve(casemod.load(j.case, j.overrides), j.case, Path(tmp))
             except (casemod.CaseError, GeometryError) as exc:
                 raise casemod.CaseError(f"run {j.name!r}: {exc}") from None
+            prints[j.name] = runner.fingerprint(spec)
+    return prints
 
 
-def finished(job: Job) -> bool:
-    """True when the job's folder holds a complete run made with the same overrides."""
+def finished(job: Job, fingerprint: str | None = None) -> bool:
+    """True when the job's folder holds a complete run made with the same overrides and,
+    when ``fingerprint`` is given, simulating the same thing (so a run made before a change
+    of the geometry generator, a record or a default is run again, not reused)."""
+    from drystone import runner
+
     out = Path(job.out_dir)
     s = out / "summary.json"
     if not s.is_file():
         return False
     try:
         done = json.loads(s.read_text())["inputs"]["provenance"]["overrides"]
-    except (KeyError, ValueError):
+        if done != job.overrides:
+            return False
+        return fingerprint is None or runner.fingerprint(json.loads((out / "spec.json").read_text())) == fingerprint
+    except (KeyError, ValueError, OSError):
         return False
-    return done == job.overrides
+
+
+def _resummarise(job: Job, status: dict) -> None:
+    """A skipped run's summary is rebuilt with the current post-processing (seconds), so
+    that its numbers follow the code, not the code of the day it ran."""
+    from drystone import runner
+
+    try:
+        s = runner.resummarise(job.out_dir)
+        status["collapse_angle_deg"] = s.get("collapse_angle_deg")
+    except Exception as exc:  # noqa: BLE001 - the run itself is complete; say so and go on
+        status["resummarise_error"] = f"{type(exc).__name__}: {exc}"
 
 
 def run_job(job: Job) -> dict:
@@ -216,14 +240,15 @@ def run(path, workers: int | None = None, backend: str = "local", dask_address: 
         if missing:
             raise casemod.CaseError(f"{path}: no run(s) named {missing}; runs: {[j.name for j in jobs]}")
         jobs = [j for j in jobs if j.name in only]
-    validate(jobs)
+    prints = validate(jobs)
     root = Path(jobs[0].out_dir).parent
     root.mkdir(parents=True, exist_ok=True)
     status = {j.name: {"name": j.name, "status": "pending", "params": j.params, "out_dir": j.out_dir} for j in jobs}
     todo = []
     for j in jobs:
-        if finished(j):
+        if finished(j, prints[j.name]):
             status[j.name]["status"] = "skipped (finished earlier)"
+            _resummarise(j, status[j.name])
         else:
             todo.append(j)
     workers = max(1, min(workers or os.cpu_count() or 1, len(todo) or 1))

@@ -7,7 +7,11 @@ that lean by a random amount, so that stones are convex quadrilaterals with non-
 joints. Neighbours share exact edge coordinates, so joints are exact (no gap, no overlap).
 Head joints of consecutive courses are offset by at least ``stagger`` x the mean stone
 length along their shared bed joint. Each stone is extruded through the thickness
-(y from -T/2 to T/2; the wall tilts out of plane towards +y). The first course is fixed to
+(y from -T/2 to T/2; the wall tilts out of plane towards +y), or, with ``depth_spread`` > 0,
+to a depth of its own: stones of varying depth, so that the wall's section is not constant
+(the faces are ragged; ``flush`` keeps one face fair). The depths are drawn after the face
+layout, so a seed gives the same face with or without them, and are scaled so that the
+wall's volume (and weight) is that of the extruded wall. The first course is fixed to
 the platform, a 0.05 m slab under the wall (top at z = 0) one stone length wider on each
 side. Blocks are numbered course by course from the bottom, left to right, from 1; the
 platform is block 0. Units: m, kg.
@@ -79,9 +83,28 @@ def _counted_joints(rng, length, n, avoid, gap, min_fraction=0.5):
     raise ValueError(f"could not place {n} staggered stones in a course: lower the stagger")
 
 
+FLUSH = {None: 0.0, "+y": 1.0, "-y": -1.0}
+
+
+def stone_depths(rng, areas, thickness, spread):
+    """Depths (m) of stones of face areas ``areas`` (m^2): thickness x (1 + spread x u),
+    u uniform in [-1, 1], then scaled so that sum(area x depth) = thickness x sum(area)
+    (the volume of the extruded wall). ``spread`` = 0 gives the constant thickness."""
+    areas = np.asarray(areas, float)
+    if spread == 0:
+        return np.full(len(areas), float(thickness))
+    d = thickness * (1.0 + spread * rng.uniform(-1.0, 1.0, len(areas)))
+    return d * (thickness * areas.sum() / (areas @ d))
+
+
+def _area(quad):
+    x, z = np.asarray(quad, float).T
+    return 0.5 * abs(x @ np.roll(z, -1) - z @ np.roll(x, -1))
+
+
 def make(length=1.5, height=0.375, thickness=0.108, courses=7, stone_length=(0.10, 0.20), irregularity=0.3,
          stagger=0.25, seed=0, density=2300.0, kn=2e8, kt=1e8, mu=0.4, damping=0.8, first_course="fixed",
-         name="irregular_wall", stones_per_course=None) -> dict:
+         name="irregular_wall", stones_per_course=None, depth_spread=0.0, flush=None) -> dict:
     """An irregular wall as a block-file dict.
 
     ``stones_per_course``: optional list of stone counts per course (bottom first); it
@@ -90,12 +113,20 @@ def make(length=1.5, height=0.375, thickness=0.108, courses=7, stone_length=(0.1
     bond); otherwise head joints lean by up to irregularity x 0.5 course height, bed joints
     rise by up to irregularity x 0.4 course height over the wall's length and their heights
     move by up to irregularity x 0.2 course height.
+    ``depth_spread`` in [0, 1): 0 extrudes every stone through ``thickness``; otherwise each
+    stone's depth is thickness x (1 +- depth_spread), rescaled to keep the wall's volume
+    (``stone_depths``). ``flush``: None centres every stone on the wall's mid-plane (both
+    faces ragged); "+y" or "-y" keeps that face fair.
     """
     if not 0 <= irregularity < 1:
         raise ValueError(f"irregularity must be in [0, 1), got {irregularity}")
     lmin, lmax = stone_length
     if not 0 < lmin < lmax <= length:
         raise ValueError(f"stone_length must be 0 < min < max <= length, got {stone_length}")
+    if not 0 <= depth_spread < 1:
+        raise ValueError(f"depth_spread must be in [0, 1), got {depth_spread}")
+    if flush not in FLUSH:
+        raise ValueError(f"flush must be one of {list(FLUSH)}, got {flush!r}")
     rng = np.random.default_rng(seed)
     if stones_per_course is not None:
         courses = len(stones_per_course)
@@ -103,16 +134,12 @@ def make(length=1.5, height=0.375, thickness=0.108, courses=7, stone_length=(0.1
     beds = _bed_joints(rng, length, height, courses, 0.4 * irregularity * ch / length, 0.5 * ch, irregularity)
     lean_max = 0.5 * irregularity * ch
     gap = stagger * 0.5 * (lmin + lmax)
-    y0, y1 = -thickness / 2, thickness / 2
 
     def z_at(k, x):
         z0, s = beds[k]
         return z0 + s * x
 
-    blocks = [{"id": 0, "role": "platform", "material": "stone",
-               "vertices": bf.box_vertices((length / 2, 0.0, -PLATFORM_THICKNESS / 2),
-                                           (length + 2 * lmax, thickness + 2 * lmax, PLATFORM_THICKNESS))}]
-    bid = 1
+    faces = []  # (course, quad) in block order
     previous_top: list[float] = []
     for k in range(courses):
         if stones_per_course is not None:
@@ -123,19 +150,25 @@ def make(length=1.5, height=0.375, thickness=0.108, courses=7, stone_length=(0.1
         lean = [0.0] + [rng.uniform(-lean_max, lean_max) for _ in xb[1:-1]] + [0.0]
         xt = [x + d for x, d in zip(xb, lean)]
         for j in range(len(xb) - 1):
-            quad = [(xb[j], z_at(k, xb[j])), (xb[j + 1], z_at(k, xb[j + 1])),
-                    (xt[j + 1], z_at(k + 1, xt[j + 1])), (xt[j], z_at(k + 1, xt[j]))]
-            verts = [[x, y, z] for x, z in quad for y in (y0, y1)]
-            if ph.inner_vertices(verts, 1e-12):
-                raise ValueError(f"stone {bid} came out non-convex; lower the irregularity")
-            blocks.append({"id": bid, "role": first_course if k == 0 else "free", "material": "stone",
-                           "vertices": verts, "label": f"course {k + 1}"})
-            bid += 1
+            faces.append((k, [(xb[j], z_at(k, xb[j])), (xb[j + 1], z_at(k, xb[j + 1])),
+                              (xt[j + 1], z_at(k + 1, xt[j + 1])), (xt[j], z_at(k + 1, xt[j]))]))
         previous_top = xt
+    depths = stone_depths(rng, [_area(q) for _, q in faces], thickness, depth_spread)
+    centres = FLUSH[flush] * (thickness - depths) / 2  # on the mid-plane, or flush with a face
+    half = float(np.max(np.abs(centres) + depths / 2))
+    blocks = [{"id": 0, "role": "platform", "material": "stone",
+               "vertices": bf.box_vertices((length / 2, 0.0, -PLATFORM_THICKNESS / 2),
+                                           (length + 2 * lmax, 2 * half + 2 * lmax, PLATFORM_THICKNESS))}]
+    for bid, ((k, quad), d, yc) in enumerate(zip(faces, depths, centres), start=1):
+        verts = [[x, y, z] for x, z in quad for y in (yc - d / 2, yc + d / 2)]
+        if ph.inner_vertices(verts, 1e-12):
+            raise ValueError(f"stone {bid} came out non-convex; lower the irregularity")
+        blocks.append({"id": bid, "role": first_course if k == 0 else "free", "material": "stone",
+                       "vertices": verts, "label": f"course {k + 1}"})
     params = dict(length=length, height=height, thickness=thickness, courses=courses,
                   stone_length=list(stone_length), irregularity=irregularity, stagger=stagger, seed=seed,
                   density=density, kn=kn, kt=kt, mu=mu, damping=damping, first_course=first_course,
-                  stones_per_course=stones_per_course)
+                  stones_per_course=stones_per_course, depth_spread=depth_spread, flush=flush)
     return {"format": bf.FORMAT, "version": bf.VERSION, "name": name,
             "description": f"irregular dry-stone wall, seed {seed} (geometry/irregular_wall.py)",
             "units": {"length": "m", "mass": "kg"},
@@ -144,12 +177,21 @@ def make(length=1.5, height=0.375, thickness=0.108, courses=7, stone_length=(0.1
             "generator": dict(params, name="irregular_wall", drystone_version=drystone.__version__)}
 
 
-def tilt_wall(seed=0, weight=1371.0, density=2300.0, kn=2e8, kt=1e8, mu=0.4, damping=0.8, **over) -> dict:
+SANTA_CRUZ_DEPTH_SPREAD = 1 / 3  # = the stone lengths' spread, 0.10-0.20 m around 0.15 m
+
+
+def tilt_wall(seed=0, weight=1371.0, density=2300.0, kn=2e8, kt=1e8, mu=0.4, damping=0.8,
+              depth_spread=SANTA_CRUZ_DEPTH_SPREAD, **over) -> dict:
     """The Santa-Cruz et al. tilt-table wall of the Sacsayhuaman paper §3.2: 1500 mm long,
     375 mm high, stones about 150 mm long (x) and 50 mm high (7 courses of 53.6 mm), about
-    100 mm deep; the thickness is chosen so the wall weighs ``weight`` = 1371 N at
-    ``density`` = 2300 kg/m^3: 0.1080 m. Contact properties: Table 1, FEM column."""
+    100 mm deep; the mean thickness is chosen so the wall weighs ``weight`` = 1371 N at
+    ``density`` = 2300 kg/m^3: 0.1080 m. The tested walls had no constant cross-section
+    (§3.2), so by default every stone has a depth of its own, 0.108 m x (1 +- 1/3) (the
+    relative spread of the stone lengths: stones irregular alike in all three dimensions),
+    centred on the mid-plane; ``depth_spread = 0`` gives stones extruded through 0.108 m.
+    Contact properties: Table 1, FEM column."""
     length, height = 1.5, 0.375
     t = thickness_for_weight(weight, density, length, height)
     return make(length=length, height=height, thickness=t, courses=7, stone_length=(0.10, 0.20), seed=seed,
-                density=density, kn=kn, kt=kt, mu=mu, damping=damping, name="tilt_wall", **over)
+                density=density, kn=kn, kt=kt, mu=mu, damping=damping, name="tilt_wall",
+                depth_spread=depth_spread, **over)

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drystone import rotations
+from drystone import collapse, rotations
 
 
 def load_histories(out: Path) -> dict:
@@ -196,9 +196,8 @@ def build(spec: dict, out: Path) -> dict:
                    "collapse_threshold_m": spec["collapse_threshold"], "provenance": case},
     }
     if any(st["kind"] == "tilt" for st in spec["stages"]):
-        col = info.get("collapse")
-        s["collapse_angle_deg"] = col["angle_deg"] if col else None
-        s["collapse"] = col
+        s["collapse"] = tilt_collapse(spec, h, info.get("collapse"))
+        s["collapse_angle_deg"] = s["collapse"]["angle_deg"] if s["collapse"] else None
     an = spec.get("analysis", {})
     if an.get("penetration"):
         s.update(penetration(spec, h, an["penetration"]))
@@ -207,6 +206,23 @@ def build(spec: dict, out: Path) -> dict:
     rv = h["reaction"][-1]
     s["final_reaction_N"] = rv.tolist()
     return s
+
+
+def tilt_collapse(spec: dict, h: dict, detected: dict | None) -> dict | None:
+    """The run's collapse detection (YADE side) with its angle dated back to the onset of
+    the motion that led to it (drystone/collapse.py; rule from the spec's onset keys)."""
+    if not detected:
+        return None
+    rate = spec.get("onset_rate", collapse.RATE_M_PER_DEG)
+    window = spec.get("onset_window_deg", collapse.WINDOW_DEG)
+    on = collapse.onset(h["tilt_deg"], h["pos"], h["t"], detected["detected_time_s"], rate, window)
+    col = {k: v for k, v in detected.items() if k not in ("angle_deg", "time_s", "onset_block")}
+    if on is None:  # no gradual start: the detection itself
+        on = {"angle_deg": detected["detected_angle_deg"], "time_s": detected["detected_time_s"], "index": None}
+    col.update(angle_deg=on["angle_deg"], time_s=on["time_s"],
+               onset_block=None if on["index"] is None else int(h["block_ids"][on["index"]]),
+               onset_rule={"rate_m_per_deg": rate, "window_deg": window})
+    return col
 
 
 def write(summary: dict, out: Path) -> Path:

@@ -3,6 +3,8 @@
 Reads the finished runs of three sweeps (drystone/sweep.py; cases/sweeps/):
 
 * ``results/tilt_seeds/<run>/``: generated walls (one per seed), FEM calibration;
+* ``results/tilt_seeds_extruded/<run>/``: the same walls with a constant section (every
+  stone extruded through the mean thickness), to show what the stones' varying depth does;
 * ``results/tilt_rate/<run>/``: the paper's protocol (0.2 deg/s) on seed 0, to check the
   faster protocol of the seeds (the collapse angle may change by at most 0.2 deg);
 * ``results/tilt_sensitivity/<run>/``: mu, K_n and the DEM calibration of Table 1.
@@ -50,12 +52,34 @@ def runs(root: Path) -> list[dict]:
             "criterion": col.get("criterion"), "first_blocks": col.get("first_blocks"),
             "onset_block": col.get("onset_block"),
             "seed": s["inputs"]["geometry"].get("generator", {}).get("seed"),
+            "depth_spread": _generated(root / name).get("depth_spread", 0.0),
+            "thickness_m": _generated(root / name).get("thickness"),
             "materials": mat, "rates_deg_s": [st["params"]["rate_deg_s"] for st in tilts],
             "overrides": s["inputs"]["provenance"]["overrides"],
             "wall_time_s": s["run"]["wall_time_s"], "steps": s["run"]["steps"], "dt_s": s["run"]["dt_s"],
             "simulated_time_s": s["run"]["simulated_time_s"],
         })
     return rows
+
+
+def _generated(folder: Path) -> dict:
+    """The generator's parameters of a run's wall (geometry.json), {} if not generated."""
+    g = folder / "geometry.json"
+    return json.loads(g.read_text()).get("generator", {}) if g.is_file() else {}
+
+
+def paired(rows: list[dict], other: list[dict]) -> dict | None:
+    """Per seed, the collapse angle of ``rows`` minus that of ``other`` (same seeds), with
+    the statistics of ``other``: what the geometry change between the two sweeps does."""
+    a = {r["seed"]: r["collapse_angle_deg"] for r in rows if r["finished"] and r["collapse_angle_deg"] is not None}
+    b = {r["seed"]: r["collapse_angle_deg"] for r in other if r["finished"] and r["collapse_angle_deg"] is not None}
+    common = sorted(set(a) & set(b))
+    if not common:
+        return None
+    d = np.array([a[k] - b[k] for k in common])
+    return {"seeds": common, "angles_deg": [b[k] for k in common], "differences_deg": d.tolist(),
+            "mean_difference_deg": float(d.mean()), "statistics": seed_statistics(other),
+            "depth_spread": next((r["depth_spread"] for r in other if r["finished"]), None)}
 
 
 def seed_statistics(rows: list[dict]) -> dict:
@@ -122,6 +146,22 @@ def report_md(summary: dict) -> str:
                       f"deviation of the experiment ({st['experiment_range_deg'][0]:.2f}-"
                       f"{st['experiment_range_deg'][1]:.2f} deg); {st['n_within_experiment_sd']} of "
                       f"{st['n_collapsed']} walls are."]
+    ex = summary.get("extruded")
+    if ex:
+        es = ex["statistics"]
+        lines += ["", "## Constant section (stones extruded through the mean thickness)", "",
+                  "The same walls (seeds, front faces, weight) with every stone extruded through "
+                  f"{_fmt(summary['thickness_m'], '.4f')} m instead of having a depth of its own "
+                  f"(depth spread {_fmt(ex['depth_spread'], 'g')} instead of {_fmt(summary['depth_spread'], '.3g')}).",
+                  "",
+                  "| seed | extruded (deg) | varying depth (deg) | difference (deg) |", "|---|---|---|---|"]
+        for k, a, d in zip(ex["seeds"], ex["angles_deg"], ex["differences_deg"]):
+            lines.append(f"| {k} | {a:.2f} | {a + d:.2f} | {d:+.2f} |")
+        if "mean_deg" in es:
+            lines += ["", f"Extruded: mean {es['mean_deg']:.2f} deg, standard deviation {_fmt(es['sd_deg'])} deg "
+                          f"({'within' if es['mean_within_experiment_sd'] else 'outside'} the experiment's "
+                          f"one-sd band; {es['n_within_experiment_sd']} of {es['n_collapsed']} walls within). "
+                          f"Varying depth lowers the angle by {-ex['mean_difference_deg']:.2f} deg on average."]
     rc = summary.get("rate_check")
     lines += ["", "## Tilt rate", ""]
     if rc and rc.get("complete"):
@@ -215,8 +255,10 @@ def snapshot_figure(run: dict, path: Path) -> Path:
                             frame_on_first=True)
 
 
-def build(seeds=None, rate=None, sensitivity=None, out: Path = OUT, figures: bool = True) -> dict:
+def build(seeds=None, rate=None, sensitivity=None, out: Path = OUT, figures: bool = True,
+          extruded=None) -> dict:
     seeds = Path(seeds or paths.RESULTS / "tilt_seeds")
+    extruded = Path(extruded or paths.RESULTS / "tilt_seeds_extruded")
     rate = Path(rate or paths.RESULTS / "tilt_rate")
     sensitivity = Path(sensitivity or paths.RESULTS / "tilt_sensitivity")
     if not seeds.is_dir():
@@ -241,6 +283,9 @@ def build(seeds=None, rate=None, sensitivity=None, out: Path = OUT, figures: boo
                        "tilt_rates_deg_s": done[0]["rates_deg_s"] if done else None,
                        "overrides": done[0]["overrides"] if done else None},
         "seed_runs": seed_rows,
+        "depth_spread": done[0]["depth_spread"] if done else None,
+        "thickness_m": done[0]["thickness_m"] if done else None,
+        "extruded": paired(seed_rows, runs(extruded)) if extruded.is_dir() else None,
         "rate_check": rate_check(seed_rows, rate_rows),
         "sensitivity": sens_rows,
         "paper": p,
@@ -273,9 +318,10 @@ def main(argv=None) -> int:
     ap.add_argument("--seeds", help="folder of the seed sweep (results/tilt_seeds)")
     ap.add_argument("--rate", help="folder of the rate check (results/tilt_rate)")
     ap.add_argument("--sensitivity", help="folder of the sensitivity sweep (results/tilt_sensitivity)")
+    ap.add_argument("--extruded", help="folder of the constant-section walls (results/tilt_seeds_extruded)")
     ap.add_argument("--out", default=str(OUT))
     a = ap.parse_args(argv)
-    build(a.seeds, a.rate, a.sensitivity, Path(a.out))
+    build(a.seeds, a.rate, a.sensitivity, Path(a.out), extruded=a.extruded)
     print((Path(a.out) / "report.md").read_text())
     print(f"written {Path(a.out) / 'summary.json'}")
     return 0

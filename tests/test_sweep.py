@@ -37,6 +37,19 @@ def test_grid_and_runs_make_named_jobs(tmp_path):
     sweep.validate(jobs)  # all three are valid cases
 
 
+def test_fingerprint_follows_the_inputs_not_the_folder(tmp_path):
+    """The same case resolved into two folders has one fingerprint; a changed geometry
+    or friction coefficient changes it (sweeps use it to decide what is finished)."""
+    p = write_sweep(tmp_path, '[[runs]]\nname = "a"\n')
+    prints = []
+    for k, over in enumerate([[], [], ["contact.mu=0.4"]]):
+        (tmp_path / str(k)).mkdir()
+        spec = runner.resolve(casemod.load(tmp_path / "cube.toml", over), "cube", tmp_path / str(k))
+        prints.append(runner.fingerprint(spec))
+    assert prints[0] == prints[1] != prints[2]
+    assert sweep.validate(sweep.load(p, results=tmp_path / "res")[1])["a"] == prints[0]
+
+
 @pytest.mark.parametrize("body, match", [
     ('[grid]\n"contact.kn" = []\n', "non-empty list"),
     ('[sweep2]\n', "unknown table"),
@@ -73,17 +86,27 @@ def test_local_sweep_resumes_and_survives_a_failure(tmp_path, monkeypatch):
         assert s["inputs"]["materials"]["stone"]["mu"] == float(n.split("_")[1])
     status = json.loads((root / "sweep.json").read_text())
     assert {r["status"] for r in status["runs"]} == {"done"}
-    # second call: nothing to do
+    # second call: nothing to run; the summaries are rebuilt with the current post-processing
+    stale = json.loads((root / "mu_0.3" / "summary.json").read_text())
+    stale["blocks"] = "stale"
+    (root / "mu_0.3" / "summary.json").write_text(json.dumps(stale))
     res = sweep.run(p, workers=2, results=tmp_path / "res")
     assert {r["status"] for r in res["runs"].values()} == {"skipped (finished earlier)"}
+    assert json.loads((root / "mu_0.3" / "summary.json").read_text())["blocks"] != "stale"
     # an interrupted sweep (one run lost its summary) runs only what is missing
     (root / "mu_0.6" / "summary.json").unlink()
     res = sweep.run(p, workers=2, results=tmp_path / "res")
     assert res["runs"]["mu_0.6"]["status"] == "done"
     assert res["runs"]["mu_0.3"]["status"].startswith("skipped")
+    # a changed input with the same overrides (here the base case's cube) is run again
+    changed = json.loads(json.dumps(BASE))
+    changed["case"]["geometry"]["boxes"][0]["size"] = [0.2, 0.2, 0.25]
+    (tmp_path / "cube.toml").write_text(runner.to_toml(changed))
+    res = sweep.run(p, workers=2, results=tmp_path / "res")
+    assert {r["status"] for r in res["runs"].values()} == {"done"}
     # a run that fails while running is reported with its log and the others still run
     p2 = write_sweep(tmp_path, '[[runs]]\nname = "good"\n[[runs]]\nname = "broken"\nset = ["time.step=1.0"]\n')
-    monkeypatch.setattr(sweep, "validate", lambda jobs: None)  # let the bad run reach the runner
+    monkeypatch.setattr(sweep, "validate", lambda jobs: {j.name: None for j in jobs})  # let it reach the runner
     res = sweep.run(p2, workers=2, results=tmp_path / "res2")
     assert res["failed"] == ["broken"]
     assert res["runs"]["good"]["status"] == "done"

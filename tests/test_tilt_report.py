@@ -63,3 +63,24 @@ def test_rate_check_outside_tolerance_is_flagged(tmp_path):
 def test_missing_seed_folder_is_an_error(tmp_path):
     with pytest.raises(FileNotFoundError, match="make tilt"):
         tilt.build(tmp_path / "nothing", out=tmp_path / "o")
+
+
+def test_extruded_walls_are_paired_by_seed(tmp_path):
+    """The constant-section comparison pairs runs by seed (a seed missing on one side is
+    left out) and reports the per-seed difference and its mean."""
+    seeds, ext = tmp_path / "seeds", tmp_path / "ext"
+    for k, (a, b) in enumerate([(14.0, 15.0), (13.5, 14.9), (14.2, None)]):
+        fake_run(seeds, f"seed_{k}", k, a)
+        (seeds / f"seed_{k}" / "geometry.json").write_text(
+            json.dumps({"generator": {"depth_spread": 1 / 3, "thickness": 0.108}}))
+        if b is not None:
+            fake_run(ext, f"seed_{k}", k, b)
+            (ext / f"seed_{k}" / "geometry.json").write_text(
+                json.dumps({"generator": {"depth_spread": 0.0, "thickness": 0.108}}))
+    s = tilt.build(seeds, tmp_path / "r", tmp_path / "n", tmp_path / "o", figures=False, extruded=ext)
+    ex = s["extruded"]
+    assert ex["seeds"] == [0, 1] and ex["differences_deg"] == pytest.approx([-1.0, -1.4])
+    assert ex["mean_difference_deg"] == pytest.approx(-1.2) and ex["depth_spread"] == 0.0
+    assert ex["statistics"]["mean_deg"] == pytest.approx(14.95)
+    md = (tmp_path / "o" / "report.md").read_text()
+    assert "| 1 | 14.90 | 13.50 | -1.40 |" in md and "lowers the angle by 1.20 deg" in md

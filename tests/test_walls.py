@@ -88,3 +88,55 @@ def test_sacsayhuaman_numbering_roles_control_points(tmp_path):
     assert vol == pytest.approx(8.64 * 4.0 * 0.8, rel=1e-9)
     bf.write(d, tmp_path / "s.json")
     assert snapshots.elevation(tmp_path / "s.json", tmp_path / "s.png").stat().st_size > 10_000
+
+
+def _depths(d):
+    return np.array([np.ptp(np.asarray(b["vertices"])[:, 1]) for b in stones(d)])
+
+
+@pytest.mark.parametrize("flush", [None, "+y", "-y"])
+def test_varying_depth_keeps_face_weight_and_bounds(flush):
+    """Stones of varying depth: the same front-face layout as the extruded wall of the same
+    seed, a valid block set (convex, no overlaps), the extruded wall's volume (so 1371 N,
+    1e-9), depths in the ratio of thickness x (1 +- spread) (the volume rescaling is one
+    factor for all), a real spread of depths, and the flush face fair."""
+    spread = 1 / 3
+    ext = iw.tilt_wall(seed=2, depth_spread=0.0)
+    var = iw.tilt_wall(seed=2, depth_spread=spread, flush=flush)
+    bs = bf.parse(var)
+    t = var["generator"]["thickness"]
+    for a, b in zip(stones(ext), stones(var)):
+        va, vb = np.asarray(a["vertices"]), np.asarray(b["vertices"])
+        assert np.array_equal(va[:, [0, 2]], vb[:, [0, 2]])
+    vol = sum(b.volume for b in bs.blocks if b.role != "platform")
+    assert vol == pytest.approx(1.5 * 0.375 * t, rel=1e-9)
+    d = _depths(var)
+    assert d.max() / d.min() <= (1 + spread) / (1 - spread) + 1e-12
+    assert 0.9 * t < np.mean(d) < 1.1 * t
+    assert d.std() > 0.1 * t  # uniform on +-1/3: sd = t / (3 sqrt 3) = 0.19 t
+    ys = np.array([[np.min(np.asarray(b["vertices"])[:, 1]), np.max(np.asarray(b["vertices"])[:, 1])]
+                   for b in stones(var)])
+    if flush is None:
+        assert np.allclose(ys.sum(axis=1), 0.0, atol=1e-12)  # centred on the mid-plane
+    elif flush == "+y":
+        assert np.allclose(ys[:, 1], t / 2, atol=1e-12)
+    else:
+        assert np.allclose(ys[:, 0], -t / 2, atol=1e-12)
+    plat = np.asarray(var["blocks"][0]["vertices"])
+    assert plat[:, 1].min() < ys.min() and plat[:, 1].max() > ys.max()  # the platform carries every stone
+
+
+def test_zero_depth_spread_is_the_extruded_wall():
+    """depth_spread = 0 extrudes every stone through the thickness (the generator's default;
+    the Santa-Cruz tilt wall varies the depth by default)."""
+    assert iw.make(seed=1, depth_spread=0.0) == iw.make(seed=1)
+    ext = iw.tilt_wall(seed=1, depth_spread=0.0)
+    assert np.allclose(_depths(ext), ext["generator"]["thickness"], rtol=1e-12)
+    assert iw.tilt_wall(seed=1)["generator"]["depth_spread"] == pytest.approx(1 / 3)
+
+
+def test_bad_depth_parameters():
+    with pytest.raises(ValueError, match="depth_spread"):
+        iw.make(depth_spread=1.0)
+    with pytest.raises(ValueError, match="flush"):
+        iw.make(depth_spread=0.2, flush="front")

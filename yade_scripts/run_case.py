@@ -77,7 +77,6 @@ class Driver:
         self.hc = {name: {k: [] for k in ("fn", "ft", "normal", "point", "slipping", "area", "volume")} for name, _, _ in self.named}
         self.w_free = float(np.sum(self.mass[self.dyn])) * spec["gravity"]
         self.collapse = None
-        self.onset = None
         self.stop_at = None
         self.max_contacts = 0
         self.t_wall0 = time.time()
@@ -208,28 +207,11 @@ class Driver:
         """Tilt stages with ``until_collapse``. Collapse is detected when the vertical
         reaction of the moving blocks drops by ``reaction_drop`` of their weight (the
         paper's Figure 13) or a block moves more than its collapse threshold; the run
-        stops ``after_collapse`` s later. The collapse angle is the tilt at the onset of
-        the motion that led to it: the middle of the first ``onset_window`` over which a
-        block's mean speed went above ``onset_speed`` (and stayed above half of it) before
-        the detection, which itself lags by the time the blocks need to move far."""
+        stops ``after_collapse`` s later. The collapse angle (the onset of the motion that
+        led to the detection) is found afterwards from the histories:
+        drystone/collapse.py, called by postprocess/summary.py."""
         st = self.prog.stages[self.prog.stage_index(t)]
-        if self.collapse is not None or st.kind != "tilt":
-            return
-        # mean speed over the last onset_window s: filters the rocking/rattling vibrations
-        # that ride on the quasi-static lean of a block before it goes
-        ts = self.h["t"]
-        j = int(np.searchsorted(ts, t - self.spec["onset_window"]))
-        if j < len(ts) - 1 and ts[-1] > ts[j]:
-            speed = np.linalg.norm(self.h["pos"][-1] - self.h["pos"][j], axis=1) / (ts[-1] - ts[j])
-            fastest = int(np.argmax(speed))
-            t_mid = 0.5 * (ts[j] + ts[-1])
-            if speed[fastest] > self.spec["onset_speed"]:
-                if self.onset is None:
-                    self.onset = {"time_s": t_mid, "angle_deg": self.prog.tilt_deg(t_mid),
-                                  "block": int(self.bid[int(self.dyn[fastest])])}
-            elif speed[fastest] < 0.5 * self.spec["onset_speed"]:
-                self.onset = None
-        if not st.params.get("until_collapse"):
+        if self.collapse is not None or st.kind != "tilt" or not st.params.get("until_collapse"):
             return
         up = self.prog.true_vertical(t)
         rv = -float(R @ up)
@@ -240,14 +222,12 @@ class Driver:
         if drop or moved.any():
             order = np.argsort(-(disp / thr))
             first = [int(self.bid[int(self.dyn[j])]) for j in order[:5] if disp[j] > 0.5 * thr[j]]
-            onset = self.onset or {"time_s": t, "angle_deg": self.prog.tilt_deg(t), "block": first[0] if first else None}
-            self.collapse = {"angle_deg": onset["angle_deg"], "time_s": onset["time_s"], "onset_block": onset["block"],
+            self.collapse = {"angle_deg": self.prog.tilt_deg(t), "time_s": t,  # dated back by the summary
                              "detected_angle_deg": self.prog.tilt_deg(t), "detected_time_s": t,
                              "criterion": "reaction_drop" if drop else "displacement",
                              "vertical_reaction_N": rv, "first_blocks": first}
-            print(f"[{self.spec['name']}] collapse: motion from {onset['angle_deg']:.2f} deg, detected at "
-                  f"{self.collapse['detected_angle_deg']:.2f} deg (t = {t:.2f} s, {self.collapse['criterion']}), "
-                  f"blocks {first}", flush=True)
+            print(f"[{self.spec['name']}] collapse detected at {self.collapse['detected_angle_deg']:.2f} deg "
+                  f"(t = {t:.2f} s, {self.collapse['criterion']}), blocks {first}", flush=True)
             self.stop_at = t + st.params["after_collapse"]
 
     # -- run ----------------------------------------------------------------------

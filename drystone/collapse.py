@@ -1,0 +1,54 @@
+"""Collapse angle of a tilt run from its recorded motion (plain Python, no YADE).
+
+A tilt run stops shortly after a collapse is *detected* (yade_scripts/run_case.py: the
+vertical reaction drops or a block moves more than its threshold). Detection lags the
+instability by the time the blocks need to move far, and at a faster tilt rate more tilt
+goes by in that time. The collapse angle is therefore the tilt where the motion that led
+to the detection began: the middle of the first window of ``window_deg`` of tilt over
+which some block moved faster than ``rate_m_per_deg`` per degree of tilt (and never fell
+back below half of it before the detection).
+
+Motion is measured per degree of tilt, not per second: a wall leaning quasi-statically
+moves a fixed distance per degree whatever the rate, so the same threshold marks the same
+state at 0.2 and at 1 deg/s (a speed threshold of 5 mm/s is 5 mm/deg at 1 deg/s but
+25 mm/deg at 0.2 deg/s, which dates the onset later in slow tilts).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+RATE_M_PER_DEG = 5e-3  # m of block displacement per degree of tilt
+WINDOW_DEG = 0.2  # deg of tilt over which the displacement is measured (filters rattling)
+
+
+def onset(tilt_deg, pos, t, detected_time_s, rate_m_per_deg=RATE_M_PER_DEG, window_deg=WINDOW_DEG) -> dict | None:
+    """Onset of the motion that led to a collapse detected at ``detected_time_s`` (s).
+
+    ``tilt_deg`` (n,) platform tilt of each sample (deg), ``pos`` (n, blocks, 3) block
+    positions in the platform frame (m), ``t`` (n,) sample times (s). Returns
+    ``{"angle_deg", "time_s", "index"}`` (index: the block that moved fastest, in the
+    order of ``pos``), or None when no window before the detection exceeded the rate.
+    """
+    tilt_deg, t = np.asarray(tilt_deg, float), np.asarray(t, float)
+    pos = np.asarray(pos, float)
+    if rate_m_per_deg <= 0 or window_deg <= 0:
+        raise ValueError(f"onset: rate ({rate_m_per_deg}) and window ({window_deg}) must be positive")
+    found = None
+    last = int(np.searchsorted(t, detected_time_s, side="right"))
+    peak = np.maximum.accumulate(tilt_deg[:last]) if last else tilt_deg[:0]
+    for i in range(1, last):
+        if tilt_deg[i] < peak[i]:  # not tilting further (a tilt held or going back): no rate per degree
+            continue
+        j = int(np.searchsorted(peak[:i + 1], tilt_deg[i] - window_deg, side="left"))
+        dtilt = tilt_deg[i] - tilt_deg[j]
+        if dtilt < 0.5 * window_deg:  # the tilt has only just started
+            continue
+        moved = np.linalg.norm(pos[i] - pos[j], axis=1) / dtilt
+        k = int(np.argmax(moved))
+        if moved[k] > rate_m_per_deg:
+            if found is None:
+                found = {"angle_deg": float(0.5 * (tilt_deg[i] + tilt_deg[j])), "time_s": float(0.5 * (t[i] + t[j])),
+                         "index": k}
+        elif moved[k] < 0.5 * rate_m_per_deg:
+            found = None
+    return found
