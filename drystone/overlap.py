@@ -6,7 +6,12 @@ keeps its block's outward normal, which is outward for I too). From these polygo
 
 * volume V and centroid of I (tetrahedra from a point of I to each polygon's fan);
 * the gradient of V with respect to a translation of B:  dV/dx_B = sum over the faces of B
-  inside A of (area x outward normal) = -(the same sum over the faces of A inside B).
+  inside A of (area x outward normal) = -(the same sum over the faces of A inside B);
+* the contact patch (footprint): the faces of B inside A projected on the plane normal to
+  n, each weighted by the cosine between its normal and -n (so that faces across the joint
+  count as their projection and faces along it not at all). Its area is |dV/dx_B|; its
+  centroid p and its second moment J = int (x - p)(x - p)^T dA (m^4, a 3x3 tensor in the
+  plane) carry the distributed contact damping (``drystone.contact``).
 
 The project's normal force F_n = K_n V (Sacsayhuaman paper Eq. 5 in YADE's volumetric form)
 then acts along  n = -dV/dx_B / |dV/dx_B|  (from A to B), the direction in which the
@@ -132,6 +137,13 @@ def pair(VA, FA, FKA, nfa, NA, DA, VB, FB, FKB, nfb, NB, DB, tol):
     counts = np.zeros(nfa + nfb, np.int64)
     na = _faces_inside(VA, FA, FKA, nfa, NA, DA, NB, DB, nfb, False, tol, polys, counts, 0)
     nt = _faces_inside(VB, FB, FKB, nfb, NB, DB, NA, DA, nfa, True, tol, polys, counts, na)
+    return _volume(polys, counts, na, nt)
+
+
+@njit(cache=True)
+def _volume(polys, counts, na, nt):
+    """Volume, centroid and dV/dx_B of the overlap bounded by ``polys[:nt]`` (the first
+    ``na`` from A's faces)."""
     cen = np.zeros(3)
     g = np.zeros(3)
     if nt == 0:
@@ -174,6 +186,73 @@ def pair(VA, FA, FKA, nfa, NA, DA, VB, FB, FKB, nfb, NB, DB, tol):
 
 
 @njit(cache=True)
+def _patch(polys, counts, first, last, cen, g):
+    """Footprint of the overlap (module docstring) from the faces of B inside A
+    (``polys[first:last]``): (area m^2, centroid p (3,), second moment about p (3, 3) m^4,
+    projected on the plane normal to n = -g/|g|)."""
+    ga = np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
+    s0 = 0.0
+    s1 = np.zeros(3)
+    s2 = np.zeros((3, 3))
+    if ga <= 0.0:
+        return 0.0, cen.copy(), s2
+    n = -g / ga
+    for s in range(first, last):
+        k = counts[s]
+        P = polys[s]
+        ax = 0.0
+        ay = 0.0
+        az = 0.0
+        for q in range(k):
+            j = q + 1 if q + 1 < k else 0
+            ax += P[q, 1] * P[j, 2] - P[q, 2] * P[j, 1]
+            ay += P[q, 2] * P[j, 0] - P[q, 0] * P[j, 2]
+            az += P[q, 0] * P[j, 1] - P[q, 1] * P[j, 0]
+        am = np.sqrt(ax * ax + ay * ay + az * az)
+        if am <= 0.0:
+            continue
+        w = -(ax * n[0] + ay * n[1] + az * n[2]) / am  # cosine between the face normal and -n
+        x0 = P[0] - cen
+        for q in range(1, k - 1):
+            x1 = P[q] - cen
+            x2 = P[q + 1] - cen
+            cx = (x1[1] - x0[1]) * (x2[2] - x0[2]) - (x1[2] - x0[2]) * (x2[1] - x0[1])
+            cy = (x1[2] - x0[2]) * (x2[0] - x0[0]) - (x1[0] - x0[0]) * (x2[2] - x0[2])
+            cz = (x1[0] - x0[0]) * (x2[1] - x0[1]) - (x1[1] - x0[1]) * (x2[0] - x0[0])
+            at = 0.5 * np.sqrt(cx * cx + cy * cy + cz * cz) * w
+            sm = x0 + x1 + x2
+            s0 += at
+            s1 += at * sm / 3.0
+            for a in range(3):
+                for b in range(3):
+                    s2[a, b] += at / 12.0 * (x0[a] * x0[b] + x1[a] * x1[b] + x2[a] * x2[b] + sm[a] * sm[b])
+    if s0 <= 0.0:
+        return 0.0, cen.copy(), np.zeros((3, 3))
+    pr = np.eye(3)
+    for a in range(3):
+        for b in range(3):
+            pr[a, b] -= n[a] * n[b]
+    c1 = s1 / s0
+    m2 = s2 - s0 * np.outer(c1, c1)
+    return s0, cen + pr @ c1, pr @ m2 @ pr
+
+
+@njit(cache=True)
+def pair_patch(VA, FA, FKA, nfa, NA, DA, VB, FB, FKB, nfb, NB, DB, tol):
+    """``pair`` plus the contact patch: (V, centroid, g, patch area, patch centroid p,
+    patch second moment J about p)."""
+    polys = np.empty((nfa + nfb, MAXV, 3))
+    counts = np.zeros(nfa + nfb, np.int64)
+    na = _faces_inside(VA, FA, FKA, nfa, NA, DA, NB, DB, nfb, False, tol, polys, counts, 0)
+    nt = _faces_inside(VB, FB, FKB, nfb, NB, DB, NA, DA, nfa, True, tol, polys, counts, na)
+    v, c, g = _volume(polys, counts, na, nt)
+    if v <= 0.0:
+        return 0.0, c, g, 0.0, c.copy(), np.zeros((3, 3))
+    a, p, J = _patch(polys, counts, na, nt, c, g)
+    return v, c, g, a, p, J
+
+
+@njit(cache=True)
 def _to_global(verts, nv, normals, offsets, nf, pos, rot, i, V, N, D):
     for q in range(nv[i]):
         for a in range(3):
@@ -185,11 +264,18 @@ def _to_global(verts, nv, normals, offsets, nf, pos, rot, i, V, N, D):
         D[f] = offsets[i, f] - (N[f, 0] * pos[i, 0] + N[f, 1] * pos[i, 1] + N[f, 2] * pos[i, 2])
 
 
-@njit(cache=True)
 def all_contacts(verts, nv, normals, offsets, nf, faces, fk, pos, rot, moving, tol):
     """Every overlapping pair with at least one moving body. ``pos`` (nb, 3) and ``rot``
     (nb, 3, 3) place each body's local geometry. Returns arrays over contacts: id1, id2
-    (id1 < id2), volume (m^3), centroid (m), normal (A->B), area A_c = |dV/dx_B| (m^2)."""
+    (id1 < id2), volume (m^3), centroid (m), normal (A->B), area A_c = |dV/dx_B| (m^2).
+    ``contacts_with_patches`` adds each contact patch's centroid and second moment."""
+    return contacts_with_patches(verts, nv, normals, offsets, nf, faces, fk, pos, rot, moving, tol)[:6]
+
+
+@njit(cache=True)
+def contacts_with_patches(verts, nv, normals, offsets, nf, faces, fk, pos, rot, moving, tol):
+    """``all_contacts`` plus, per contact, the patch centroid p (m, (m, 3)) and the patch
+    second moment J about p (m^4, (m, 3, 3)); see the module docstring."""
     nb = len(nv)
     maxv = verts.shape[1]
     maxf = normals.shape[1]
@@ -210,6 +296,8 @@ def all_contacts(verts, nv, normals, offsets, nf, faces, fk, pos, rot, moving, t
     cen = np.empty((cap, 3))
     nrm = np.empty((cap, 3))
     area = np.empty(cap)
+    pc = np.empty((cap, 3))
+    pj = np.empty((cap, 3, 3))
     m = 0
     for i in range(nb):
         for j in range(i + 1, nb):
@@ -218,8 +306,8 @@ def all_contacts(verts, nv, normals, offsets, nf, faces, fk, pos, rot, moving, t
             if lo[i, 0] > hi[j, 0] or lo[j, 0] > hi[i, 0] or lo[i, 1] > hi[j, 1] or lo[j, 1] > hi[i, 1] \
                     or lo[i, 2] > hi[j, 2] or lo[j, 2] > hi[i, 2]:
                 continue
-            v, c, g = pair(GV[i], faces[i], fk[i], nf[i], GN[i], GD[i], GV[j], faces[j], fk[j], nf[j], GN[j], GD[j],
-                           tol)
+            v, c, g, pa, p, J = pair_patch(GV[i], faces[i], fk[i], nf[i], GN[i], GD[i], GV[j], faces[j], fk[j],
+                                           nf[j], GN[j], GD[j], tol)
             if v <= 0.0:
                 continue
             ga = np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
@@ -233,14 +321,48 @@ def all_contacts(verts, nv, normals, offsets, nf, faces, fk, pos, rot, moving, t
                 area = _grow_f(area, cap)
                 cen = _grow_3(cen, cap)
                 nrm = _grow_3(nrm, cap)
+                pc = _grow_3(pc, cap)
+                pj2 = np.empty((cap, 3, 3))
+                pj2[:m] = pj[:m]
+                pj = pj2
             id1[m] = i
             id2[m] = j
             vol[m] = v
             cen[m] = c
             nrm[m] = -g / ga
             area[m] = ga
+            pc[m] = p
+            pj[m] = J
             m += 1
-    return id1[:m], id2[:m], vol[:m], cen[:m], nrm[:m], area[:m]
+    return id1[:m], id2[:m], vol[:m], cen[:m], nrm[:m], area[:m], pc[:m], pj[:m]
+
+
+@njit(cache=True)
+def patches_of_pairs(verts, nv, normals, offsets, nf, faces, fk, pos, rot, ia, ib, tol):
+    """Contact patches (area m^2, centroid m, second moment m^4) of the given pairs of
+    bodies, for contacts whose geometry comes from elsewhere (YADE's intersection)."""
+    m = len(ia)
+    maxv = verts.shape[1]
+    maxf = normals.shape[1]
+    area = np.zeros(m)
+    pc = np.zeros((m, 3))
+    pj = np.zeros((m, 3, 3))
+    VA = np.empty((maxv, 3))
+    NA = np.empty((maxf, 3))
+    DA = np.empty(maxf)
+    VB = np.empty((maxv, 3))
+    NB = np.empty((maxf, 3))
+    DB = np.empty(maxf)
+    for k in range(m):
+        i = ia[k]
+        j = ib[k]
+        _to_global(verts, nv, normals, offsets, nf, pos, rot, i, VA, NA, DA)
+        _to_global(verts, nv, normals, offsets, nf, pos, rot, j, VB, NB, DB)
+        v, c, g, a, p, J = pair_patch(VA, faces[i], fk[i], nf[i], NA, DA, VB, faces[j], fk[j], nf[j], NB, DB, tol)
+        area[k] = a
+        pc[k] = p
+        pj[k] = J
+    return area, pc, pj
 
 
 @njit(cache=True)
@@ -264,9 +386,10 @@ def _grow_3(a, cap):
     return b
 
 
-def overlap(va, vb, tol: float = TOL) -> tuple[float, np.ndarray, np.ndarray]:
+def overlap(va, vb, tol: float = TOL, patch: bool = False) -> tuple:
     """Overlap of two convex blocks given by their vertices in one frame (convenience for
-    tests and tools): (volume m^3, centroid m, dV/dx_B m^2)."""
+    tests and tools): (volume m^3, centroid m, dV/dx_B m^2); with ``patch`` also the
+    contact patch (area m^2, centroid m, second moment m^4 about it)."""
     s = Shapes([np.asarray(va, float), np.asarray(vb, float)])
     i = np.eye(3)
     pos = np.zeros((2, 3))
@@ -278,4 +401,5 @@ def overlap(va, vb, tol: float = TOL) -> tuple[float, np.ndarray, np.ndarray]:
         _to_global(s.verts, s.nv, s.normals, s.offsets, s.nf, pos, np.stack([i, i]), b, V, N, D)
         out.append((V, N, D))
     (VA, NA, DA), (VB, NB, DB) = out
-    return pair(VA, s.faces[0], s.fk[0], s.nf[0], NA, DA, VB, s.faces[1], s.fk[1], s.nf[1], NB, DB, tol)
+    fn = pair_patch if patch else pair
+    return fn(VA, s.faces[0], s.fk[0], s.nf[0], NA, DA, VB, s.faces[1], s.fk[1], s.nf[1], NB, DB, tol)

@@ -36,34 +36,34 @@ def test_projection_direction_prefers_face_normal():
 def test_stick_below_friction_limit():
     """A tangential increment below mu F_n is stored elastically: F = -K_t A u."""
     v = np.array([[1e-3, 0.0, 0.0]])
-    f, fs, slip = law.forces(N, v, np.array([100.0]), np.zeros((1, 3)), np.array([0.1]),
-                             np.array([1e7]), np.array([0.5]), np.array([0.0]), np.array([10.0]), 1e-3)
+    fs, slip = law.shear_spring(N, v, np.zeros((1, 3)), np.array([0.1]), np.array([1e7]), np.array([0.5]),
+                                np.array([100.0]), 1e-3)
     assert not slip[0]
     assert np.allclose(fs, [[-1e7 * 0.1 * 1e-3 * 1e-3, 0, 0]])
-    assert np.allclose(f, fs)
 
 
 def test_slip_caps_at_coulomb():
     v = np.array([[1.0, 0.0, 0.0]])
-    f, fs, slip = law.forces(N, v, np.array([100.0]), np.zeros((1, 3)), np.array([0.1]),
-                             np.array([1e7]), np.array([0.5]), np.array([0.8]), np.array([10.0]), 1e-3)
+    fs, slip = law.shear_spring(N, v, np.zeros((1, 3)), np.array([0.1]), np.array([1e7]), np.array([0.5]),
+                                np.array([100.0]), 1e-3)
     assert slip[0]
-    assert np.linalg.norm(f) == pytest.approx(50.0)
-    assert f[0, 0] < 0  # opposes the relative motion
+    assert np.linalg.norm(fs) == pytest.approx(50.0)
+    assert fs[0, 0] < 0  # opposes the relative motion
 
 
 def test_damped_stick_never_exceeds_coulomb():
-    v = np.array([[1e-3, 0.0, 0.0]])
-    f, _, _ = law.forces(N, v, np.array([1.0]), np.array([[-0.49, 0, 0]]), np.array([0.1]),
-                         np.array([1e7]), np.array([0.5]), np.array([0.8]), np.array([1e3]), 1e-6)
-    assert np.linalg.norm(f) <= 0.5 + 1e-12
+    """Spring 0.49 N near the cap 0.5 N plus a large tangential dashpot force: capped."""
+    J = np.diag([1e-3, 1e-3, 0.0])[None]
+    fd, _ = law.cap_damping(np.array([[-3.0, 0.0, 0.0]]), np.zeros((1, 3)), N, np.array([1.0]),
+                            np.array([[-0.49, 0, 0]]), np.array([0.5]), np.zeros((1, 3)), np.array([0.1]), J)
+    assert np.linalg.norm(fd + [[-0.49, 0, 0]]) <= 0.5 + 1e-12
 
 
 def test_normal_damping_never_pulls():
     """Separating fast: the dashpot may cancel the elastic force but never pull."""
-    v = np.array([[0.0, 0.0, 10.0]])
-    fd = law.normal_damping(N, v, np.array([5.0]), np.array([1e8]), np.array([0.1]), np.array([0.8]),
-                            np.array([100.0]))
+    J = np.diag([1e-3, 1e-3, 0.0])[None]
+    fd, _ = law.cap_damping(np.array([[0.0, 0.0, -1e4]]), np.zeros((1, 3)), N, np.array([5.0]), np.zeros((1, 3)),
+                            np.array([0.5]), np.zeros((1, 3)), np.array([0.1]), J)
     assert fd[0, 2] == pytest.approx(-5.0)
 
 
@@ -90,15 +90,21 @@ def test_pair_properties_series_and_overrides():
     assert p["kn"] == 2e8 and p["kt"] == 1e8 and p["mu"] == 0.5 and p["damping"] == 0.4
 
 
-def test_effective_mass_at_a_contact_point():
+def test_mobility_at_a_contact_point():
     """A free block (m, principal inertia I) against a fixed one: the effective mass along
-    the normal is m at a point on the normal through the centre, and 1/(1/m + r^2/I)
-    at a lever arm r (the rocking edge); a fixed body adds nothing."""
+    the normal, 1/(n.W n), is m at a point on the normal through the centre, and
+    1/(1/m + r^2/I) at a lever arm r (the rocking edge); a fixed body adds nothing; a
+    moment M at the point turns the block by I^-1 M and drags the point by -r x I^-1 M."""
     m, inertia, r = 10.0, np.array([0.5, 0.2, 0.3]), 0.1
     u = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 1.0]])
     ra = np.zeros((2, 3))
     rb = np.array([[0.0, 0.0, -0.2], [r, 0.0, -0.2]])  # on the axis, then offset along x
     inv_i_b = np.repeat(np.diag(1.0 / inertia)[None], 2, axis=0)
-    me = law.effective_mass(u, ra, rb, np.zeros(2), np.full(2, 1.0 / m), np.zeros((2, 3, 3)), inv_i_b)
+    W = law.mobility(ra, rb, np.zeros(2), np.full(2, 1.0 / m), np.zeros((2, 3, 3)), inv_i_b)
+    me = 1.0 / np.einsum("ki,kij,kj->k", u, W[:, :3, :3], u)
     # offset along x, force along z: rotation about y (inertia 0.2)
     assert me == pytest.approx([m, 1.0 / (1.0 / m + r * r / 0.2)], rel=1e-12)
+    moment = np.array([0.0, 1.0, 0.0])
+    assert np.allclose(W[0, 3:, 3:] @ moment, moment / inertia)
+    assert np.allclose(W[0, :3, 3:] @ moment, -np.cross(rb[0], moment / inertia))
+    assert np.allclose(W[0], W[0].T)

@@ -6,6 +6,11 @@ Why not the stock law alone: ``Law2_PolyhedraGeom_PolyhedraPhys_Volumetric`` (YA
 2023.02a) keeps the running shear force in one member of the functor, shared by all
 contacts, so shear history leaks from one contact to another, and it has no damping.
 Its volumetric normal force (K_n V at the overlap centroid) is right and is kept.
+
+Forces per contact: the elastic normal force K_n V at the overlap centroid c (applied by
+YADE's law with ``detection = yade``, here with ``native``), the shear spring at c, and
+the damping wrench distributed over the contact patch, at the patch centroid p
+(``drystone.contact``: force and moment).
 """
 from __future__ import annotations
 
@@ -80,15 +85,17 @@ class PenaltyCoulomb:
         self.inv_inertia_local = np.where(self.moving[:, None], 1.0 / inertia, 0.0)
         self.inv_mass = np.where(self.moving, 1.0 / self.mass, 0.0)
         self.native = detection == "native"
-        if self.native:
-            self.shapes = ov.Shapes(local_vertices)
-        else:  # for the contact-area estimate on YADE's geometry
+        self.shapes = ov.Shapes(local_vertices)  # overlaps (native) and contact patches (both)
+        if not self.native:  # for the contact-area estimate on YADE's geometry
             self.vloc = _padded(local_vertices)  # repeated entries leave min/max/argmax unchanged
             self.nloc = _padded([_face_normals(v) for v in local_vertices])
         self._shear: dict[tuple[int, int], np.ndarray] = {}
         self._props: dict[tuple[int, int], tuple] = {}
         self.state = ContactState()
         self.elastic = (0.0, 0.0)  # elastic energy (J) at the previous and current step
+        #: largest omega dt of any contact mode so far (central differences are stable
+        #: below 2 (sqrt(1 + xi^2) - xi))
+        self.max_omega_dt = 0.0
 
     def _props_arrays(self, keys):
         out = []
@@ -123,7 +130,7 @@ class PenaltyCoulomb:
         n = rows[:, 3:6]
         c = rows[:, 6:9]
         if len(rows) == 0:
-            return ia, ib, vol, n, c, np.zeros(0)
+            return ia, ib, vol, n, c, np.zeros(0), np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3, 3))
         # contact area from the overlap extent along the joint's face normal
         # face normals in the global frame, then vertex projections x.m = x_local.(R^T m) + pos.m
         fa = np.matmul(self.nloc[ia], rot[ia].transpose(0, 2, 1))
@@ -138,23 +145,30 @@ class PenaltyCoulomb:
         cm = law.dot(c, m)
         # the centroid's distance from the flat face the overlap presses into
         e = np.where(face_of_a, hi - cm, cm - lo)
-        return ia, ib, vol, n, c, law.contact_area(vol, hi - lo, e)
+        s = self.shapes
+        pa, pc, pj = ov.patches_of_pairs(s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, pos, rot,
+                                         ia, ib, ov.TOL)
+        return ia, ib, vol, n, c, law.contact_area(vol, hi - lo, e), pa, pc, pj
 
     def _native_geometry(self, bodies_state):
-        """Overlaps computed here (drystone.overlap): (ia, ib, volume, normal, point, area)."""
+        """Overlaps computed here (drystone.overlap): (ia, ib, volume, normal, point, area,
+        patch area, patch centroid, patch second moment)."""
         pos, _, _, rot = bodies_state
         s = self.shapes
-        ia, ib, vol, c, n, area = ov.all_contacts(s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk,
-                                                  pos, rot, self.moving, ov.TOL)
-        return ia, ib, vol, n, c, area
+        ia, ib, vol, c, n, area, pc, pj = ov.contacts_with_patches(s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces,
+                                                                   s.fk, pos, rot, self.moving, ov.TOL)
+        return ia, ib, vol, n, c, area, area, pc, pj
 
     def step(self, O, bodies_state):
         """Compute and apply this step's forces. ``bodies_state``: (pos, vel, angvel, R)
         arrays over all bodies (m, m/s, rad/s, rotation matrices)."""
         if self.native:
-            ia, ib, vol, n, c, area = self._native_geometry(bodies_state)
+            ia, ib, vol, n, c, area, parea, pc, pj = self._native_geometry(bodies_state)
         else:
-            ia, ib, vol, n, c, area = self._yade_geometry(O, bodies_state)
+            ia, ib, vol, n, c, area, parea, pc, pj = self._yade_geometry(O, bodies_state)
+        if not self.native:  # YADE may keep interactions between two non-moving bodies
+            keep = self.moving[ia] | self.moving[ib]
+            ia, ib, vol, n, c, area, parea, pc, pj = (a[keep] for a in (ia, ib, vol, n, c, area, parea, pc, pj))
         st = self.state
         if len(ia) == 0:
             st.clear()
@@ -168,37 +182,39 @@ class PenaltyCoulomb:
         ra = c - pos[ia]
         rb = c - pos[ib]
         v_rel = (vel[ib] + law.cross(angvel[ib], rb)) - (vel[ia] + law.cross(angvel[ia], ra))
-        # effective masses at the contact point along the normal and the sliding direction
-        ia_inv = np.matmul(rot[ia] * self.inv_inertia_local[ia][:, None, :], rot[ia].transpose(0, 2, 1))
-        ib_inv = np.matmul(rot[ib] * self.inv_inertia_local[ib][:, None, :], rot[ib].transpose(0, 2, 1))
-        masses = (ra, rb, self.inv_mass[ia], self.inv_mass[ib], ia_inv, ib_inv)
-        m_n = law.effective_mass(n, *masses)
-        vt = v_rel - law.dot(v_rel, n)[:, None] * n
-        vt_mag = np.linalg.norm(vt, axis=1)
-        t_dir = np.where(vt_mag[:, None] > 0, vt / np.where(vt_mag > 0, vt_mag, 1.0)[:, None], 0.0)
-        m_t = np.where(vt_mag > 0, law.effective_mass(t_dir, *masses), m_n)
         fn = kn * vol
-
         fs_prev = np.array([self._shear.get(k, (0.0, 0.0, 0.0)) for k in keys], float).reshape(-1, 3)
-        f_t, fs_new, slipping = law.forces(n, v_rel, fn, fs_prev, area, kt, mu, xi, m_t, O.dt)
-        f_nd = law.normal_damping(n, v_rel, fn, kn, area, xi, m_n)
-        f_b = f_t + f_nd
+        fs_new, slipping = law.shear_spring(n, v_rel, fs_prev, area, kt, mu, fn, O.dt)
         self._shear = dict(zip(keys, fs_new))
 
+        # damping distributed over the patch, at its centroid p
+        pa_, pb_ = pc - pos[ia], pc - pos[ib]
+        twist = np.concatenate([(vel[ib] + law.cross(angvel[ib], pb_)) - (vel[ia] + law.cross(angvel[ia], pa_)),
+                                angvel[ib] - angvel[ia]], axis=1)
+        ia_inv = np.matmul(rot[ia] * self.inv_inertia_local[ia][:, None, :], rot[ia].transpose(0, 2, 1))
+        ib_inv = np.matmul(rot[ib] * self.inv_inertia_local[ib][:, None, :], rot[ib].transpose(0, 2, 1))
+        W = law.mobility(pa_, pb_, self.inv_mass[ia], self.inv_mass[ib], ia_inv, ib_inv)
+        K = law.patch_stiffness(n, parea, pj, kn, kt, ~slipping)
+        C, om = law.damping_matrix(K, W, xi)
+        self.max_omega_dt = max(self.max_omega_dt, float(om.max()) * O.dt)
+        wd = -np.matmul(C, twist[:, :, None])[:, :, 0]
+        fd, md = law.cap_damping(wd[:, :3], wd[:, 3:], n, fn, fs_new, mu, c - pc, parea, pj)
+        f_b = fs_new + fd  # the force this law adds on B besides K_n V (resultant)
+
         st.id1, st.id2, st.normal, st.point, st.volume = ia, ib, n, c, vol
-        st.area, st.fn, st.f_extra, st.shear, st.slipping = area, fn, f_b, f_t, slipping
+        st.area, st.fn, st.f_extra, st.shear, st.slipping = area, fn, f_b, fs_new + fd - law.dot(fd, n)[:, None] * n, slipping
         ok = area > 0
         e_el = float(np.sum(0.5 * fn[ok] * vol[ok] / area[ok])
                      + np.sum(np.sum(fs_new[ok] ** 2, axis=1) / (2.0 * kt[ok] * area[ok])))
         self.elastic = (self.elastic[1], e_el)
 
-        # the force applied here: with native detection the elastic normal force too
-        f_apply = f_b + fn[:, None] * n if self.native else f_b
-        # accumulate per body (bincount) and apply once per moving body in contact
+        # the forces applied here: shear spring at c, damping at p (+ its moment), and with
+        # native detection the elastic normal force at c too
+        f_c = fs_new + fn[:, None] * n if self.native else fs_new
         nb = len(self.mass)
         idx = np.concatenate([ib, ia])
-        F = np.concatenate([f_apply, -f_apply])
-        T = np.concatenate([law.cross(rb, f_apply), -law.cross(ra, f_apply)])
+        F = np.concatenate([f_c + fd, -(f_c + fd)])
+        T = np.concatenate([law.cross(rb, f_c) + law.cross(pb_, fd) + md, -law.cross(ra, f_c) - law.cross(pa_, fd) - md])
         Fs = np.stack([np.bincount(idx, F[:, k], nb) for k in range(3)], 1)
         Ts = np.stack([np.bincount(idx, T[:, k], nb) for k in range(3)], 1)
         V3 = yade.Vector3

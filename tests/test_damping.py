@@ -1,0 +1,196 @@
+"""Contact damping distributed over the contact patch (drystone/contact.py): each mode of
+a contact gets the fraction of critical damping asked for.
+
+Without YADE: the damping matrix of one block on a rigid base gives every mode of the
+linear 6-DOF system exactly xi (state-space eigenvalues), and the patch geometry of the
+overlap kernel is exact for flat joints and wedges.
+
+With YADE (both contact geometries): free decay of the bouncing, rocking and sliding modes
+of one block after a push is released, read from the recorded velocities. The rocking and sliding modes are coupled (the
+push acts at the centroid); the recorded motion is projected on the closed-form modes of
+the block on its joint springs (Winkler rocking-sliding, with gravity's term) and the
+logarithmic decrement of each modal coordinate gives its damping ratio. The issue asks
+for 20 % relative: the integration lags the dashpot by half a step (omega dt / 2 < 0.02
+here) and the coupling left by the approximate modes is a few per cent.
+"""
+import numpy as np
+import pytest
+
+from conftest import requires_yade, run_case
+from drystone import contact as law
+from drystone import overlap as ov
+
+G = 9.81
+
+
+def box(lo, hi):
+    return np.array([[(hi if (k >> a) & 1 else lo)[a] for a in range(3)] for k in range(8)], float)
+
+
+def _block_on_base(b, d, h, rho, kn, kt, xi, sticking=True):
+    """M (6x6 at the patch centroid), K, C of a b x d x h block (x, y, z) on a rigid base."""
+    m = rho * b * d * h
+    ic = np.diag([m * (d * d + h * h) / 12, m * (b * b + h * h) / 12, m * (b * b + d * d) / 12])
+    A = b * d
+    J = np.diag([b ** 3 * d / 12, d ** 3 * b / 12, 0.0])
+    n = np.array([[0.0, 0.0, 1.0]])
+    r = np.array([[0.0, 0.0, -h / 2]])  # patch centroid minus the block's centroid
+    W = law.mobility(np.zeros((1, 3)), r, np.zeros(1), np.array([1 / m]), np.zeros((1, 3, 3)),
+                     np.linalg.inv(ic)[None])
+    K = law.patch_stiffness(n, np.array([A]), J[None], np.array([kn]), np.array([kt]), np.array([sticking]))
+    C, om = law.damping_matrix(K, W, np.array([xi]))
+    return np.linalg.inv(W[0]), K[0], C[0], om[0]
+
+
+@pytest.mark.parametrize("xi", [0.05, 0.3, 0.8])
+@pytest.mark.parametrize("size", [(0.2, 0.2, 0.4), (0.6, 0.3, 0.2)])
+def test_every_mode_of_a_block_on_its_joint_gets_xi(xi, size):
+    """State-space eigenvalues s = -xi w +- i w sqrt(1 - xi^2) for every mode with
+    stiffness (bouncing, two rocking-sliding pairs; twist has none): ratio -Re s/|s| = xi
+    to round-off, and omega_max is the fastest mode."""
+    M, K, C, om = _block_on_base(*size, 2300.0, 2e8, 1e8, xi)
+    Mi = np.linalg.inv(M)
+    Asys = np.block([[np.zeros((6, 6)), np.eye(6)], [-Mi @ K, -Mi @ C]])
+    s = np.linalg.eigvals(Asys)
+    s = s[np.abs(s) > 1e-6 * np.abs(s).max()]  # drop the rigid twist mode
+    assert len(s) == 10  # five modes with stiffness, each a conjugate pair
+    assert np.allclose(-s.real / np.abs(s), xi, rtol=1e-8, atol=1e-10)
+    w = np.sqrt(np.linalg.eigvals(Mi @ K).real.max())
+    assert om == pytest.approx(w, rel=1e-9)
+
+
+def test_flat_joint_reduces_to_the_dashpot_pressure():
+    """A flat slab (rocking and sliding decoupled to leading order when h << b): the normal
+    dashpot is 2 xi sqrt(K_n A m) and the rocking one 2 xi sqrt(K_n R I_p), R = int y^2 dA,
+    I_p the inertia about the patch axis (the dashpot pressure c v_n(x) over the patch)."""
+    b, d, h, rho, kn, xi = 0.4, 0.4, 1e-3, 2300.0, 2e8, 0.3
+    M, K, C, _ = _block_on_base(b, d, h, rho, kn, 1e8, xi)
+    m = rho * b * d * h
+    assert C[2, 2] == pytest.approx(2 * xi * np.sqrt(kn * b * d * m), rel=1e-9)
+    R = b ** 3 * d / 12
+    ip = m * (b * b + 4 * h * h) / 12
+    assert C[3, 3] == pytest.approx(2 * xi * np.sqrt(kn * R * ip), rel=1e-4)
+
+
+def test_slipping_contact_has_no_tangential_damping():
+    M, K, C, _ = _block_on_base(0.2, 0.2, 0.4, 2300.0, 2e8, 1e8, 0.3, sticking=False)
+    assert np.allclose(C[:2, :], 0.0, atol=1e-9 * np.abs(C).max())
+    assert np.allclose(C[:, :2], 0.0, atol=1e-9 * np.abs(C).max())
+    assert C[2, 2] > 0 and C[3, 3] > 0
+
+
+def test_patch_of_flat_joint_and_wedge():
+    """The footprint: a flat joint is the overlap of the two faces (area, centroid, second
+    moment b d^3/12); a block rocking on its edge presses a strip whose width is where its
+    face is below the other one."""
+    A = box([-1, -1, -1], [1, 1, 0])
+    B = box([-0.3, -0.2, -1e-4], [0.5, 0.4, 0.5])
+    v, c, g, a, p, J = ov.overlap(A, B, patch=True)
+    assert a == pytest.approx(0.48, rel=1e-12)
+    assert np.allclose(p[:2], [0.1, 0.1], atol=1e-12)
+    assert np.allclose(np.diag(J), [0.6 * 0.8 ** 3 / 12, 0.8 * 0.6 ** 3 / 12, 0.0], rtol=1e-9, atol=1e-15)
+    th = 1e-3
+    R = np.array([[1, 0, 0], [0, np.cos(th), -np.sin(th)], [0, np.sin(th), np.cos(th)]])
+    B2 = box([-0.3, -0.2, 0.0], [0.5, 0.4, 0.5]) @ R.T + [0, 0, -2e-4]
+    v, c, g, a, p, J = ov.overlap(A, B2, patch=True)
+    w = 0.2 + 2e-4 / np.sin(th) * np.cos(th)  # y from -0.2 to where the face crosses z = 0
+    assert a == pytest.approx(0.8 * w, rel=1e-5)
+    assert J[1, 1] == pytest.approx(0.8 * w ** 3 / 12, rel=1e-4)
+    assert J[0, 0] == pytest.approx(w * 0.8 ** 3 / 12, rel=1e-5)
+
+
+def test_damping_caps():
+    """The normal dashpot never pulls; spring + tangential dashpot stay within mu F_n; the
+    damping moment keeps the resultant inside the patch (here |M| <= N b / 2, the edge)."""
+    n = np.array([[0.0, 0.0, 1.0]])
+    J = np.diag([0.4 ** 3 * 0.4 / 12, 0.4 ** 3 * 0.4 / 12, 0.0])[None]
+    fd, md = law.cap_damping(np.array([[30.0, 0.0, -50.0]]), np.array([[0.0, 1e6, 0.0]]), n, np.array([10.0]),
+                             np.array([[-2.0, 0.0, 0.0]]), np.array([0.5]), np.zeros((1, 3)), np.array([0.16]), J)
+    assert fd[0, 2] == pytest.approx(-10.0)  # cancels the elastic 10 N, no pull
+    assert np.hypot(-2.0 + fd[0, 0], fd[0, 1]) == pytest.approx(5.0)  # mu F_n
+    N = 10.0 + fd[0, 2]
+    assert abs(md[0, 1]) <= N * 0.2 + 1e-12
+    fd, md = law.cap_damping(np.array([[0.0, 0.0, -5.0]]), np.array([[0.0, 1e6, 0.0]]), n, np.array([10.0]),
+                             np.zeros((1, 3)), np.array([0.5]), np.zeros((1, 3)), np.array([0.16]), J)
+    assert fd[0, 2] == pytest.approx(-5.0)
+    assert md[0, 1] == pytest.approx(5.0 * 0.2, rel=1e-9)  # resultant on the edge, b / 2 = 0.2 m
+
+
+# -- free decay in YADE ------------------------------------------------------------
+B, D, H, RHO, KN, KT = 0.2, 0.2, 0.4, 2300.0, 2e8, 1e8
+MASS = RHO * B * D * H
+W = MASS * G
+
+
+def _log_decrement_ratio(q, dt):
+    """Damping ratio from the successive positive peaks of a decaying oscillation q(t) (a
+    velocity: it oscillates about zero), over the peaks above 2 % of the first."""
+    q = np.asarray(q, float)
+    i = np.flatnonzero((q[1:-1] > q[:-2]) & (q[1:-1] >= q[2:]) & (q[1:-1] > 0)) + 1
+    pk = q[i]
+    keep = pk > 0.02 * pk[0]
+    pk = pk[keep][:6]
+    assert len(pk) >= 2, "fewer than two peaks"
+    delta = np.log(pk[0] / pk[-1]) / (len(pk) - 1)
+    return delta / np.sqrt(4 * np.pi ** 2 + delta ** 2)
+
+
+def _free_decay(outdir, detection, xi, force, t_release, duration, interval):
+    c = {"case": {"geometry": {"generator": "boxes_on_platform", "mu": 0.7, "damping": xi, "density": RHO,
+                               "kn": KN, "kt": KT, "boxes": [{"id": 1, "center_xy": [0.0, 0.0], "size": [B, D, H]}]}},
+         "contact": {"law": "penalty_coulomb", "detection": detection},
+         "stages": [{"type": "gravity", "duration": t_release, "ramp": 0.05},
+                    {"type": "rest", "duration": duration}],
+         "forces": [{"block": 1, "force": list(force), "start": 0.0, "end": t_release}],
+         "output": {"interval": interval}}
+    s, h, spec = run_case(c, outdir)
+    win = h["t"] >= t_release
+    return h["t"][win], h["vel"][win, 0], h["angvel"][win, 0], spec
+
+
+@requires_yade
+@pytest.mark.yade
+@pytest.mark.parametrize("detection", ["native", "yade"])
+@pytest.mark.parametrize("xi", [0.05, 0.3])
+def test_free_decay_bouncing(outdir, detection, xi):
+    """Pressed down by 0.5 W, then released: the vertical mode sqrt(K_n A / m) decays at xi
+    (20 %); lightly damped, it rings at its frequency (2 %: the period from three peaks
+    sampled every 1e-4 s, 0.7 % of it)."""
+    t, v, _, spec = _free_decay(outdir, detection, xi, [0.0, 0.0, -0.5 * W], 0.3, 0.08, 1e-4)
+    z = v[:, 2]
+    assert _log_decrement_ratio(z, spec["dt"]) == pytest.approx(xi, rel=0.2)
+    w = np.sqrt(KN * B * D / MASS)
+    i = np.flatnonzero((z[1:-1] > z[:-2]) & (z[1:-1] >= z[2:]) & (z[1:-1] > 0)) + 1
+    period = np.diff(t[i[:3]]).mean()
+    if xi <= 0.1:
+        assert 2 * np.pi / period == pytest.approx(w * np.sqrt(1 - xi ** 2), rel=0.02)
+
+
+def _rocking_sliding_modes():
+    """Closed-form modes of the block on its joint, coordinates (x of the patch centre,
+    rotation about y): M, K (gravity lowers the rocking stiffness by m g h / 2)."""
+    ic = MASS * (B * B + H * H) / 12
+    M = np.array([[MASS, MASS * H / 2], [MASS * H / 2, MASS * H * H / 4 + ic]])
+    K = np.diag([KT * B * D, KN * D * B ** 3 / 12 - W * H / 2])
+    from scipy.linalg import eigh
+    lam, phi = eigh(K, M)
+    return M, K, np.sqrt(lam), phi
+
+
+@requires_yade
+@pytest.mark.yade
+@pytest.mark.parametrize("detection", ["native", "yade"])
+@pytest.mark.parametrize("xi", [0.05, 0.3])
+def test_free_decay_rocking_and_sliding(outdir, detection, xi):
+    """Pushed sideways at the centroid by 0.06 W (the joint stays closed: the rocking lifts
+    the edge by 40 % of the static penetration, and the shear is 9 % of mu W), then
+    released: the two rocking-sliding modes (projected on the closed-form modes) each
+    decay at xi (20 %)."""
+    t, v, w, spec = _free_decay(outdir, detection, xi, [0.06 * W, 0.0, 0.0], 0.3, 0.25, 2e-4)
+    theta = w[:, 1]  # rates: no static offset to remove
+    x_p = v[:, 0] - theta * H / 2
+    M, K, om, phi = _rocking_sliding_modes()
+    modal = (phi.T @ M @ np.stack([x_p, theta])).T
+    for k in range(2):
+        assert _log_decrement_ratio(modal[:, k] * np.sign(modal[0, k]), spec["dt"]) == pytest.approx(xi, rel=0.2), \
+            f"mode {k} ({om[k] / 2 / np.pi:.1f} Hz)"
