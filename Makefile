@@ -10,7 +10,7 @@ STAMP   := $(VENV)/.setup-stamp
 RUN     := $(PY) -m drystone
 
 .PHONY: setup system-deps test demo run gravity4 settlement4 bench clean help records spectrum ogawa3d ogawa \
-        sweep tilt tilt-rate tilt-sensitivity tilt-report sacsayhuaman sacsayhuaman-report vtk
+        sweep tilt tilt-rate tilt-sensitivity tilt-report sacsayhuaman sacsayhuaman-report vtk ogawa-pga readme
 
 help:
 	@echo "make setup        install Debian's YADE, make .venv, install PyPI dependencies"
@@ -20,7 +20,9 @@ help:
 	@echo "make gravity4 | settlement4   the paper's four-block verification cases"
 	@echo "make bench        speed figures (not a test)"
 	@echo "make ogawa        Ogawa et al.: Tables 1-3 check and figure, 1D friction studies and report (~15 min)"
-	@echo "make ogawa3d      the same five blocks in 3D (YADE) for the named friction sets (~4 min per set)"
+	@echo "make ogawa3d      the same five blocks in 3D (YADE) for the named friction sets (~4 min per set) + make ogawa-pga"
+	@echo "make ogawa-pga    3D: both block readings, PGA sweep (end-block overturning), reset vs cumulative (~30 min on 2 cores)"
+	@echo "make readme       regenerate README.md's result tables from results/*/ (skips missing reports)"
 	@echo "make records      papers' records (user files or FEMA P695 analogues) -> results/records/catalogue.json"
 	@echo "make spectrum FILE=path [ARGS=...]   PGA, step, duration, predominant frequencies (JSON) + PNG"
 	@echo "make sweep SWEEP=cases/sweeps/x.toml [DASK=tcp://host:8786|local]   a sweep, parallel and resumable"
@@ -67,7 +69,15 @@ ogawa: setup
 
 ogawa3d: setup
 	$(PY) -m ogawa study3d --workers $(JOBS)
+	$(MAKE) ogawa-pga
+
+ogawa-pga: setup
+	$(RUN) sweep cases/sweeps/ogawa_pga.toml --workers $(JOBS)
+	$(RUN) sweep cases/sweeps/ogawa_cumulative.toml --workers $(JOBS)
 	$(PY) -m ogawa refresh
+
+readme: setup
+	$(PY) -m postprocess.readme_tables README.md
 
 demo: setup
 	$(RUN) run cases/gravity4.toml -j $(JOBS)

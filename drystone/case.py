@@ -116,9 +116,28 @@ STAGES: dict[str, dict[str, Key]] = {
         "pga_g": Key(None, "g", "scale the motion to this peak ground acceleration", float, positive=True),
         "record": Key(None, "-", "catalogue name or file of an acceleration record", str),
         "seed": Key(0, "-", "white-noise seed", int),
+        "start": Key("rest", "-", "how a sine starts (motion = 'sine' only): 'rest' = the acceleration "
+                     "a(t) = -A sin(wt) from a base at rest (the base velocity grows from 0); 'displacement' = the "
+                     "paper's Eq. 9, base displacement d(t) = A/w^2 sin(wt), whose velocity A/w cos(wt) jumps from 0 "
+                     "to A/w at the start: every free block gets the relative velocity -A/w along 'direction' when "
+                     "the stage begins (derivation: drystone/runner.py initial_relative_velocity)", str,
+                     ("rest", "displacement")),
     },
     "rest": {
-        "duration": Key(REQUIRED, "s", "free motion under the current loads", float, positive=True),
+        "duration": Key(REQUIRED, "s", "free motion under the current loads; with until_kinetic_below(_per_weight), "
+                        "the longest it may run", float, positive=True),
+        "until_kinetic_below": Key(None, "J", "end the stage (and the run: last stage only) once the kinetic energy "
+                                   "of the free blocks (those fallen below the platform left out) has stayed below "
+                                   "this for settle_window s; run_info/summary say whether it was reached", float,
+                                   positive=True),
+        "until_kinetic_below_per_weight": Key(None, "m", "the same threshold as a fraction of the weight W of the "
+                                              "free blocks: kinetic energy < W x this length (the energy that would "
+                                              "lift them all by it; 1e-7 m ~ an rms speed sqrt(2 g x 1e-7) = 1.4 "
+                                              "mm/s)", float, positive=True),
+        "settle_window": Key(0.5, "s", "how long the kinetic energy must stay below the threshold: a rocking or "
+                             "vibrating body passes through zero kinetic energy at its turning points, so take at "
+                             "least half the period of the slowest oscillation expected", float,
+                             positive=True),
     },
 }
 
@@ -276,6 +295,10 @@ def validate(raw: dict, where: str, base_dir: Path, stem: str = "case") -> dict:
         filled = _fill(w, body, STAGES[kind])
         filled["type"] = kind
         _check_stage(w, filled)
+        if kind == "rest" and k != len(stages) - 1 and (filled["until_kinetic_below"] is not None
+                                                        or filled["until_kinetic_below_per_weight"] is not None):
+            raise CaseError(f"{w}: 'until_kinetic_below(_per_weight)' ends the run early: only the last stage may "
+                            "have it")
         case["stages"].append(filled)
     names = [c["name"] for c in case["output"]["contacts"]]
     for key in ("penetration", "slip"):
@@ -302,6 +325,17 @@ def _check_stage(where: str, s: dict):
             raise CaseError(f"{where}: motion 'record' needs 'record' (catalogue name or file)")
         if m != "record" and s["duration"] is None:
             raise CaseError(f"{where}: motion {m!r} needs 'duration'")
+        if m != "sine" and s["start"] != "rest":
+            raise CaseError(f"{where}: 'start' = {s['start']!r} is defined for motion 'sine' only (Eq. 9's "
+                            f"displacement); a {m!r} motion starts from rest")
+    if kind == "rest":
+        if s["until_kinetic_below"] is not None and s["until_kinetic_below_per_weight"] is not None:
+            raise CaseError(f"{where}: give 'until_kinetic_below' (J) or 'until_kinetic_below_per_weight' (m), "
+                            "not both")
+        quiet = s["until_kinetic_below"] is not None or s["until_kinetic_below_per_weight"] is not None
+        if quiet and s["settle_window"] > s["duration"]:
+            raise CaseError(f"{where}: 'settle_window' ({s['settle_window']} s) exceeds 'duration' "
+                            f"({s['duration']} s)")
 
 
 def describe() -> str:

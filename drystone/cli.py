@@ -1,4 +1,4 @@
-"""Command line: python -m drystone {run, sweep, keys, compare, bench}."""
+"""Command line: python -m drystone {run, sweep, keys, compare, bench, free-decay}."""
 from __future__ import annotations
 
 import argparse
@@ -23,6 +23,8 @@ def main(argv=None) -> int:
     c = sub.add_parser("compare", help="compare finished verification runs with the paper")
     c.add_argument("folders", nargs="+")
     sub.add_parser("bench", help="speed figures for the 40-block running-bond wall")
+    sub.add_parser("free-decay", help="damping ratio per mode of one block (both contact geometries) -> "
+                   "results/free_decay/report.md")
     w = sub.add_parser("sweep", help="run a sweep file (many overrides of one case) in parallel, resumably")
     w.add_argument("sweep")
     w.add_argument("--workers", type=int, default=None, help="parallel runs (default: number of cores)")
@@ -54,6 +56,9 @@ def main(argv=None) -> int:
             backend = "dask" if a.dask else a.backend
             res = sweep.run(a.sweep, a.workers, backend, a.dask, a.threads, a.only)
             return 1 if res["failed"] else 0
+        elif a.cmd == "free-decay":
+            from drystone import free_decay
+            print(free_decay.report().read_text())
         elif a.cmd == "bench":
             from drystone import bench
             bench.main()

@@ -52,3 +52,45 @@ def onset(tilt_deg, pos, t, detected_time_s, rate_m_per_deg=RATE_M_PER_DEG, wind
         elif moved[k] < 0.5 * rate_m_per_deg:
             found = None
     return found
+
+
+REACTION_DROP = 0.05  # fraction of the moving blocks' weight (the tilt stage's default reaction_drop)
+
+
+def reaction_drop(t, tilt_deg, reaction_N, weight_N, active=None, drop=REACTION_DROP) -> dict:
+    """The paper's collapse angle (Sacsayhuaman paper §3.2, Figure 13: "the vertical
+    reaction drops sharply at 33.5 s, corresponding to a rotation of 14.3 deg").
+
+    Definition: the platform tilt at the first recorded sample, among the ``active`` ones
+    (the samples of the tilt stages), at which the vertical reaction of the moving blocks
+    on the platform and the fixed blocks, ``reaction_N`` (N, along the true vertical, up),
+    is below ``(1 - drop) * weight_N``, with ``weight_N`` the weight of the moving blocks
+    (N) and ``drop`` a fraction (default 5 %, the tilt stage's ``reaction_drop``).
+
+    Measured along the true vertical, the reaction of a wall at rest equals its weight at
+    any tilt (the platform carries all of it; along the platform's normal it would fall as
+    cos(tilt), 3 % at 14 deg, without any collapse); it drops only while blocks accelerate
+    downwards, i.e. fall. This is the rule the run itself uses to stop
+    (yade_scripts/run_case.py, evaluated at the same recorded samples), so when the run's
+    criterion was ``reaction_drop`` the angle equals its detection angle.
+
+    ``t`` (n,) s, ``tilt_deg`` (n,) deg, ``reaction_N`` (n,) N, ``active`` (n,) bool or
+    None (all samples). Returns ``{"angle_deg", "time_s", "reaction_N", "fraction",
+    "min_fraction", "drop", "weight_N"}``: ``fraction`` = reaction / weight at that sample,
+    ``min_fraction`` the lowest over the active samples; ``angle_deg`` and ``time_s`` are
+    None when the reaction never dropped that far in the recorded history.
+    """
+    t, tilt_deg = np.asarray(t, float), np.asarray(tilt_deg, float)
+    r = np.asarray(reaction_N, float)
+    if not weight_N > 0 or not 0 < drop < 1:
+        raise ValueError(f"reaction_drop: weight ({weight_N} N) must be positive and drop ({drop}) in (0, 1)")
+    act = np.ones(len(t), bool) if active is None else np.asarray(active, bool)
+    frac = r / weight_N
+    out = {"angle_deg": None, "time_s": None, "reaction_N": None, "fraction": None,
+           "min_fraction": float(frac[act].min()) if act.any() else None, "drop": float(drop),
+           "weight_N": float(weight_N)}
+    hit = np.flatnonzero(act & (frac < 1.0 - drop))
+    if len(hit):
+        i = int(hit[0])
+        out.update(angle_deg=float(tilt_deg[i]), time_s=float(t[i]), reaction_N=float(r[i]), fraction=float(frac[i]))
+    return out

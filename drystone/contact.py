@@ -41,6 +41,7 @@ centroid and second moment come from the exact overlap (``drystone.overlap``).
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 #: ignore contacts thinner than this (m) or with no volume: failed intersections in
 #: YADE leave such values behind
@@ -257,3 +258,258 @@ def critical_time_step(mass, stiffness, damping_ratio=0.0) -> float:
     omega = np.sqrt(np.asarray(stiffness, float) / np.asarray(mass, float))
     xi = np.asarray(damping_ratio, float)
     return float(np.min(2.0 / omega * (np.sqrt(1.0 + xi * xi) - xi)))
+
+
+# -- compiled kernel ------------------------------------------------------------------
+# The same damping as mobility -> patch_stiffness -> damping_matrix -> cap_damping, one
+# contact at a time without temporaries (the numpy functions above are the reference:
+# tests/test_damping.py checks that both agree). W = L L^T by Cholesky, B = L^T K L, its
+# square root by cyclic Jacobi rotations (6 x 6), and C u = 2 xi L^-T B^1/2 L^-1 u by
+# triangular solves.
+
+@njit(cache=True)
+def _jacobi_sqrt(B, out):
+    """out = B^1/2 for a symmetric positive semi-definite 6 x 6 B (negative round-off
+    eigenvalues clipped); returns the largest eigenvalue."""
+    n = 6
+    A = B.copy()
+    V = np.eye(n)
+    for _ in range(50):
+        off = 0.0
+        scale = 0.0
+        for i in range(n):
+            scale += A[i, i] * A[i, i]
+            for j in range(i + 1, n):
+                off += A[i, j] * A[i, j]
+        if off <= 1e-30 * scale or scale == 0.0:
+            break
+        for p in range(n - 1):
+            for q in range(p + 1, n):
+                apq = A[p, q]
+                if apq == 0.0:
+                    continue
+                theta = (A[q, q] - A[p, p]) / (2.0 * apq)
+                t = (1.0 if theta >= 0 else -1.0) / (abs(theta) + np.sqrt(theta * theta + 1.0))
+                c = 1.0 / np.sqrt(t * t + 1.0)
+                s = t * c
+                for k in range(n):
+                    akp = A[k, p]
+                    akq = A[k, q]
+                    A[k, p] = c * akp - s * akq
+                    A[k, q] = s * akp + c * akq
+                for k in range(n):
+                    apk = A[p, k]
+                    aqk = A[q, k]
+                    A[p, k] = c * apk - s * aqk
+                    A[q, k] = s * apk + c * aqk
+                for k in range(n):
+                    vkp = V[k, p]
+                    vkq = V[k, q]
+                    V[k, p] = c * vkp - s * vkq
+                    V[k, q] = s * vkp + c * vkq
+    lmax = 0.0
+    for i in range(n):
+        if A[i, i] > lmax:
+            lmax = A[i, i]
+    for i in range(n):
+        for j in range(n):
+            acc = 0.0
+            for k in range(n):
+                lam = A[k, k]
+                if lam > 0.0:
+                    acc += V[i, k] * np.sqrt(lam) * V[j, k]
+            out[i, j] = acc
+    return lmax
+
+
+@njit(cache=True)
+def _add_body(W, r, im, ii):
+    """W += G^T diag(im, ii) G for one body (see ``mobility``)."""
+    S = np.zeros((3, 3))
+    S[0, 1] = -r[2]
+    S[0, 2] = r[1]
+    S[1, 0] = r[2]
+    S[1, 2] = -r[0]
+    S[2, 0] = -r[1]
+    S[2, 1] = r[0]
+    IS = ii @ S
+    SIS = S @ IS
+    SI = S @ ii
+    for a in range(3):
+        W[a, a] += im
+        for b in range(3):
+            W[a, b] -= SIS[a, b]
+            W[a, 3 + b] -= SI[a, b]
+            W[3 + a, b] += IS[a, b]
+            W[3 + a, 3 + b] += ii[a, b]
+
+
+@njit(cache=True)
+def damping_wrenches(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, iib, twist,
+                     fn_el, fs, mu, lever):
+    """Capped damping force and moment on B at each patch centroid (m,3) + (m,3), and each
+    contact's highest modal frequency omega_max (m,) rad/s. Arguments as in ``mobility``,
+    ``patch_stiffness``, ``damping_matrix`` and ``cap_damping``; ``twist`` (m,6) is B's
+    velocity and angular velocity relative to A at the patch centroid."""
+    m = len(parea)
+    fd = np.zeros((m, 3))
+    md = np.zeros((m, 3))
+    om = np.zeros(m)
+    W = np.empty((6, 6))
+    K = np.empty((6, 6))
+    L = np.empty((6, 6))
+    B = np.empty((6, 6))
+    R = np.empty((6, 6))
+    y = np.empty(6)
+    z = np.empty(6)
+    for c in range(m):
+        if xi[c] <= 0.0 or parea[c] <= 0.0:
+            continue
+        W[:, :] = 0.0
+        _add_body(W, ra[c], ima[c], iia[c])
+        _add_body(W, rb[c], imb[c], iib[c])
+        # K at the patch centroid
+        K[:, :] = 0.0
+        nc = n[c]
+        kta = kt[c] * parea[c] if sticking[c] else 0.0
+        S = np.zeros((3, 3))
+        S[0, 1] = -nc[2]
+        S[0, 2] = nc[1]
+        S[1, 0] = nc[2]
+        S[1, 2] = -nc[0]
+        S[2, 0] = -nc[1]
+        S[2, 1] = nc[0]
+        Rr = S @ pj[c] @ S.T
+        for a in range(3):
+            for b in range(3):
+                nn = nc[a] * nc[b]
+                K[a, b] = kn[c] * parea[c] * nn + kta * ((1.0 if a == b else 0.0) - nn)
+                K[3 + a, 3 + b] = kn[c] * Rr[a, b]
+        # Cholesky W = L L^T
+        L[:, :] = 0.0
+        ok = True
+        for i in range(6):
+            for j in range(i + 1):
+                s = W[i, j]
+                for k in range(j):
+                    s -= L[i, k] * L[j, k]
+                if i == j:
+                    if s <= 0.0:
+                        ok = False
+                        break
+                    L[i, i] = np.sqrt(s)
+                else:
+                    L[i, j] = s / L[j, j]
+            if not ok:
+                break
+        if not ok:
+            continue
+        B[:, :] = L.T @ K @ L
+        for i in range(6):
+            for j in range(i + 1, 6):
+                v = 0.5 * (B[i, j] + B[j, i])
+                B[i, j] = v
+                B[j, i] = v
+        lmax = _jacobi_sqrt(B, R)
+        om[c] = np.sqrt(lmax)
+        # y = L^-1 u (forward), z = R y, w = L^-T z (backward); wrench = -2 xi w
+        for i in range(6):
+            s = twist[c, i]
+            for k in range(i):
+                s -= L[i, k] * y[k]
+            y[i] = s / L[i, i]
+        for i in range(6):
+            s = 0.0
+            for k in range(6):
+                s += R[i, k] * y[k]
+            z[i] = s
+        for i in range(5, -1, -1):
+            s = z[i]
+            for k in range(i + 1, 6):
+                s -= L[k, i] * y[k]
+            y[i] = s / L[i, i]
+        f = np.empty(3)
+        mm = np.empty(3)
+        for a in range(3):
+            f[a] = -2.0 * xi[c] * y[a]
+            mm[a] = -2.0 * xi[c] * y[3 + a]
+        # caps (cap_damping): no pull, Coulomb, resultant inside the patch ellipse
+        fdn = f[0] * nc[0] + f[1] * nc[1] + f[2] * nc[2]
+        fdn_c = max(fdn, -fn_el[c])
+        fmax = mu[c] * fn_el[c]
+        tot = np.empty(3)
+        for a in range(3):
+            tot[a] = fs[c, a] + f[a] - fdn * nc[a]
+        tm = np.sqrt(tot[0] ** 2 + tot[1] ** 2 + tot[2] ** 2)
+        sc = fmax / tm if tm > fmax else 1.0
+        for a in range(3):
+            fd[c, a] = fdn_c * nc[a] + tot[a] * sc - fs[c, a]
+        N = fn_el[c] + fdn_c
+        lv = lever[c]
+        mel = np.empty(3)
+        mel[0] = lv[1] * nc[2] - lv[2] * nc[1]
+        mel[1] = lv[2] * nc[0] - lv[0] * nc[2]
+        mel[2] = lv[0] * nc[1] - lv[1] * nc[0]
+        mdn = mm[0] * nc[0] + mm[1] * nc[1] + mm[2] * nc[2]
+        mel_n = mel[0] * nc[0] + mel[1] * nc[1] + mel[2] * nc[2]
+        for a in range(3):
+            mel[a] = fn_el[c] * (mel[a] - mel_n * nc[a])
+        mdi = np.empty(3)
+        for a in range(3):
+            mdi[a] = mm[a] - mdn * nc[a]
+        e0 = np.empty(3)
+        e1 = np.empty(3)
+        e0[0] = nc[1] * mel[2] - nc[2] * mel[1]
+        e0[1] = nc[2] * mel[0] - nc[0] * mel[2]
+        e0[2] = nc[0] * mel[1] - nc[1] * mel[0]
+        e1[0] = nc[1] * mdi[2] - nc[2] * mdi[1]
+        e1[1] = nc[2] * mdi[0] - nc[0] * mdi[2]
+        e1[2] = nc[0] * mdi[1] - nc[1] * mdi[0]
+        # pseudo-inverse of the patch second moment in the plane (2 x 2 in a basis t1, t2)
+        t1 = np.empty(3)
+        if abs(nc[0]) < 0.9:
+            t1[0], t1[1], t1[2] = 0.0, -nc[2], nc[1]
+        else:
+            t1[0], t1[1], t1[2] = nc[2], 0.0, -nc[0]
+        t1 /= np.sqrt(t1[0] ** 2 + t1[1] ** 2 + t1[2] ** 2)
+        t2 = np.empty(3)
+        t2[0] = nc[1] * t1[2] - nc[2] * t1[1]
+        t2[1] = nc[2] * t1[0] - nc[0] * t1[2]
+        t2[2] = nc[0] * t1[1] - nc[1] * t1[0]
+        Jc = pj[c]
+        j11 = t1 @ Jc @ t1
+        j12 = t1 @ Jc @ t2
+        j22 = t2 @ Jc @ t2
+        tr = j11 + j22
+        dif = np.sqrt(0.25 * (j11 - j22) ** 2 + j12 * j12)
+        l1 = 0.5 * tr + dif
+        l2 = 0.5 * tr - dif
+        # eigenvectors of the 2 x 2
+        if abs(j12) > 1e-300:
+            v1 = np.array([l1 - j22, j12])
+        elif j11 >= j22:
+            v1 = np.array([1.0, 0.0])
+        else:
+            v1 = np.array([0.0, 1.0])
+        v1 /= np.sqrt(v1[0] ** 2 + v1[1] ** 2)
+        v2 = np.array([-v1[1], v1[0]])
+        tol = 1e-9 * l1
+        i1 = 1.0 / l1 if l1 > tol else 0.0
+        i2 = 1.0 / l2 if l2 > tol else 0.0
+        a0 = np.array([e0 @ t1, e0 @ t2])
+        a1 = np.array([e1 @ t1, e1 @ t2])
+        p0 = a0 @ v1
+        q0 = a0 @ v2
+        p1 = a1 @ v1
+        q1 = a1 @ v2
+        A2 = parea[c] * (i1 * p1 * p1 + i2 * q1 * q1)
+        A1 = 2.0 * parea[c] * (i1 * p0 * p1 + i2 * q0 * q1)
+        A0 = parea[c] * (i1 * p0 * p0 + i2 * q0 * q0) - 3.0 * N * N
+        s = 1.0
+        if A2 + A1 + A0 > 0.0:
+            disc = max(A1 * A1 - 4.0 * A2 * A0, 0.0)
+            s = (-A1 + np.sqrt(disc)) / (2.0 * A2) if A2 > 0.0 else 0.0
+            s = min(max(s, 0.0), 1.0)
+        for a in range(3):
+            md[c, a] = s * mdi[a] + mdn * nc[a]
+    return fd, md, om

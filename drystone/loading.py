@@ -11,7 +11,12 @@ platform, which therefore never moves in the simulation):
 * a base acceleration a_b(t) along ``e`` adds the inertial body force -a_b e (exact for a
   rigid, translating base): no displacement needs to be integrated from the record, so no
   baseline drift enters, and block displacements are directly relative to the platform;
-* a settlement moves one non-moving block down at constant speed.
+* a sine excitation with ``start = "displacement"`` (the Sacsayhuaman paper's Eq. 9 as a
+  base displacement) also carries the base's velocity jump at its start: every free block
+  gets the relative velocity ``initial_relative_velocity`` = -(A / w) e when the stage
+  begins (``velocity_jump``; derivation in ``drystone.runner.initial_relative_velocity``);
+* a settlement moves one non-moving block down at constant speed;
+* a last rest stage may end early once the kinetic energy has settled (``settle``).
 
 ``LoadProgramme.at(t)`` returns the body-force field and the imposed velocities.
 """
@@ -98,6 +103,29 @@ class LoadProgramme:
         th = math.radians(self.tilt_deg(t))
         g = self.gravity * self.gravity_scale(t) * (math.sin(th) * self._towards - math.cos(th) * Z)
         return g - self.base_acceleration(t)
+
+    def velocity_jump(self, k: int) -> np.ndarray:
+        """Relative velocity (m/s, platform frame) added to every free block when stage k
+        begins: -v_base(0) for a sine excitation started as a displacement, else zero."""
+        s = self.stages[k]
+        if s.kind != "excitation":
+            return np.zeros(3)
+        return np.asarray(s.params.get("initial_relative_velocity", (0.0, 0.0, 0.0)), float)
+
+    def settle(self, k: int, weight: float) -> dict | None:
+        """Early end of rest stage k: {"threshold_J", "window_s"} when it has an
+        ``until_kinetic_below`` (J) or ``until_kinetic_below_per_weight`` (m, times
+        ``weight``, the free blocks' weight in N), else None."""
+        p = self.stages[k].params
+        if self.stages[k].kind != "rest":
+            return None
+        if p.get("until_kinetic_below") is not None:
+            thr = float(p["until_kinetic_below"])
+        elif p.get("until_kinetic_below_per_weight") is not None:
+            thr = float(p["until_kinetic_below_per_weight"]) * float(weight)
+        else:
+            return None
+        return {"threshold_J": thr, "window_s": float(p.get("settle_window", 0.0))}
 
     def imposed_velocities(self, t: float) -> dict[int, np.ndarray]:
         """Velocities (m/s) imposed on non-moving blocks at t, by block id."""

@@ -84,6 +84,26 @@ def _excitation(s: dict, where: str, out: Path, k: int) -> tuple[np.ndarray, flo
     return acc, dt, meta
 
 
+def initial_relative_velocity(s: dict, meta: dict) -> list[float]:
+    """Velocity (m/s, platform frame) every free block gets when an excitation stage begins.
+
+    ``start = "displacement"`` (sine only) imposes the paper's Eq. 9 as the base displacement
+    d(t) = (A / w^2) sin(w t) from t = 0 (stage time), the base at rest before. Its velocity
+    d'(t) = (A / w) cos(w t) jumps from 0 to v_b = A / w at t = 0, while its acceleration
+    d''(t) = -A sin(w t) is what ``motions.generators.sine`` samples (and the load programme
+    applies as the body force -d'' e). The jump is an acceleration impulse v_b delta(t) e that
+    the samples cannot carry: at t = 0+ the free blocks, held only by finite contact forces,
+    still have their world velocity (zero), so relative to the platform they move at
+    0 - v_b e = -(A / w) e. With A = 0.5 m/s^2: 0.080 m/s at 1 Hz, 0.8 m/s at 0.1 Hz.
+    ``start = "rest"`` (and every other motion) gives zero. At the end of the stage nothing
+    is applied: the base keeps its final velocity (an inertial frame, no load on the wall)."""
+    if s.get("start", "rest") != "displacement":
+        return [0.0, 0.0, 0.0]
+    info = meta["info"]
+    v_b = info["amplitude_m_s2"] / (2.0 * math.pi * info["frequency_hz"])
+    return [0.0 - v_b * c for c in AXES[s["direction"]]]
+
+
 def resolve(case: dict, where: str, out: Path) -> dict:
     """Turn a validated case into the run specification YADE executes."""
     bs, geo_source = _geometry(case, where, out)
@@ -151,10 +171,17 @@ def resolve(case: dict, where: str, out: Path) -> dict:
         elif kind == "excitation":
             acc, sdt, meta = _excitation(s, where, out, k)
             dur = s["duration"] if s["duration"] is not None else (len(acc) - 1) * sdt
-            params = {"acc_file": meta["acc_file"], "dt": sdt, "direction": AXES[s["direction"]]}
+            params = {"acc_file": meta["acc_file"], "dt": sdt, "direction": AXES[s["direction"]],
+                      "start": s["start"], "initial_relative_velocity": initial_relative_velocity(s, meta)}
+            meta = dict(meta, start=s["start"], initial_relative_velocity_m_s=params["initial_relative_velocity"])
             excitations.append(dict(meta, stage=k + 1))
         else:  # rest
             dur = s["duration"]
+            params = {"until_kinetic_below": s["until_kinetic_below"],
+                      "until_kinetic_below_per_weight": s["until_kinetic_below_per_weight"],
+                      "settle_window": s["settle_window"]}
+            if params["until_kinetic_below"] is None and params["until_kinetic_below_per_weight"] is None:
+                params = {}  # a plain rest: same fingerprint as before these keys existed
         stages.append({"kind": kind, "start": t, "end": t + dur, "params": params})
         t += dur
 

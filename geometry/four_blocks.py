@@ -32,6 +32,10 @@ L, W, H = 0.220, 0.105, 0.050  # block length (x), width (y), height (z), m
 PIVOT_LEVER = 0.050  # m, distance from block 4's edge to block 3's far edge
 X_BLOCK1 = -0.003  # m, centre of blocks 1 and 2, just left of the pivot (over block 3)
 SUPPORT_MU = 1.0  # friction of the support joints 1-3 and 1-4 (see above)
+#: inputs the paper does not give, labelled in every run's geometry.json and summary.json
+ASSUMED = ["four-block layout ASSUMED (the paper's Figure 6 is not available): blocks 3 and 4 on end, block 1 "
+           f"across them with its centre {abs(X_BLOCK1) * 1e3:.0f} mm over block 3, block 2 on block 1",
+           f"support joints 1-3 and 1-4 rough, mu = {SUPPORT_MU} (ASSUMED, to isolate the joint under test 1-2)"]
 
 
 def make(density=2200.0, kn=1.96e7, kt=0.82e7, friction_angle_deg=38.0, damping=0.08) -> dict:
@@ -55,7 +59,7 @@ def make(density=2200.0, kn=1.96e7, kt=0.82e7, friction_angle_deg=38.0, damping=
             "blocks": blocks,
             "joints": [{"blocks": [1, 3], "mu": SUPPORT_MU}, {"blocks": [1, 4], "mu": SUPPORT_MU}],
             "generator": {"name": "four_blocks", "density": density, "kn": kn, "kt": kt,
-                          "friction_angle_deg": friction_angle_deg, "damping": damping}}
+                          "friction_angle_deg": friction_angle_deg, "damping": damping, "assumed": ASSUMED}}
 
 
 def tilt_for_settlement(s: float) -> float:

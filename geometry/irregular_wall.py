@@ -192,6 +192,20 @@ def tilt_wall(seed=0, weight=1371.0, density=2300.0, kn=2e8, kt=1e8, mu=0.4, dam
     Contact properties: Table 1, FEM column."""
     length, height = 1.5, 0.375
     t = thickness_for_weight(weight, density, length, height)
-    return make(length=length, height=height, thickness=t, courses=7, stone_length=(0.10, 0.20), seed=seed,
-                density=density, kn=kn, kt=kt, mu=mu, damping=damping, name="tilt_wall",
-                depth_spread=depth_spread, **over)
+    d = make(length=length, height=height, thickness=t, courses=7, stone_length=(0.10, 0.20), seed=seed,
+             density=density, kn=kn, kt=kt, mu=mu, damping=damping, name="tilt_wall",
+             depth_spread=depth_spread, **over)
+    g = d["generator"]
+    assumed = [f"tilt wall generated (seed {seed}), not the tested walls' stones: the real outlines are not available "
+               "(ASSUMED)",
+               f"{g['courses']} courses of {1e3 * height / g['courses']:.1f} mm (ASSUMED from the stones' ~50 mm height "
+               "and the wall's 375 mm)",
+               f"stone lengths {g['stone_length'][0]:.2f}-{g['stone_length'][1]:.2f} m with leaning head joints "
+               "(ASSUMED from the stones' ~150 mm)"]
+    if g["depth_spread"]:
+        assumed.append(f"stone depths {t:.4f} m x (1 ± {g['depth_spread']:.3g}) (ASSUMED: the relative spread of "
+                       "the stone lengths; the paper says only that the walls had no constant section)")
+    else:
+        assumed.append(f"constant section: every stone extruded through {t:.4f} m (as the paper's model)")
+    g["assumed"] = assumed
+    return d

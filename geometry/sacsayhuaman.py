@@ -28,6 +28,11 @@ from . import blockfile as bf
 from . import irregular_wall as iw
 
 COURSES = [7, 6, 10, 10, 7]
+#: inputs the paper does not state, labelled in every run's geometry.json and summary.json
+ASSUMED = ["stone outlines generated (seeded irregular wall), not the paper's: the real outlines exist only in "
+           "its Figure 19 (ASSUMED)",
+           "course counts 7, 6, 10, 10, 7 (ASSUMED: read from the numbering of Figure 19c, not stated in the text)",
+           "stone numbering and side-block positions follow Figure 19c as read (ASSUMED)"]
 SIDE_BLOCKS = (8, 9, 14, 15, 24, 25, 34)
 CONTROL = {"A": 35, "B": 38, "C": 39, "D": 40}
 
@@ -63,7 +68,7 @@ def make(seed=0, irregularity=0.5, density=2300.0, kn=2e8, kt=1e8, mu=0.4, dampi
         top = v[np.isclose(v[:, 2], v[:, 2].max())]
         cps.append({"name": name, "block": bid, "position": [float(top[:, 0].mean()), 0.0, float(top[:, 2].mean())]})
     d["control_points"] = cps
-    d["generator"] = dict(d["generator"], name="sacsayhuaman", seed=seed)
+    d["generator"] = dict(d["generator"], name="sacsayhuaman", seed=seed, assumed=ASSUMED)
     d["description"] = f"Sacsayhuaman 40-stone wall section, generated (seed {seed}): geometry/sacsayhuaman.py"
     return d
 

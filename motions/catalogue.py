@@ -21,7 +21,7 @@ excluded for the later ones, in the order kobe1995, paruro2014, cusco2023, ancas
 ties go to the smaller record id, then component a):
 
 * ``kobe1995``: Kobe 1995 components only; the one whose PGA is closest (|ln ratio|) to
-  the JMA Kobe record's 0.818 g.
+  the JMA Kobe record's 818 gal = 0.834 g.
 * ``paruro2014``: eligible if the record lasts at least 60 s and the first predominant
   frequency of its first 60 s lies in 0.46-1 Hz; score = overlap / union, on a log
   frequency axis, of its half-amplitude band and 0.46-1 Hz (1 = same band).
@@ -55,8 +55,8 @@ TOML_KEYS = {"file", "format", "component", "units", "dt", "event", "station"}
 PAPER = {
     "kobe1995": {
         "event": "1995 Hyogo-ken Nanbu (Kobe) earthquake, 17 Jan 1995", "station": "JMA Kobe (Kobe Marine Observatory)",
-        "component": "NS", "used_by": "Ogawa et al.", "pga_g": 0.818,
-        "description": "JMA Kobe record, NS component, PGA 0.818 g (about 818 gal)", "window_s": None},
+        "component": "NS", "used_by": "Ogawa et al.", "pga_g": 818.0 / 980.665,
+        "description": "JMA Kobe record, NS component, PGA 818 gal = 0.834 g", "window_s": None},
     "paruro2014": {
         "event": "Paruro earthquake, 2014", "station": "Tambomachay (Cusco)", "component": "NS",
         "used_by": "Sacsayhuaman paper", "band_hz": [0.46, 1.0], "window_s": [0.0, 60.0],

@@ -8,13 +8,19 @@
   and the sampled PGA is exactly A; the displacement amplitude A / omega^2 is in
   ``info["displacement_amplitude_m"]``.
 * ``white_noise(duration=30, fmax_hz=20, rate_hz=1000, peak_displacement=0.9e-3,
-  seed=0)``: band-limited white noise: Gaussian samples (numpy ``default_rng(seed)``)
-  shaped in the frequency domain to a flat amplitude from ``fmin_hz`` (default 1 / duration,
-  the first bin: a displacement history has no static offset) to ``fmax_hz`` with random
-  phases, zero elsewhere; the displacement is that noise, scaled so its peak is
-  ``peak_displacement`` (m, below the paper's 1 mm), and the record is its exact second
-  derivative in the frequency domain (acceleration, m/s^2). Start and end at rest are
-  ensured by a 0.5 s Hann taper of the displacement before the derivative is taken.
+  seed=0, fmin_hz=None, spectrum="acceleration")``: band-limited white noise: random
+  phases (numpy ``default_rng(seed)``) with a flat Fourier amplitude from ``fmin_hz``
+  (default 1 / duration, the first bin: a displacement history has no static offset) to
+  ``fmax_hz``, zero elsewhere. ``spectrum`` says which quantity is white:
+  ``"acceleration"`` (flat acceleration, displacement spectrum falling as 1/f^2: the
+  displacement is dominated by the lowest frequencies and a peak displacement of 0.9 mm
+  gives a PGA of only about 2e-4 g) or ``"displacement"`` (flat displacement, acceleration
+  rising as f^2: the Sacsayhuaman paper's "white noise ... less than 1 mm" read as a
+  displacement signal, PGA of several m/s^2 at 1 mm). The displacement is scaled so its
+  peak is ``peak_displacement`` (m) and the record is its exact second derivative in the
+  frequency domain (acceleration, m/s^2); it starts at rest (zero displacement and
+  velocity at t = 0) and, being periodic, ends where it started.
+* ``white_noise_displacement(record)``: the displacement (m) of such a record from rest.
 """
 from __future__ import annotations
 
@@ -46,8 +52,13 @@ def sine(frequency_hz: float, duration: float = 10.0, amplitude: float = 0.5, pg
 
 
 def white_noise(duration: float = 30.0, fmax_hz: float = 20.0, rate_hz: float = 1000.0,
-                peak_displacement: float = 0.9e-3, seed: int = 0, fmin_hz: float | None = None) -> Record:
-    """Band-limited white-noise base acceleration (module docstring); seeded and reproducible."""
+                peak_displacement: float = 0.9e-3, seed: int = 0, fmin_hz: float | None = None,
+                spectrum: str = "acceleration") -> Record:
+    """Band-limited white-noise base acceleration (module docstring); seeded and reproducible.
+    ``spectrum``: "acceleration" (flat acceleration spectrum) or "displacement" (flat
+    displacement spectrum); ``peak_displacement`` in m either way."""
+    if spectrum not in ("acceleration", "displacement"):
+        raise ValueError(f"spectrum must be 'acceleration' or 'displacement', got {spectrum!r}")
     dt = 1.0 / float(rate_hz)
     n = int(round(duration * rate_hz))
     if not 0 < fmax_hz < 0.5 * rate_hz:
@@ -58,29 +69,36 @@ def white_noise(duration: float = 30.0, fmax_hz: float = 20.0, rate_hz: float = 
     freq = np.fft.rfftfreq(n, dt)
     w = 2 * np.pi * freq
     lo = freq[1] if fmin_hz is None else float(fmin_hz)
+    if not lo > 0:
+        raise ValueError(f"fmin_hz must be positive, got {fmin_hz}")
     band = np.flatnonzero((freq >= lo) & (freq <= fmax_hz))
     if len(band) < 2:
         raise ValueError(f"the band {lo:g}-{fmax_hz:g} Hz holds fewer than 2 frequencies of a {duration:g} s record")
-    A = np.zeros(len(freq), complex)  # acceleration spectrum: unit modulus, random phase
-    A[band] = np.exp(2j * np.pi * rng.random(len(band)))
-    X = np.zeros_like(A)
-    X[band] = -A[band] / w[band] ** 2  # displacement spectrum
+    phase = np.exp(2j * np.pi * rng.random(len(band)))  # unit modulus, random phase
+    X = np.zeros(len(freq), complex)  # displacement spectrum
+    X[band] = -phase / w[band] ** 2 if spectrum == "acceleration" else phase
     # start at rest: v(0) = -(2/n) sum w_k Im X_k = 0, by the imaginary part of the lowest
     # band frequency; d(0) = 0 by a constant offset of the displacement (no acceleration)
-    k1, rest = band[0], band[1:]
-    X[k1] = X[k1].real + 1j * (-(w[rest] * X[rest].imag).sum() / w[k1])
-    A[k1] = -w[k1] ** 2 * X[k1]
+    if spectrum == "acceleration":
+        k1, rest = band[0], band[1:]
+        X[k1] = X[k1].real + 1j * (-(w[rest] * X[rest].imag).sum() / w[k1])
+    else:  # the lowest bin would dominate a flat displacement: the least-squares correction
+        # spread over the band instead (each amplitude changes by ~ 1/sqrt(2 x bins): 3 % at 600)
+        wb = w[band]
+        X[band] -= 1j * wb * (wb * X[band].imag).sum() / (wb ** 2).sum()
+    A = np.zeros_like(X)
+    A[band] = -w[band] ** 2 * X[band]  # acceleration spectrum
     disp = np.fft.irfft(X, n)
     disp -= disp[0]
     s = peak_displacement / np.abs(disp).max()
     acc = np.fft.irfft(A, n) * s
     disp *= s
-    note = (f"generated: band-limited white noise, flat acceleration {lo:g}-{fmax_hz:g} Hz, {rate_hz:g} Hz sampling, "
+    note = (f"generated: band-limited white noise, flat {spectrum} {lo:g}-{fmax_hz:g} Hz, {rate_hz:g} Hz sampling, "
             f"{n * dt:g} s, peak displacement {peak_displacement * 1e3:g} mm, seed {seed}")
-    return Record(acc, dt, event="white noise", station="synthetic", component="horizontal",
+    return Record(acc, dt, event=f"white noise ({spectrum})", station="synthetic", component="horizontal",
                   units_in_file="m/s^2", source="generators.white_noise", history=[note],
-                  info={"motion": "white_noise", "seed": int(seed), "fmin_hz": float(lo), "fmax_hz": float(fmax_hz),
-                        "rate_hz": float(rate_hz), "duration_s": float(n * dt),
+                  info={"motion": "white_noise", "spectrum": spectrum, "seed": int(seed), "fmin_hz": float(lo),
+                        "fmax_hz": float(fmax_hz), "rate_hz": float(rate_hz), "duration_s": float(n * dt),
                         "peak_displacement_m": float(np.abs(disp).max()),
                         "rms_acceleration_m_s2": float(np.sqrt(np.mean(acc ** 2)))})
 

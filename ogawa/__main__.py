@@ -1,6 +1,7 @@
 """python -m ogawa study [--random N] [--runs R] [--substeps K]   1D friction studies
 python -m ogawa study3d [--workers N]   3D YADE model for the named sets (long)
-python -m ogawa refresh                 attach 3D results, rewrite the report
+python -m ogawa refresh                 attach 3D results (named sets; the orientation / PGA / reset-vs-cumulative
+                                        sweeps results/ogawa_pga, results/ogawa_cumulative), rewrite the report
 python -m ogawa insitu                  check Tables 1-2 averages, draw the Table 3 figure"""
 from __future__ import annotations
 
@@ -22,7 +23,8 @@ def main(argv=None) -> int:
     t = sub.add_parser("study3d", help="the 3D YADE model for the named friction sets (~4 min each)")
     t.add_argument("--workers", type=int, default=None)
     t.add_argument("--sets", nargs="*", default=None, help="named sets (default: all of ogawa.study.NAMED)")
-    sub.add_parser("refresh", help="attach finished 3D runs to results/ogawa/summary.json, rewrite the report")
+    sub.add_parser("refresh", help="attach finished 3D runs (named sets, ogawa_pga and ogawa_cumulative sweeps) "
+                                   "to results/ogawa/summary.json, rewrite the report")
     a = ap.parse_args(argv)
     if a.cmd == "study":
         from ogawa import study

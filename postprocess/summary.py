@@ -193,11 +193,16 @@ def build(spec: dict, out: Path) -> dict:
                    "joint_overrides": spec["joint_overrides"], "stages": spec["stages"],
                    "excitations": spec["excitations"], "forces": spec["forces"], "dt_s": spec["dt"],
                    "dt_critical_s": spec["dt_critical"], "gravity_m_s2": spec["gravity"],
-                   "collapse_threshold_m": spec["collapse_threshold"], "provenance": case},
+                   "collapse_threshold_m": spec["collapse_threshold"], "provenance": case,
+                   "assumed": assumed_inputs(spec, out)},
     }
+    # a last rest stage run until the kinetic energy settled: threshold, reached or not (None:
+    # no such stage); velocity jumps of sines started as Eq. 9's displacement
+    s["run"].update(settle=info.get("settle"), velocity_jumps=info.get("velocity_jumps", []))
     if any(st["kind"] == "tilt" for st in spec["stages"]):
         s["collapse"] = tilt_collapse(spec, h, info.get("collapse"))
         s["collapse_angle_deg"] = s["collapse"]["angle_deg"] if s["collapse"] else None
+        s["reaction_drop_angle_deg"] = s["collapse"]["reaction_drop_angle_deg"] if s["collapse"] else None
     an = spec.get("analysis", {})
     if an.get("penetration"):
         s.update(penetration(spec, h, an["penetration"]))
@@ -208,9 +213,63 @@ def build(spec: dict, out: Path) -> dict:
     return s
 
 
+def vertical_reaction(spec: dict, h: dict) -> np.ndarray:
+    """Vertical reaction (N) of the moving blocks on the platform and the fixed blocks at
+    every sample: the recorded reaction force projected on the true (world) vertical, up."""
+    from drystone.loading import LoadProgramme, Stage
+
+    prog = LoadProgramme([Stage(st["kind"], st["start"], st["end"], st["params"]) for st in spec["stages"]],
+                         spec["gravity"])
+    up = np.array([prog.true_vertical(t) for t in h["t"]]).reshape(-1, 3)
+    return -np.einsum("ij,ij->i", np.asarray(h["reaction"], float).reshape(-1, 3), up)
+
+
+def tilt_reaction_drop(spec: dict, h: dict) -> dict:
+    """The paper's reaction-drop collapse angle of a tilt run (drystone.collapse.reaction_drop)
+    over the samples of its tilt stages, with the drop fraction of its until_collapse stage
+    (5 % by default) and the weight of the moving blocks (histories' masses x gravity)."""
+    t = np.asarray(h["t"], float)
+    tilts = [st for st in spec["stages"] if st["kind"] == "tilt"]
+    active = np.zeros(len(t), bool)
+    for st in tilts:
+        active |= (t > st["start"]) & (t <= st["end"] + 1e-9)
+    drop = next((st["params"].get("reaction_drop") for st in tilts if st["params"].get("until_collapse")), None)
+    if "mass" not in h:  # histories written before the masses were recorded
+        return {"angle_deg": None, "time_s": None, "reaction_N": None, "fraction": None, "min_fraction": None,
+                "drop": drop, "weight_N": None, "rule": "not available: histories.npz has no block masses"}
+    weight = float(np.sum(h["mass"])) * spec["gravity"]
+    out = collapse.reaction_drop(t, h["tilt_deg"], vertical_reaction(spec, h), weight, active,
+                                 drop if drop is not None else collapse.REACTION_DROP)
+    out["rule"] = ("first recorded sample of a tilt stage where the vertical reaction of the moving blocks "
+                   "(true vertical) is below (1 - drop) x their weight (drystone/collapse.py reaction_drop)")
+    return out
+
+
+def assumed_inputs(spec: dict, out: Path) -> list[str]:
+    """The run's inputs that no paper gives, each labelled as assumed: what the geometry
+    generator declares (its ``assumed`` list in geometry.json, e.g. a layout, course
+    counts, a block orientation) and every record that is an analogue standing in for a
+    paper's record (motions/catalogue.py)."""
+    items = []
+    g = Path(out) / "geometry.json"
+    if g.is_file():
+        items += [str(a) for a in json.loads(g.read_text()).get("generator", {}).get("assumed", [])]
+    for k, e in enumerate(spec.get("excitations") or []):
+        cat = (e.get("info") or {}).get("catalogue") or {}
+        if cat.get("source_kind") == "analogue":
+            items.append(f"excitation {k + 1}: record {cat.get('name')!r} is an ASSUMED analogue of "
+                         f"{cat.get('stands_for')}: FEMA P695 {cat.get('fema_set')} record "
+                         f"{e['info'].get('name', cat.get('fema_record_id'))} at {e.get('station')}")
+    return items
+
+
 def tilt_collapse(spec: dict, h: dict, detected: dict | None) -> dict | None:
-    """The run's collapse detection (YADE side) with its angle dated back to the onset of
-    the motion that led to it (drystone/collapse.py; rule from the spec's onset keys)."""
+    """The run's collapse detection (YADE side) with two angles: ``angle_deg`` (=
+    ``onset_angle_deg``), dated back to the onset of the motion that led to it
+    (drystone/collapse.py onset; rule from the spec's onset keys), and
+    ``reaction_drop_angle_deg``, the paper's criterion (its Figure 13: the tilt at which the
+    vertical reaction first drops by the stage's ``reaction_drop`` fraction of the moving
+    blocks' weight; None if it never did before the run stopped)."""
     if not detected:
         return None
     rate = spec.get("onset_rate", collapse.RATE_M_PER_DEG)
@@ -222,6 +281,10 @@ def tilt_collapse(spec: dict, h: dict, detected: dict | None) -> dict | None:
     col.update(angle_deg=on["angle_deg"], time_s=on["time_s"],
                onset_block=None if on["index"] is None else int(h["block_ids"][on["index"]]),
                onset_rule={"rate_m_per_deg": rate, "window_deg": window})
+    col["onset_angle_deg"] = col["angle_deg"]
+    rd = tilt_reaction_drop(spec, h)
+    col["reaction_drop_angle_deg"] = rd["angle_deg"]
+    col["reaction_drop"] = rd
     return col
 
 

@@ -13,6 +13,15 @@ and writes ``results/tilt/summary.json`` (``collapse_angles_deg``: one per seed,
 parameters), ``results/tilt/report.md`` and figures: the wall at the paper's Figure 12
 angles and the vertical reaction against time and tilt for every seed (Figure 13).
 Missing sweeps are reported as missing, never filled in. Angles in degrees.
+
+Two collapse angles per wall: the *onset* angle (where the motion that led to the collapse
+began, drystone/collapse.py ``onset``: ``collapse_angle_deg``) and the paper's
+*reaction-drop* angle (its Figure 13: the tilt at which the vertical reaction of the moving
+stones first falls 5 % below their weight, drystone/collapse.py ``reaction_drop``:
+``reaction_drop_angle_deg``). The headline (``headline``) is the constant-section walls
+(every stone extruded through the mean thickness, as the paper's model was built: the
+like-for-like comparison), beside the varying-depth walls (our hypothesis for the real,
+irregular walls).
 """
 from __future__ import annotations
 
@@ -48,6 +57,7 @@ def runs(root: Path) -> list[dict]:
         rows.append({
             "name": name, "finished": True, "folder": str(root / name),
             "collapse_angle_deg": s.get("collapse_angle_deg"),
+            "reaction_drop_angle_deg": _reaction_drop_angle(root / name, s),
             "detected_angle_deg": col.get("detected_angle_deg"),
             "criterion": col.get("criterion"), "first_blocks": col.get("first_blocks"),
             "onset_block": col.get("onset_block"),
@@ -62,31 +72,54 @@ def runs(root: Path) -> list[dict]:
     return rows
 
 
+def _reaction_drop_angle(folder: Path, s: dict) -> float | None:
+    """The run's reaction-drop angle (deg): from summary.json, or, for a summary written
+    before it was reported, from the run's histories (postprocess/summary.py)."""
+    if "reaction_drop_angle_deg" in s:
+        return s["reaction_drop_angle_deg"]
+    if not s.get("collapse"):
+        return None
+    try:
+        from postprocess import summary as summ
+
+        spec = json.loads((folder / "spec.json").read_text())
+        return summ.tilt_reaction_drop(spec, summ.load_histories(folder))["angle_deg"]
+    except (OSError, KeyError, ValueError):
+        return None
+
+
 def _generated(folder: Path) -> dict:
     """The generator's parameters of a run's wall (geometry.json), {} if not generated."""
     g = folder / "geometry.json"
     return json.loads(g.read_text()).get("generator", {}) if g.is_file() else {}
 
 
-def paired(rows: list[dict], other: list[dict]) -> dict | None:
-    """Per seed, the collapse angle of ``rows`` minus that of ``other`` (same seeds), with
-    the statistics of ``other``: what the geometry change between the two sweeps does."""
-    a = {r["seed"]: r["collapse_angle_deg"] for r in rows if r["finished"] and r["collapse_angle_deg"] is not None}
-    b = {r["seed"]: r["collapse_angle_deg"] for r in other if r["finished"] and r["collapse_angle_deg"] is not None}
+def paired(rows: list[dict], other: list[dict], key: str = "collapse_angle_deg") -> dict | None:
+    """Per seed, the angle ``key`` of ``rows`` minus that of ``other`` (same seeds), with
+    the statistics of ``other``: what the geometry change between the two sweeps does.
+    The reaction-drop angles are paired the same way under ``reaction_drop``."""
+    def by_seed(rr, k):
+        return {r["seed"]: r.get(k) for r in rr if r["finished"] and r.get(k) is not None}
+
+    a, b = by_seed(rows, key), by_seed(other, key)
     common = sorted(set(a) & set(b))
     if not common:
         return None
     d = np.array([a[k] - b[k] for k in common])
-    return {"seeds": common, "angles_deg": [b[k] for k in common], "differences_deg": d.tolist(),
-            "mean_difference_deg": float(d.mean()), "statistics": seed_statistics(other),
-            "depth_spread": next((r["depth_spread"] for r in other if r["finished"]), None)}
+    out = {"seeds": common, "angles_deg": [b[k] for k in common], "differences_deg": d.tolist(),
+           "mean_difference_deg": float(d.mean()), "statistics": seed_statistics(other, key),
+           "depth_spread": next((r["depth_spread"] for r in other if r["finished"]), None)}
+    if key == "collapse_angle_deg":
+        out["reaction_drop"] = paired(rows, other, "reaction_drop_angle_deg")
+    return out
 
 
-def seed_statistics(rows: list[dict]) -> dict:
-    """Mean, sample standard deviation and range of the collapse angles of finished runs;
-    runs that did not collapse are counted, not averaged."""
+def seed_statistics(rows: list[dict], key: str = "collapse_angle_deg") -> dict:
+    """Mean, sample standard deviation and range of the angles ``key`` (the onset
+    ``collapse_angle_deg`` or ``reaction_drop_angle_deg``) of finished runs; runs without
+    one (no collapse, or no reaction drop before the run stopped) are counted, not averaged."""
     done = [r for r in rows if r["finished"]]
-    angles = [r["collapse_angle_deg"] for r in done if r["collapse_angle_deg"] is not None]
+    angles = [r.get(key) for r in done if r.get(key) is not None]
     p = compare.paper("sacsayhuaman")["tilt"]
     lo = p["experiment_collapse_deg"] - p["experiment_collapse_sd_deg"]
     hi = p["experiment_collapse_deg"] + p["experiment_collapse_sd_deg"]
@@ -124,20 +157,93 @@ def _fmt(v, spec=".2f"):
     return "-" if v is None else format(v, spec)
 
 
+HEADLINE = (("constant_section", "constant section (every stone extruded through the mean thickness, as the "
+                                 "paper's model): like for like"),
+            ("varying_depth", "stones of varying depth (our hypothesis for the real walls)"))
+
+
+def headline(constant: list[dict], varying: list[dict]) -> dict:
+    """Both collapse angles (onset, reaction drop) of both geometries; the constant-section
+    walls first: they are built as the paper's model was (extruded), so they are the
+    like-for-like comparison with its 14.3 deg."""
+    out = {"like_for_like": "constant_section", "rows": []}
+    for (key, label), rows in zip(HEADLINE, (constant, varying)):
+        done = [r for r in rows if r["finished"]]
+        out["rows"].append({
+            "walls": key, "label": label, "n_runs": len(rows),
+            "seeds": [r["seed"] for r in done],
+            "onset_angles_deg": [r["collapse_angle_deg"] for r in done],
+            "reaction_drop_angles_deg": [r.get("reaction_drop_angle_deg") for r in done],
+            "onset": seed_statistics(rows) if rows else None,
+            "reaction_drop": seed_statistics(rows, "reaction_drop_angle_deg") if rows else None})
+    return out
+
+
+def _angles_cell(values: list, st: dict | None) -> str:
+    if not values:
+        return "not run"
+    txt = ", ".join(_fmt(v) for v in values)
+    if st and "mean_deg" in st:
+        txt += f": mean {st['mean_deg']:.2f}" + (f", sd {st['sd_deg']:.2f}" if st.get("sd_deg") is not None else "")
+    return txt
+
+
+def _within_cell(st: dict | None) -> str:
+    if not st or "mean_deg" not in st:
+        return "-"
+    return f"{st['n_within_experiment_sd']} of {st['n_collapsed']}"
+
+
+def headline_md(summary: dict) -> list[str]:
+    """The headline table: experiment, the paper's model, and our two geometries with both
+    collapse angles."""
+    p = summary["paper"]
+    hl = summary.get("headline") or {"rows": []}
+    lines = ["## Collapse angle: both definitions, both geometries", "",
+             "Onset: the tilt where the motion that led to the collapse began (5 mm of block motion per degree "
+             "of tilt over 0.2 deg; drystone/collapse.py `onset`). Reaction drop: the paper's criterion (Fig. 13), "
+             "the tilt at which the vertical reaction of the moving stones on the platform and fixed course first "
+             f"falls below {1 - summary.get('reaction_drop_fraction', 0.05):.2f} of their weight "
+             "(drystone/collapse.py `reaction_drop`). The constant-section walls are the like-for-like "
+             "comparison with the paper's model (its blocks were extruded from the front face).", "",
+             "| walls | onset angle (deg) | reaction-drop angle (deg) | within the experiment's ±1 sd (onset; drop) |",
+             "|---|---|---|---|",
+             f"| experiment (Santa-Cruz et al., 3 walls) | {p['experiment_collapse_deg']} ± "
+             f"{p['experiment_collapse_sd_deg']} | | |",
+             f"| paper's model (constant section, FEM calibration) | | {p['model_collapse_deg']} | |"]
+    for r in hl["rows"]:
+        bold = "**" if r["walls"] == hl.get("like_for_like") else ""
+        lines.append(f"| {bold}{r['label']}{bold}, seeds {', '.join(str(k) for k in r['seeds']) or '-'} | "
+                     f"{_angles_cell(r['onset_angles_deg'], r['onset'])} | "
+                     f"{_angles_cell(r['reaction_drop_angles_deg'], r['reaction_drop'])} | "
+                     f"{_within_cell(r['onset'])}; {_within_cell(r['reaction_drop'])} |")
+    return lines + [""]
+
+
 def report_md(summary: dict) -> str:
     st = summary["seeds"]
     lines = ["# Tilt-table validation (Sacsayhuaman paper §3.2)", "",
              f"Walls: {summary['wall']}", "",
              f"Experiment (Santa-Cruz et al.): {st['experiment_deg']} ± {st['experiment_sd_deg']} deg; "
              f"paper's model {st['paper_model_deg']} deg.", "",
-             "## Collapse angle per generated wall (FEM calibration of Table 1)", "",
-             "| run | seed | collapse angle (deg) | detected at (deg) | criterion | first blocks | wall time (s) |",
-             "|---|---|---|---|---|---|---|"]
+             "## Assumed inputs", ""]
+    assumed = summary.get("assumed") or {}
+    seen = []
+    for walls in ("constant_section", "varying_depth"):
+        seen += [a for a in assumed.get(walls, []) if a not in seen]
+    lines += [f"* {a}" for a in seen] or ["* (no run found: the generator's assumptions are listed by its runs)"]
+    lines += [""]
+    lines += headline_md(summary)
+    lines += ["## Collapse angle per wall of varying depth (FEM calibration of Table 1)", "",
+              "| run | seed | onset angle (deg) | reaction-drop angle (deg) | detected at (deg) | criterion | "
+              "first blocks | wall time (s) |",
+              "|---|---|---|---|---|---|---|---|"]
     for r in summary["seed_runs"]:
         if not r["finished"]:
-            lines.append(f"| {r['name']} | | not run | | | | |")
+            lines.append(f"| {r['name']} | | not run | | | | | |")
             continue
-        lines.append(f"| {r['name']} | {r['seed']} | {_fmt(r['collapse_angle_deg'])} | {_fmt(r['detected_angle_deg'])} "
+        lines.append(f"| {r['name']} | {r['seed']} | {_fmt(r['collapse_angle_deg'])} | "
+                     f"{_fmt(r.get('reaction_drop_angle_deg'))} | {_fmt(r['detected_angle_deg'])} "
                      f"| {r['criterion'] or 'no collapse'} | {r['first_blocks']} | {r['wall_time_s']:.0f} |")
     if "mean_deg" in st:
         lines += ["", f"Mean {st['mean_deg']:.2f} deg, standard deviation {_fmt(st['sd_deg'])} deg, range "
@@ -154,9 +260,15 @@ def report_md(summary: dict) -> str:
                   f"{_fmt(summary['thickness_m'], '.4f')} m instead of having a depth of its own "
                   f"(depth spread {_fmt(ex['depth_spread'], 'g')} instead of {_fmt(summary['depth_spread'], '.3g')}).",
                   "",
-                  "| seed | extruded (deg) | varying depth (deg) | difference (deg) |", "|---|---|---|---|"]
+                  "| seed | onset, extruded (deg) | onset, varying depth (deg) | difference (deg) | "
+                  "reaction drop, extruded (deg) | reaction drop, varying depth (deg) | difference (deg) |",
+                  "|---|---|---|---|---|---|---|"]
+        rd = ex.get("reaction_drop") or {"seeds": [], "angles_deg": [], "differences_deg": []}
+        rdm = {k: (a, d) for k, a, d in zip(rd["seeds"], rd["angles_deg"], rd["differences_deg"])}
         for k, a, d in zip(ex["seeds"], ex["angles_deg"], ex["differences_deg"]):
-            lines.append(f"| {k} | {a:.2f} | {a + d:.2f} | {d:+.2f} |")
+            ra, rdd = rdm.get(k, (None, None))
+            lines.append(f"| {k} | {a:.2f} | {a + d:.2f} | {d:+.2f} | {_fmt(ra)} | "
+                         f"{_fmt(None if ra is None else ra + rdd)} | {_fmt(rdd, '+.2f')} |")
         if "mean_deg" in es:
             lines += ["", f"Extruded: mean {es['mean_deg']:.2f} deg, standard deviation {_fmt(es['sd_deg'])} deg "
                           f"({'within' if es['mean_within_experiment_sd'] else 'outside'} the experiment's "
@@ -214,11 +326,14 @@ def reaction_figure(rows: list[dict], path: Path) -> Path | None:
                              spec["gravity"])
         up = np.array([prog.true_vertical(t) for t in h["t"]])
         rv = -np.einsum("ij,ij->i", h["reaction"], up)
-        label = f"{r['name']}: {_fmt(r['collapse_angle_deg'])} deg"
+        label = (f"{r['name']}: onset {_fmt(r['collapse_angle_deg'])} deg (:), "
+                 f"reaction drop {_fmt(r.get('reaction_drop_angle_deg'))} deg (--)")
         line, = a1.plot(h["t"], rv, lw=0.9, label=label)
         a2.plot(h["tilt_deg"], rv, lw=0.9, color=line.get_color())
         if r["collapse_angle_deg"] is not None:
-            a2.axvline(r["collapse_angle_deg"], color=line.get_color(), ls=":", lw=0.8)
+            a2.axvline(r["collapse_angle_deg"], color=line.get_color(), ls=":", lw=0.8)  # onset
+        if r.get("reaction_drop_angle_deg") is not None:
+            a2.axvline(r["reaction_drop_angle_deg"], color=line.get_color(), ls="--", lw=0.8)  # reaction drop
     p = compare.paper("sacsayhuaman")["tilt"]
     a2.axvspan(p["experiment_collapse_deg"] - p["experiment_collapse_sd_deg"],
                p["experiment_collapse_deg"] + p["experiment_collapse_sd_deg"], color="0.85", zorder=0,
@@ -264,6 +379,7 @@ def build(seeds=None, rate=None, sensitivity=None, out: Path = OUT, figures: boo
     if not seeds.is_dir():
         raise FileNotFoundError(f"{seeds}: no tilt runs (run `make tilt` first)")
     seed_rows = runs(seeds)
+    ext_rows = runs(extruded) if extruded.is_dir() else []
     rate_rows = runs(rate) if rate.is_dir() else []
     sens_rows = runs(sensitivity) if sensitivity.is_dir() else []
     done = [r for r in seed_rows if r["finished"]]
@@ -285,7 +401,10 @@ def build(seeds=None, rate=None, sensitivity=None, out: Path = OUT, figures: boo
         "seed_runs": seed_rows,
         "depth_spread": done[0]["depth_spread"] if done else None,
         "thickness_m": done[0]["thickness_m"] if done else None,
-        "extruded": paired(seed_rows, runs(extruded)) if extruded.is_dir() else None,
+        "extruded": paired(seed_rows, ext_rows) if ext_rows else None,
+        "headline": headline(ext_rows, seed_rows),
+        "assumed": {"constant_section": _assumed(ext_rows), "varying_depth": _assumed(seed_rows)},
+        "reaction_drop_fraction": _drop_fraction(done),
         "rate_check": rate_check(seed_rows, rate_rows),
         "sensitivity": sens_rows,
         "paper": p,
@@ -295,11 +414,37 @@ def build(seeds=None, rate=None, sensitivity=None, out: Path = OUT, figures: boo
     if figures and done:
         f = reaction_figure(seed_rows + [r for r in rate_rows if r["finished"]], out / "reaction.png")
         summary["figures"].append(str(f))
+        if any(r["finished"] for r in ext_rows):
+            f = reaction_figure(ext_rows, out / "reaction_constant_section.png")
+            summary["figures"].append(str(f))
         show = next((r for r in rate_rows if r["finished"]), done[0])
         summary["figures"].append(str(snapshot_figure(show, out / "snapshots.png")))
     (out / "summary.json").write_text(json.dumps(summary, indent=1, default=_json_default))
     (out / "report.md").write_text(report_md(summary))
     return summary
+
+
+def _assumed(rows: list[dict]) -> list[str]:
+    """The generator's assumed inputs of the first finished run (geometry.json), seed-free."""
+    import re
+
+    for r in rows:
+        if r["finished"]:
+            return [re.sub(r" \(seed \d+\)", "", a) for a in _generated(Path(r["folder"])).get("assumed", [])]
+    return []
+
+
+def _drop_fraction(done: list[dict]) -> float:
+    """The reaction_drop fraction of the runs' until_collapse stage (5 % by default)."""
+    for r in done:
+        try:
+            spec = json.loads((Path(r["folder"]) / "spec.json").read_text())
+        except (OSError, KeyError, ValueError):
+            continue
+        for st in spec["stages"]:
+            if st["kind"] == "tilt" and st["params"].get("until_collapse"):
+                return float(st["params"].get("reaction_drop", 0.05))
+    return 0.05
 
 
 def _json_default(v):

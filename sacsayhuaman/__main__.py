@@ -1,8 +1,8 @@
 """python -m sacsayhuaman {identify, sine, resonance, table3, all, report, demo} [--workers N] [--dask ADDRESS]
 
 identify   white noise out of plane -> peaks of A-D (results/sacsayhuaman_white_noise)
-sine       Eq. 9 sines over 0.2-20 Hz and at the white-noise peaks -> dominant frequency
-resonance  the dominant-frequency sine scaled to PGA 0.1-0.9 g [--frequency HZ]
+sine       Eq. 9 sines (as a displacement) over 0.1-20 Hz, 0.976 Hz and at the white-noise peaks -> dominant frequency
+resonance  the sine at the paper's 0.976 Hz and at the wall's own peak [--frequency HZ] scaled to PGA 0.1-0.9 g
 table3     three records x nine PGAs (Table 3)
 all        the four above in order, then the report
 report     results/sacsayhuaman/: identification.json, table3.csv, figures, report.md
@@ -33,8 +33,9 @@ def main(argv=None) -> int:
         print(f"dominant frequency: {study.sine(**kw)['dominant_frequency_hz']} Hz")
     elif a.step == "resonance":
         for r in study.resonance(frequency_hz=a.frequency, **kw):
-            print(f"PGA {r['pga_g']:g} g: max residual {r['max_residual_mm']:.2f} mm, moved {r['moved']}, "
-                  f"collapsed {r['collapsed']}")
+            print(f"{r['frequency_hz']:.3f} Hz, PGA {r['pga_g']:g} g: max out-of-plane residual "
+                  f"{r['max_residual_mm']:.2f} mm ({r['max_residual_3d_mm']:.2f} mm in 3D), moved {r['moved']}, "
+                  f"collapsed {r['collapsed']}, motion died out: {r['settled']}")
     elif a.step == "table3":
         study.table3(**kw)
     elif a.step == "all":

@@ -63,3 +63,87 @@ def test_rattling_and_a_steady_lean_are_not_an_onset():
 def test_bad_rule():
     with pytest.raises(ValueError, match="positive"):
         collapse.onset([0, 1], np.zeros((2, 1, 3)), [0, 1], 1.0, rate_m_per_deg=0.0)
+
+
+# --- the paper's reaction-drop angle (Figure 13) on synthetic reaction histories -------------
+
+W = 1000.0  # N, weight of the moving blocks
+
+
+def wall_reaction(theta_fall=14.3, rate=1.0, dt=0.05, dip=0.0, falling=0.3):
+    """A wall tilted from 10 deg at ``rate`` deg/s whose vertical reaction equals its weight
+    until blocks carrying ``falling`` of it start to fall at ``theta_fall`` (the reaction
+    then drops by that fraction within 0.1 s, as free-falling stones unload the platform),
+    with a vibration of relative amplitude ``dip``."""
+    t = np.arange(0.0, (theta_fall - 10.0) / rate + 1.0, dt)
+    tilt = 10.0 + rate * t
+    t_fall = (theta_fall - 10.0) / rate
+    r = W * (1.0 - falling * np.clip((t - t_fall) / 0.1, 0.0, 1.0)) * (1.0 + dip * np.sin(2 * np.pi * 7.3 * t))
+    return t, tilt, r
+
+
+@pytest.mark.parametrize("rate", [0.2, 1.0])
+def test_reaction_drop_angle_is_where_the_weight_goes(rate):
+    """The reaction falls linearly from W to 0.7 W over 0.1 s from 14.3 deg: it crosses
+    0.95 W after 0.1 * 0.05 / 0.3 s = 0.017 s, i.e. at the next sample. The angle is that
+    sample's tilt: within one sample (rate x 0.05 s) above 14.3 deg at either rate."""
+    t, tilt, r = wall_reaction(rate=rate)
+    rd = collapse.reaction_drop(t, tilt, r, W)
+    assert 14.3 < rd["angle_deg"] <= 14.3 + rate * 0.05 + 1e-9
+    assert rd["fraction"] < 0.95 and rd["min_fraction"] == pytest.approx(0.7)
+    assert rd["reaction_N"] == pytest.approx(rd["fraction"] * W)
+
+
+def test_vibration_below_the_drop_is_not_a_collapse():
+    """A 3 % vibration of the reaction (below the 5 % drop) with no blocks falling: no angle,
+    and the lowest fraction (0.97 within the sampling of the sine) says how close it came."""
+    t, tilt, r = wall_reaction(dip=0.03, falling=0.0)
+    rd = collapse.reaction_drop(t, tilt, r, W)
+    assert rd["angle_deg"] is None and rd["time_s"] is None
+    assert 0.97 - 1e-9 <= rd["min_fraction"] < 0.975
+
+
+def test_inactive_samples_are_ignored():
+    """The gravity ramp (reaction growing from 0) is not a drop: only active samples count."""
+    t, tilt, r = wall_reaction()
+    r = r.copy()
+    r[:10] = np.linspace(0.0, W, 10)  # as if gravity were still being applied
+    active = np.arange(len(t)) >= 10
+    rd = collapse.reaction_drop(t, tilt, r, W, active=active)
+    assert 14.3 < rd["angle_deg"] <= 14.35 + 1e-9
+    assert collapse.reaction_drop(t, tilt, r, W)["angle_deg"] == pytest.approx(tilt[0])  # not masked: at once
+
+
+def test_reaction_drop_refuses_bad_arguments():
+    with pytest.raises(ValueError):
+        collapse.reaction_drop([0.0], [0.0], [1.0], 0.0)
+    with pytest.raises(ValueError):
+        collapse.reaction_drop([0.0], [0.0], [1.0], 1.0, drop=1.5)
+
+
+def test_summary_reaction_is_along_the_true_vertical():
+    """postprocess.summary on a synthetic tilt run: a wall at rest pushes its weight straight
+    down (world frame) at any tilt, so its vertical reaction stays W (along the platform's
+    normal it would be W cos(tilt): 0.95 W at 18.2 deg, a false collapse); blocks that
+    fall from 14.3 deg unload it. The reaction-drop angle is found within one sample."""
+    from drystone.loading import LoadProgramme, Stage
+    from postprocess import summary as summ
+
+    stages = [{"kind": "gravity", "start": 0.0, "end": 1.0, "params": {"ramp": 0.5}},
+              {"kind": "tilt", "start": 1.0, "end": 31.0,
+               "params": {"rate_deg_s": 1.0, "towards": [0.0, 1.0, 0.0], "until_collapse": True,
+                          "reaction_drop": 0.05}}]
+    spec = {"stages": stages, "gravity": 9.81}
+    prog = LoadProgramme([Stage(s["kind"], s["start"], s["end"], s["params"]) for s in stages], 9.81)
+    t = np.arange(0.0, 20.0, 0.02)
+    tilt = np.array([prog.tilt_deg(x) for x in t])
+    scale = np.clip(t / 0.5, 0.0, 1.0) * (1.0 - 0.3 * np.clip((tilt - 14.3) / 0.1, 0.0, 1.0))
+    up = np.array([prog.true_vertical(x) for x in t])
+    h = {"t": t, "tilt_deg": tilt, "mass": np.array([W / 9.81 / 2, W / 9.81 / 2]),
+         "reaction": -(W * scale)[:, None] * up}
+    rv = summ.vertical_reaction(spec, h)
+    rest = (t > 1.0) & (tilt < 14.3)
+    assert np.allclose(rv[rest], W, rtol=1e-12)
+    rd = summ.tilt_reaction_drop(spec, h)
+    assert rd["weight_N"] == pytest.approx(W) and rd["drop"] == 0.05
+    assert 14.3 < rd["angle_deg"] <= 14.3 + 0.02 + 1e-9

@@ -46,3 +46,93 @@ def test_base_acceleration_is_an_inertial_body_force():
     assert p.base_acceleration(17.25) == pytest.approx([0.5, 0, 0])
     g = p.body_acceleration(17.25)
     assert g[0] == pytest.approx(-0.5)  # the block feels -a_base
+
+
+# -- Eq. 9 as a displacement (issue 11, item 2) and settling rest stages (item 4) ---------------
+
+def _case(tmp_path, excitation: dict, rest: dict | None = None) -> dict:
+    from drystone import case as casemod
+    from drystone import paths
+
+    raw = {"case": {"geometry": str(paths.CASES / "examples" / "one_block.json")},
+           "stages": [{"type": "gravity", "duration": 0.2},
+                      dict({"type": "excitation", "motion": "sine", "duration": 1.0, "direction": "y"}, **excitation)]}
+    if rest is not None:
+        raw["stages"].append(dict({"type": "rest"}, **rest))
+    return casemod.validate(raw, "test.toml", tmp_path)
+
+
+@pytest.mark.parametrize("f, amp, pga_g, direction", [(1.0, 0.5, None, "y"), (0.1, 0.5, None, "x"),
+                                                      (0.976, 0.5, 0.3, "y")])
+def test_sine_started_as_displacement_gives_every_free_block_minus_the_base_velocity(tmp_path, f, amp, pga_g,
+                                                                                    direction):
+    """d(t) = A/w^2 sin(wt) has d'(0) = A/w (0.080 m/s at 1 Hz, 0.80 m/s at 0.1 Hz) and
+    d''(t) = -A sin(wt), the sampled acceleration: the resolved stage carries -A/w along the
+    excitation direction, the load programme gives it at the stage's start only, and the
+    samples are the same as with start = 'rest'."""
+    from drystone import runner
+
+    exc = {"frequency_hz": f, "amplitude": amp, "direction": direction, "start": "displacement"}
+    if pga_g is not None:
+        exc["pga_g"] = pga_g
+    spec = runner.resolve(_case(tmp_path / "d", exc), "test.toml", tmp_path)
+    st = spec["stages"][1]
+    a = amp if pga_g is None else pga_g * 9.80665
+    e = np.array(runner.AXES[direction])
+    v_b = a / (2 * math.pi * f)
+    assert st["params"]["start"] == "displacement"
+    assert st["params"]["initial_relative_velocity"] == pytest.approx(-v_b * e, rel=1e-12)
+    assert spec["excitations"][0]["initial_relative_velocity_m_s"] == st["params"]["initial_relative_velocity"]
+    acc = np.load(tmp_path / st["params"]["acc_file"])
+    dt = st["params"]["dt"]
+    # the base velocity of the samples from v_b: trapezoidal integral of a(t) = -A sin(wt) returns
+    # to v_b after each whole period (the jump is consistent with the samples' sign)
+    n = int(round(1.0 / (f * dt)))
+    if n < len(acc):
+        v = v_b + np.concatenate([[0.0], np.cumsum(0.5 * (acc[1:] + acc[:-1]) * dt)])
+        assert v[n] == pytest.approx(v_b, rel=1e-3)
+        assert v[n // 4] == pytest.approx(0.0, abs=1e-3 * v_b)  # d' = A/w cos(wt) = 0 at a quarter period
+    stages = [Stage(**s) for s in spec["stages"]]
+    p = LoadProgramme(stages, G)
+    assert p.velocity_jump(0) == pytest.approx([0, 0, 0])
+    assert p.velocity_jump(1) == pytest.approx(-v_b * e)
+    rest = runner.resolve(_case(tmp_path / "r", dict(exc, start="rest")), "test.toml", tmp_path / "r")
+    assert rest["stages"][1]["params"]["initial_relative_velocity"] == [0.0, 0.0, 0.0]
+    assert np.array_equal(np.load(tmp_path / "r" / rest["stages"][1]["params"]["acc_file"]), acc)
+    assert runner.fingerprint(rest) != runner.fingerprint(spec)
+
+
+def test_start_and_settle_keys_are_checked(tmp_path):
+    from drystone.case import CaseError
+
+    with pytest.raises(CaseError, match=r"#2.*'start' = 'displacement' is defined for motion 'sine' only"):
+        _case(tmp_path, {"motion": "white_noise", "start": "displacement"})
+    with pytest.raises(CaseError, match=r"'start' must be one of"):
+        _case(tmp_path, {"frequency_hz": 1.0, "start": "velocity"})
+    with pytest.raises(CaseError, match="not both"):
+        _case(tmp_path, {"frequency_hz": 1.0}, {"duration": 1.0, "until_kinetic_below": 1.0,
+                                                "until_kinetic_below_per_weight": 1e-7})
+    with pytest.raises(CaseError, match="settle_window"):
+        _case(tmp_path, {"frequency_hz": 1.0}, {"duration": 1.0, "until_kinetic_below": 1.0, "settle_window": 2.0})
+    # only the last stage may end the run early
+    from drystone import case as casemod
+    from drystone import paths
+    raw = {"case": {"geometry": str(paths.CASES / "examples" / "one_block.json")},
+           "stages": [{"type": "rest", "duration": 1.0, "until_kinetic_below": 1.0}, {"type": "rest", "duration": 1.0}]}
+    with pytest.raises(CaseError, match=r"test.toml \[\[stages\]\] #1: .*only the last stage"):
+        casemod.validate(raw, "test.toml", tmp_path)
+
+
+def test_settle_threshold_absolute_or_per_weight(tmp_path):
+    """The threshold is the given energy (J) or W x the given length (m)."""
+    from drystone import runner
+
+    for rest, weight, thr in (({"until_kinetic_below": 0.05}, 500.0, 0.05),
+                              ({"until_kinetic_below_per_weight": 1e-7}, 5e5, 0.05)):
+        spec = runner.resolve(_case(tmp_path, {"frequency_hz": 1.0}, dict(rest, duration=3.0, settle_window=1.0)),
+                              "test.toml", tmp_path)
+        p = LoadProgramme([Stage(**s) for s in spec["stages"]], G)
+        assert p.settle(2, weight) == {"threshold_J": pytest.approx(thr), "window_s": 1.0}
+        assert p.settle(1, weight) is None
+    plain = runner.resolve(_case(tmp_path, {"frequency_hz": 1.0}, {"duration": 3.0}), "test.toml", tmp_path)
+    assert plain["stages"][2]["params"] == {}  # a plain rest keeps its old fingerprint

@@ -40,11 +40,12 @@ def test_single_row_sliding_agrees_with_1d(outdir):
 
 
 def test_five_blocks_short_kobe_end_to_end(outdir):
-    """2 s of the Kobe record (the strong part, 0.818 g) twice on the five-block model:
+    """2 s of the Kobe record (the strong part, 818 gal = 0.834 g) twice on the five-block model:
     finite residuals per run, below the base's own displacement range over the window
     (no block can slide farther than the base moves under it)."""
     from motions import catalogue, processing
-    rec = processing.trim(processing.scale_to_pga(catalogue.get("kobe1995"), pga_g=0.818), 6.0, 8.0)
+    from ogawa.study import KOBE_PGA_G
+    rec = processing.trim(processing.scale_to_pga(catalogue.get("kobe1995"), pga_g=KOBE_PGA_G), 6.0, 8.0)
     path = outdir / "kobe_window.txt"
     np.savetxt(path, np.column_stack([rec.time - rec.time[0], rec.acc]), header="units = m/s^2\nevent = Kobe window")
     stages = [{"type": "gravity", "duration": 0.4, "ramp": 0.2}]

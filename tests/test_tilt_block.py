@@ -37,22 +37,32 @@ def test_block_topples_at_the_winkler_angle(outdir):
     s, h, _ = run_case(tilt_case([0.2, 0.2, 0.4], 0.7, expected - 2.0), outdir)
     assert s["collapse_angle_deg"] == pytest.approx(expected, abs=0.3)
     assert s["blocks"]["1"]["residual_rotation_angle_rad"] > 0.3  # it fell over, not slid
+    # the paper's criterion: the vertical reaction drops by 5 % of the weight once the block
+    # falls, i.e. after the onset of its run-away and within the time it takes to fall (under
+    # 2 s for a 0.4 m block, 1 deg of tilt at 0.5 deg/s); a standing block keeps it at W
+    rd = s["reaction_drop_angle_deg"]
+    assert rd is not None and s["collapse_angle_deg"] - 0.1 <= rd <= s["collapse_angle_deg"] + 1.0
+    assert s["collapse"]["reaction_drop"]["fraction"] < 0.95
 
 
 def test_toppling_block_at_both_quasi_static_rates(outdir):
-    """A stiff block has no gradual lean before its limit: it runs away in time, and at
-    1 deg/s the platform turns further while it does, so its onset (5 mm per degree) is
-    dated later than at 0.2 deg/s (measured: 23.08 and 23.35 deg, Winkler limit 23.16).
-    Both stay within the 0.3 deg of the sanity checks, and the faster rate dates later,
-    never earlier. The rate limit of issue 5 (0.2 deg) is checked on the wall itself,
-    whose collapse is a gradual lean (`make tilt-rate`, postprocess/tilt.py; and
-    tests/test_collapse.py for the onset rule)."""
+    """A stiff block has no gradual lean before its limit: it runs away in time, and while
+    it does the platform turns further, so the faster the tilt the later its onset (5 mm
+    per degree) is dated. The run-away is slowed by the contact damping, which acts on the
+    rocking mode since the damping is distributed over the joint (issue 11): with
+    xi = 0.8 the 1 deg/s protocol dates the toppling ~0.5 deg late (23.67 against 23.22 at
+    0.2 deg/s), with xi = 0.08 it does not. Asserted: the paper's 0.2 deg/s and the
+    lightly damped 1 deg/s within the 0.3 deg of the sanity checks; the damped fast run
+    later, never earlier, than both. The rate limit of issue 5 (0.2 deg) is checked on the
+    wall itself (`make tilt-rate`, postprocess/tilt.py)."""
     expected = analytic.toppling_tilt_deg(0.2, 0.4, 0.2, 2300, 2e8)
-    angles = []
-    for rate in (0.2, 1.0):
+    angles = {}
+    for rate, xi in ((0.2, 0.8), (1.0, 0.8), (1.0, 0.08)):
         case = tilt_case([0.2, 0.2, 0.4], 0.7, expected - 1.0)
+        case["case"]["geometry"]["damping"] = xi
         case["stages"][2]["rate_deg_s"] = rate
-        s, _, _ = run_case(case, outdir, name=f"rate_{rate}")
-        angles.append(s["collapse_angle_deg"])
-    assert angles == pytest.approx([expected, expected], abs=0.3)
-    assert angles[1] >= angles[0]
+        s, _, _ = run_case(case, outdir, name=f"rate_{rate}_{xi}")
+        angles[rate, xi] = s["collapse_angle_deg"]
+    assert angles[0.2, 0.8] == pytest.approx(expected, abs=0.3)
+    assert angles[1.0, 0.08] == pytest.approx(expected, abs=0.3)
+    assert angles[1.0, 0.8] >= max(angles[0.2, 0.8], angles[1.0, 0.08])

@@ -7,7 +7,9 @@ import pytest
 from postprocess import tilt
 
 
-def fake_run(root, name, seed, angle, rates=(2.0, 1.0), mu=0.4, kn=2e8):
+def fake_run(root, name, seed, angle, rates=(2.0, 1.0), mu=0.4, kn=2e8, drop="absent"):
+    """A finished run's summary.json; ``drop`` is its reaction-drop angle ("absent": a
+    summary written before that angle was reported)."""
     d = root / name
     d.mkdir(parents=True)
     s = {"collapse_angle_deg": angle,
@@ -19,6 +21,8 @@ def fake_run(root, name, seed, angle, rates=(2.0, 1.0), mu=0.4, kn=2e8):
                     + [{"kind": "tilt", "params": {"rate_deg_s": r}} for r in rates],
                     "provenance": {"overrides": [f"case.geometry.seed={seed}"]}},
          "run": {"wall_time_s": 100.0, "steps": 1000, "dt_s": 1e-4, "simulated_time_s": 0.1}}
+    if drop != "absent":
+        s["reaction_drop_angle_deg"] = drop
     (d / "summary.json").write_text(json.dumps(s))
 
 
@@ -84,3 +88,27 @@ def test_extruded_walls_are_paired_by_seed(tmp_path):
     assert ex["statistics"]["mean_deg"] == pytest.approx(14.95)
     md = (tmp_path / "o" / "report.md").read_text()
     assert "| 1 | 14.90 | 13.50 | -1.40 |" in md and "lowers the angle by 1.20 deg" in md
+
+
+def test_headline_both_angles_constant_section_first(tmp_path):
+    """The headline gives the onset and the reaction-drop angles of both geometries, the
+    constant-section walls first (the like-for-like comparison, in bold); a run without a
+    reaction drop (None) is counted, not averaged; an old summary without the key and
+    without histories reads as None."""
+    seeds, ext = tmp_path / "seeds", tmp_path / "ext"
+    for k, (a, ra, b, rb) in enumerate([(14.0, 14.6, 15.0, 15.3), (13.5, None, 14.9, 15.1), (14.2, "absent", 15.2, 15.5)]):
+        fake_run(seeds, f"seed_{k}", k, a, drop=ra)
+        fake_run(ext, f"seed_{k}", k, b, drop=rb)
+    s = tilt.build(seeds, tmp_path / "r", tmp_path / "n", tmp_path / "o", figures=False, extruded=ext)
+    rows = s["headline"]["rows"]
+    assert [r["walls"] for r in rows] == ["constant_section", "varying_depth"]
+    assert s["headline"]["like_for_like"] == "constant_section"
+    assert rows[0]["reaction_drop"]["mean_deg"] == pytest.approx(15.3)
+    assert rows[0]["onset"]["mean_deg"] == pytest.approx(15.033333333)
+    assert rows[1]["reaction_drop_angles_deg"] == [14.6, None, None]
+    assert rows[1]["reaction_drop"]["n_collapsed"] == 1 and rows[1]["reaction_drop"]["mean_deg"] == pytest.approx(14.6)
+    assert s["extruded"]["reaction_drop"]["differences_deg"] == pytest.approx([-0.7])
+    md = (tmp_path / "o" / "report.md").read_text()
+    assert md.index("**constant section") < md.index("stones of varying depth (our hypothesis")
+    assert "15.30, 15.10, 15.50: mean 15.30, sd 0.20" in md
+    assert "| 14.3 |" in md  # the paper's model, on the reaction-drop column

@@ -193,12 +193,9 @@ class PenaltyCoulomb:
                                 angvel[ib] - angvel[ia]], axis=1)
         ia_inv = np.matmul(rot[ia] * self.inv_inertia_local[ia][:, None, :], rot[ia].transpose(0, 2, 1))
         ib_inv = np.matmul(rot[ib] * self.inv_inertia_local[ib][:, None, :], rot[ib].transpose(0, 2, 1))
-        W = law.mobility(pa_, pb_, self.inv_mass[ia], self.inv_mass[ib], ia_inv, ib_inv)
-        K = law.patch_stiffness(n, parea, pj, kn, kt, ~slipping)
-        C, om = law.damping_matrix(K, W, xi)
+        fd, md, om = law.damping_wrenches(n, parea, pj, kn, kt, xi, ~slipping, pa_, pb_, self.inv_mass[ia],
+                                          self.inv_mass[ib], ia_inv, ib_inv, twist, fn, fs_new, mu, c - pc)
         self.max_omega_dt = max(self.max_omega_dt, float(om.max()) * O.dt)
-        wd = -np.matmul(C, twist[:, :, None])[:, :, 0]
-        fd, md = law.cap_damping(wd[:, :3], wd[:, 3:], n, fn, fs_new, mu, c - pc, parea, pj)
         f_b = fs_new + fd  # the force this law adds on B besides K_n V (resultant)
 
         st.id1, st.id2, st.normal, st.point, st.volume = ia, ib, n, c, vol

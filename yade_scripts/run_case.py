@@ -78,6 +78,13 @@ class Driver:
         self.w_free = float(np.sum(self.mass[self.dyn])) * spec["gravity"]
         self.collapse = None
         self.stop_at = None
+        self.jumps = []  # velocity jumps applied at stage starts (run_info.json)
+        self.settle = None  # early end of a last rest stage on low kinetic energy (run_info.json)
+        self.below_since = None
+        # a stone whose centroid is below the platform's underside has fallen off the model:
+        # its free fall is left out of the settling criterion
+        self.z_floor = min((min(v[2] for v in b["vertices"]) for b in spec["blocks"] if b["role"] == "platform"),
+                           default=-np.inf)
         self.max_contacts = 0
         self.t_wall0 = time.time()
         self.t_print = self.t_wall0
@@ -143,6 +150,22 @@ class Driver:
               f"{st.start:.3f}-{st.end:.3f} s", flush=True)
         for block, v in self.prog.imposed_velocities(self.O.time).items():
             self.O.bodies[self.yid[block]].state.vel = yade.Vector3(*v)
+        dv = self.prog.velocity_jump(k)
+        if np.any(dv):
+            # Eq. 9 as a displacement: the base's velocity jump, as a relative velocity of every
+            # free block (drystone.runner.initial_relative_velocity); blocked translations keep theirs
+            for i in self.dyn:
+                state = self.states[int(i)]
+                free = np.array([c not in (state.blockedDOFs or "") for c in "xyz"], float)
+                state.vel = state.vel + yade.Vector3(*(dv * free))
+            self.jumps.append({"stage": k + 1, "time_s": float(self.O.time), "relative_velocity_m_s": dv.tolist()})
+            print(f"[{self.spec['name']}] stage {k + 1}: base velocity jump, free blocks get {dv.tolist()} m/s "
+                  "relative to the platform", flush=True)
+        cfg = self.prog.settle(k, self.w_free)
+        if cfg is not None:
+            self.settle = dict(cfg, stage=k + 1, reached=False, time_s=None, max_end_s=st.end,
+                               final_kinetic_J=None)
+            self.below_since = None
 
     def _record(self, t):
         O = self.O
@@ -171,12 +194,14 @@ class Driver:
         self.max_contacts = max(self.max_contacts, len(st.fn))
         # energies at the half step t - dt/2, where leapfrog velocities live (J)
         m = self.mass[d]
-        ke = 0.5 * np.sum(m * np.sum(self.vel[d] ** 2, axis=1))
-        for i in d:
+        ke_b = 0.5 * m * np.sum(self.vel[d] ** 2, axis=1)  # per free block
+        for j, i in enumerate(d):
             inertia = np.array(tuple(O.bodies[int(i)].state.inertia))
             w_loc = self.rot[i].T @ self.angvel[i]
-            ke += 0.5 * float(np.sum(inertia * w_loc ** 2))
+            ke_b[j] += 0.5 * float(np.sum(inertia * w_loc ** 2))
+        ke = float(ke_b.sum())
         h["kinetic"].append(ke)
+        self._check_settled(t, ke_b)
         x_half = self.pos[d] - 0.5 * O.dt * self.vel[d]
         h["potential"].append(-float(np.sum(m * (x_half @ g))))
         h["elastic"].append(0.5 * sum(self.engine.elastic) if self.law_name == "penalty_coulomb" else np.nan)
@@ -202,6 +227,30 @@ class Driver:
             hc["area"].append(float(st.area[r]))
             hc["volume"].append(float(st.volume[r]))
         self._check_collapse(t, R)
+
+    def _check_settled(self, t, ke_b):
+        """A last rest stage with ``until_kinetic_below(_per_weight)``: stop the run once the
+        kinetic energy of the free blocks (J, at the recorded samples; blocks fallen off the
+        platform left out) has stayed below the threshold for ``settle_window`` s;
+        run_info.json says whether and when."""
+        cfg = self.settle
+        if cfg is None or cfg["reached"] or t < self.prog.stages[cfg["stage"] - 1].start:
+            return
+        fallen = self.pos[self.dyn, 2] < self.z_floor
+        ke = float(ke_b[~fallen].sum())
+        cfg["final_kinetic_J"] = ke
+        cfg["fallen_excluded"] = [int(self.bid[int(i)]) for i in self.dyn[fallen]]
+        if ke >= cfg["threshold_J"]:
+            self.below_since = None
+            return
+        if self.below_since is None:
+            self.below_since = t
+        if t - self.below_since >= cfg["window_s"] - 1e-12:
+            cfg.update(reached=True, time_s=float(t), below_since_s=float(self.below_since))
+            print(f"[{self.spec['name']}] settled: kinetic energy below {cfg['threshold_J']:.3g} J since "
+                  f"t = {self.below_since:.3f} s; stopping at {t:.3f} s", flush=True)
+            if self.stop_at is None or self.stop_at > t:
+                self.stop_at = t
 
     def _check_collapse(self, t, R):
         """Tilt stages with ``until_collapse``. Collapse is detected when the vertical
@@ -258,6 +307,8 @@ class Driver:
                 "dt_s": float(self.O.dt), "threads": int(yade.Omega().numThreads),
                 "max_contacts": int(self.max_contacts), "final_contacts": int(self.h["n_contacts"][-1]),
                 "stopped_early": bool(self.done), "collapse": self.collapse,
+                "velocity_jumps": self.jumps, "settle": self.settle,
+                "max_contact_omega_dt": float(self.engine.max_omega_dt),
                 "yade_version": yade.config.version if hasattr(yade, "config") else "unknown",
                 "us_per_step": 1e6 * wall / max(1, self.O.iter),
                 "python_us_per_step": 1e6 * self.python_time / max(1, self.O.iter)}

@@ -1,0 +1,253 @@
+"""Linearised modal analysis of a block assembly on its joint springs (plain Python, no YADE).
+
+Around a static configuration (the settled state after gravity, or any configuration
+given by the blocks' world vertices), each free block has 6 degrees of freedom: the
+translation u of its centroid (m) and a rotation vector theta (rad) about it, in global
+axes; DOFs a block may not use (YADE's ``blocked_dofs`` letters: x y z translations,
+X Y Z rotations) are left out. The generalised forces Q(q) are those of the project's law
+(``drystone/contact.py``) without damping, evaluated from the exact overlap geometry
+(``drystone.overlap.all_contacts``) of the perturbed configuration:
+
+* normal: F_n = K_n V along the contact normal, at the overlap centroid (for a flat joint
+  the resultant of a Winkler pressure K_n x penetration, so the rotational stiffness
+  K_n I of the footprint comes out of the moving centroid);
+* tangential: a spring K_t A_c on the relative tangential displacement, at the contact
+  point, of the two blocks' material points that were at the overlap centroid in the
+  static configuration (A_c and that point fixed at their static values; no stored
+  tangential force: the static configuration's shear forces are not recorded);
+* gravity: m g at each centroid.
+
+K = -dQ/dq by central differences (``stiffness``): steps of ``rel_step`` times the median
+overlap depth V / A_c for translations and that divided by the block's size for
+rotations, so that no overlap changes topology within a step and the truncation error,
+O(step^2) relative to the depth, is ~1e-6. Gravity's geometric stiffness is not a separate
+term: the preloaded normal forces move with the footprint (a block rotating by theta about
+its centroid at height h above its joint shifts its footprint by -h theta under the load W:
+the -W h of a rocking block) and the difference quotient sees it. The generalised force
+of a rotation vector is T(theta)^T M (T the exponential map's tangent, ``_tangent``), exact
+virtual work for finite steps. The FD matrix is symmetric at an equilibrium up to the
+tangential springs' path dependence; ``modes`` solves eigh((K + K^T)/2, M) and reports the
+relative asymmetry and the static residual Q(0).
+
+Units: SI (m, kg, N, rad, Hz); K_n, K_t in N/m^3.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import linalg
+from scipy.spatial import ConvexHull
+
+from drystone import overlap
+from drystone.contact import combine
+
+G = 9.80665
+_LETTERS = "xyzXYZ"
+
+
+def mass_properties(vertices, density: float) -> tuple[float, np.ndarray, np.ndarray]:
+    """Mass (kg), centroid (m) and inertia tensor about the centroid (kg m^2, axes of the
+    vertices' frame) of a convex polyhedron of uniform density (kg/m^3)."""
+    v = np.asarray(vertices, float)
+    hull = ConvexHull(v)
+    ref = v.mean(axis=0)
+    vol, first, second = 0.0, np.zeros(3), np.zeros((3, 3))
+    for tri in hull.simplices:
+        a, b, c = v[tri] - ref
+        d = np.dot(a, np.cross(b, c)) / 6.0
+        d = abs(d)  # every tetrahedron (ref, face) is positively counted: ref is inside
+        s = a + b + c
+        vol += d
+        first += d * s / 4.0
+        second += d / 20.0 * (np.outer(a, a) + np.outer(b, b) + np.outer(c, c) + np.outer(s, s))
+    cen = first / vol
+    cc = second - vol * np.outer(cen, cen)
+    inertia = density * (np.trace(cc) * np.eye(3) - cc)
+    return density * vol, ref + cen, inertia
+
+
+def _skew(w) -> np.ndarray:
+    return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
+
+
+def rotation(theta) -> np.ndarray:
+    """Rotation matrix exp([theta]x) of a rotation vector (rad)."""
+    th = np.asarray(theta, float)
+    phi = float(np.linalg.norm(th))
+    k = _skew(th)
+    if phi < 1e-12:
+        return np.eye(3) + k + 0.5 * k @ k
+    return np.eye(3) + np.sin(phi) / phi * k + (1 - np.cos(phi)) / phi ** 2 * k @ k
+
+
+def _tangent(theta) -> np.ndarray:
+    """T(theta): spatial angular velocity = T theta_dot for R = exp([theta]x) R0."""
+    th = np.asarray(theta, float)
+    phi = float(np.linalg.norm(th))
+    k = _skew(th)
+    if phi < 1e-6:
+        return np.eye(3) + 0.5 * k + k @ k / 6.0
+    return np.eye(3) + (1 - np.cos(phi)) / phi ** 2 * k + (phi - np.sin(phi)) / phi ** 3 * k @ k
+
+
+@dataclass
+class Assembly:
+    """Blocks at a static configuration.
+
+    vertices: per block, world vertices (n, 3) m; moving: per block bool; density kg/m^3,
+    kn, kt N/m^3 per block (pairs combine in series, ``drystone.contact.combine``);
+    blocked: per block a string of blocked DOF letters (x y z X Y Z; "" for none); ids:
+    block ids for the tables; gravity: m/s^2 vector."""
+    vertices: list
+    moving: np.ndarray
+    density: np.ndarray
+    kn: np.ndarray
+    kt: np.ndarray
+    blocked: list = field(default_factory=list)
+    ids: list = field(default_factory=list)
+    gravity: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, -G]))
+
+    def __post_init__(self):
+        nb = len(self.vertices)
+        self.moving = np.asarray(self.moving, bool)
+        self.density = np.broadcast_to(np.asarray(self.density, float), (nb,)).copy()
+        self.kn = np.broadcast_to(np.asarray(self.kn, float), (nb,)).copy()
+        self.kt = np.broadcast_to(np.asarray(self.kt, float), (nb,)).copy()
+        self.blocked = list(self.blocked) or [""] * nb
+        self.ids = list(self.ids) or list(range(nb))
+        self.gravity = np.asarray(self.gravity, float)
+        if not (len(self.moving) == len(self.blocked) == len(self.ids) == nb):
+            raise ValueError("vertices, moving, blocked and ids must have one entry per block")
+        for b in self.blocked:
+            if set(b) - set(_LETTERS):
+                raise ValueError(f"blocked DOFs {b!r}: letters must be among {_LETTERS}")
+        props = [mass_properties(v, rho) for v, rho in zip(self.vertices, self.density)]
+        self.mass = np.array([p[0] for p in props])
+        self.pos0 = np.array([p[1] for p in props])
+        self.inertia = np.array([p[2] for p in props])
+        self.size = np.array([float(np.ptp(np.asarray(v), axis=0).max()) for v in self.vertices])
+        self.shapes = overlap.Shapes([np.asarray(v, float) - c for v, c in zip(self.vertices, self.pos0)])
+        # the DOFs: (block index, component 0-5) of the moving blocks, blocked ones left out
+        self.dofs = [(b, c) for b in np.flatnonzero(self.moving) for c in range(6)
+                     if _LETTERS[c] not in self.blocked[b]]
+        self._index = {d: k for k, d in enumerate(self.dofs)}
+        ref = self.contacts(np.zeros(self.ndof))
+        self.reference = {(int(i), int(j)): (c.copy(), float(a))
+                          for i, j, c, a in zip(ref["id1"], ref["id2"], ref["centroid"], ref["area"])}
+        self.reference_contacts = ref
+
+    @property
+    def ndof(self) -> int:
+        return len(self.dofs)
+
+    def _configuration(self, q) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        nb = len(self.vertices)
+        u = np.zeros((nb, 6))
+        for k, (b, c) in enumerate(self.dofs):
+            u[b, c] = q[k]
+        rot = np.array([rotation(u[b, 3:]) for b in range(nb)])
+        return self.pos0 + u[:, :3], rot, u
+
+    def contacts(self, q) -> dict:
+        """The overlaps of the configuration q (``overlap.all_contacts``' arrays)."""
+        pos, rot, _ = self._configuration(q)
+        s = self.shapes
+        out = overlap.all_contacts(s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, pos, rot,
+                                   self.moving, overlap.TOL)
+        return dict(zip(("id1", "id2", "volume", "centroid", "normal", "area"), out))
+
+    def generalised_forces(self, q) -> np.ndarray:
+        """Q(q): per DOF, force (N) or T(theta)^T moment (N m) on the block (module docstring)."""
+        pos, rot, u = self._configuration(q)
+        c = self.contacts(q)
+        nb = len(self.vertices)
+        force = np.zeros((nb, 3))
+        moment = np.zeros((nb, 3))
+        force[self.moving] += self.mass[self.moving, None] * self.gravity
+        for i, j, v, x, n in zip(c["id1"], c["id2"], c["volume"], c["centroid"], c["normal"]):
+            fb = combine(self.kn[i], self.kn[j]) * v * n
+            ref = self.reference.get((int(i), int(j)))
+            if ref is not None:
+                x0, a0 = ref
+                ub = pos[j] - self.pos0[j] + (rot[j] - np.eye(3)) @ (x0 - self.pos0[j])
+                ua = pos[i] - self.pos0[i] + (rot[i] - np.eye(3)) @ (x0 - self.pos0[i])
+                s = ub - ua
+                fb = fb - combine(self.kt[i], self.kt[j]) * a0 * (s - (s @ n) * n)
+            for b, f in ((j, fb), (i, -fb)):
+                if self.moving[b]:
+                    force[b] += f
+                    moment[b] += np.cross(x - pos[b], f)
+        out = np.empty(self.ndof)
+        for k, (b, comp) in enumerate(self.dofs):
+            out[k] = force[b, comp] if comp < 3 else (_tangent(u[b, 3:]).T @ moment[b])[comp - 3]
+        return out
+
+    def steps(self, rel_step: float = 1e-3) -> np.ndarray:
+        """Finite-difference step per DOF (m or rad): ``rel_step`` x the median overlap depth
+        V / A_c of the static contacts (translations), divided by the block's size (rotations)."""
+        rc = self.reference_contacts
+        if len(rc["volume"]) == 0:
+            raise ValueError("the static configuration has no contact: nothing holds the blocks")
+        depth = float(np.median(rc["volume"] / rc["area"]))
+        return np.array([rel_step * depth / (1.0 if c < 3 else self.size[b]) for b, c in self.dofs])
+
+    def stiffness(self, rel_step: float = 1e-3) -> np.ndarray:
+        """K = -dQ/dq (N/m, N, N m/rad) by central differences (``steps``)."""
+        h = self.steps(rel_step)
+        K = np.empty((self.ndof, self.ndof))
+        for k in range(self.ndof):
+            e = np.zeros(self.ndof)
+            e[k] = h[k]
+            K[:, k] = -(self.generalised_forces(e) - self.generalised_forces(-e)) / (2 * h[k])
+        return K
+
+    def mass_matrix(self) -> np.ndarray:
+        """Block-diagonal mass matrix over the DOFs (kg, kg m^2)."""
+        M = np.zeros((self.ndof, self.ndof))
+        for k, (b, c) in enumerate(self.dofs):
+            for l, (b2, c2) in enumerate(self.dofs):
+                if b2 != b:
+                    continue
+                if c < 3 and c2 == c:
+                    M[k, l] = self.mass[b]
+                elif c >= 3 and c2 >= 3:
+                    M[k, l] = self.inertia[b][c - 3, c2 - 3]
+        return M
+
+    def influence(self, direction) -> np.ndarray:
+        """Rigid translation of every free block along a unit direction, over the DOFs."""
+        d = np.asarray(direction, float)
+        return np.array([d[c] if c < 3 else 0.0 for _, c in self.dofs])
+
+    def point_displacement(self, shape, block_id, point) -> np.ndarray:
+        """Displacement (m per unit modal coordinate) of a point (m) of a block: u + theta x r."""
+        b = self.ids.index(block_id)
+        u = np.zeros(6)
+        for k, (bb, c) in enumerate(self.dofs):
+            if bb == b:
+                u[c] = shape[k]
+        return u[:3] + np.cross(u[3:], np.asarray(point, float) - self.pos0[b])
+
+    def modes(self, rel_step: float = 1e-3, direction=(0.0, 1.0, 0.0)) -> dict:
+        """Natural frequencies (Hz, ascending), mass-normalised mode shapes (ndof x nmodes),
+        participation factors Gamma = phi^T M r and effective-mass ratios Gamma^2 / total
+        mass for a base motion along ``direction``; the stiffness's relative asymmetry
+        |K - K^T| / |K| (Frobenius) and the static residual (largest |Q(0)| over the
+        translation DOFs divided by the block's weight). Negative eigenvalues (an unstable
+        or unrestrained configuration) give negative 'frequencies' (-sqrt|lambda|)."""
+        K = self.stiffness(rel_step)
+        M = self.mass_matrix()
+        ks = 0.5 * (K + K.T)
+        lam, phi = linalg.eigh(ks, M)
+        r = self.influence(direction)
+        gamma = phi.T @ M @ r
+        q0 = self.generalised_forces(np.zeros(self.ndof))
+        w = np.array([self.mass[b] * np.linalg.norm(self.gravity) for b, c in self.dofs])
+        tr = np.array([c < 3 for _, c in self.dofs])
+        return {"frequency_hz": np.sign(lam) * np.sqrt(np.abs(lam)) / (2 * np.pi), "shapes": phi,
+                "participation": gamma, "effective_mass_ratio": gamma ** 2 / float(self.mass[self.moving].sum()),
+                "asymmetry": float(np.linalg.norm(K - K.T) / np.linalg.norm(K)),
+                "residual": float(np.max(np.abs(q0[tr]) / w[tr])) if tr.any() else 0.0,
+                "K": K, "M": M, "dofs": [(self.ids[b], _LETTERS[c]) for b, c in self.dofs],
+                "contacts": len(self.reference)}

@@ -1,0 +1,105 @@
+"""Linearised modal analysis (drystone/modal.py) against closed forms for one block on a
+rigid base (a Winkler foundation: K_n per unit area normal, K_t tangential).
+
+Block b (x) x d (y) x H (z), mass m, on a fixed platform, sunk by the static penetration
+delta0 = m g / (K_n A) (A = b d): the exact equilibrium of the law. With h = H/2 the
+height of the centroid above the block's bottom face:
+
+* bouncing: w^2 = K_n A / m;
+* torsion about z: none. The project's law puts the tangential spring K_t A_c at one
+  point, the overlap's centroid, below the block's centroid here: a twist about z does not
+  move that point, so a single flat joint has no torsional stiffness (a zero mode);
+* sliding-rocking in x-z (DOFs u_x, theta_y about the centroid): K = [[K_t A, -K_t A h_c],
+  [-K_t A h_c, K_n I_y + K_t A h_c^2 - W h_c]], M = diag(m, J_y), with I_y = d b^3 / 12,
+  W = m g and h_c = h - delta0/2 the height of the centroid above the overlap's centroid
+  (mid-depth of the overlap), where both forces act: the lever arm of the tangential
+  spring, and the shift -h_c theta of the overlap (it moves with the block's sides) under
+  the load W: gravity's geometric stiffness -W h_c;
+* the same in y-z with b and d swapped.
+
+These are exact for the law (no small-delta0 approximation) up to the finite-difference
+truncation, O((step / delta0)^2) = 1e-6 with the default step of 1e-3 delta0, and the
+round-off of the overlap volumes (~1e-15 m on a 1e-3 m depth): the tolerance 1e-5 on
+frequencies is 10 times the truncation. The block is slender and the joint soft so that
+gravity's term is 17 % of the rocking stiffness: leaving it out fails the test by far.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import linalg
+
+from drystone import modal
+
+RHO, KN, KT = 2300.0, 2e7, 1e7
+B, D, H = 0.2, 0.3, 1.0
+
+
+def _box(x0, x1, y0, y1, z0, z1):
+    return np.array([[x, y, z] for x in (x0, x1) for y in (y0, y1) for z in (z0, z1)], float)
+
+
+def _one_block(blocked=""):
+    m = RHO * B * D * H
+    delta0 = m * modal.G / (KN * B * D)
+    platform = _box(-1, 1, -1, 1, -0.2, 0.0)
+    block = _box(-B / 2, B / 2, -D / 2, D / 2, -delta0, H - delta0)
+    return modal.Assembly([platform, block], moving=[False, True], density=RHO, kn=KN, kt=KT,
+                          blocked=["", blocked], ids=[0, 1]), m, delta0
+
+
+def _rocking_sliding(b, d, m, delta0):
+    """Closed-form frequencies (Hz) of the coupled sliding-rocking pair in the plane of b."""
+    a = b * d
+    h = H / 2
+    hc = h - delta0 / 2
+    W = m * modal.G
+    K = np.array([[KT * a, -KT * a * hc], [-KT * a * hc, KN * d * b ** 3 / 12 + KT * a * hc ** 2 - W * hc]])
+    M = np.diag([m, m * (b * b + H * H) / 12])
+    return np.sqrt(linalg.eigh(K, M, eigvals_only=True)) / (2 * np.pi)
+
+
+def test_mass_properties_of_a_box():
+    m, c, inertia = modal.mass_properties(_box(0, B, 0, D, 0, H), RHO)
+    assert m == pytest.approx(RHO * B * D * H, rel=1e-12)
+    np.testing.assert_allclose(c, [B / 2, D / 2, H / 2], rtol=1e-12)
+    np.testing.assert_allclose(inertia, np.diag([m * (D * D + H * H), m * (B * B + H * H), m * (B * B + D * D)]) / 12,
+                               rtol=1e-12, atol=1e-12 * m)
+
+
+def test_one_block_on_a_winkler_foundation():
+    asm, m, delta0 = _one_block()
+    res = asm.modes()
+    f = np.sort(res["frequency_hz"])
+    bounce = np.sqrt(KN * B * D / m) / (2 * np.pi)
+    expected = np.sort(np.concatenate([[bounce], _rocking_sliding(B, D, m, delta0), _rocking_sliding(D, B, m, delta0)]))
+    assert abs(f[0]) < 1e-3  # torsion: no stiffness (against 1.3-21 Hz)
+    np.testing.assert_allclose(f[1:], expected, rtol=1e-5)
+    assert res["residual"] < 1e-9  # the sunk block is in equilibrium
+    assert res["asymmetry"] < 1e-6
+    # gravity's geometric stiffness matters here: without it the lowest rocking mode is
+    # well off (more than 5 %)
+    assert m * modal.G * (H / 2) / (KN * D * B ** 3 / 12) > 0.15
+    # the lowest mode with stiffness is rocking-sliding in x (the narrow side): most of
+    # the mass for a base motion along x, none along y
+    rx, ry = asm.modes(direction=(1, 0, 0)), asm.modes(direction=(0, 1, 0))
+    k0 = int(np.argmin(np.where(rx["frequency_hz"] > 0.1, rx["frequency_hz"], np.inf)))
+    assert rx["effective_mass_ratio"][k0] > 0.5 and ry["effective_mass_ratio"][k0] < 1e-12
+    assert rx["effective_mass_ratio"].sum() == pytest.approx(1.0, rel=1e-9)
+
+
+def test_blocked_dofs_are_left_out():
+    """A side block of the wall ("xYZ": moves in y, z and rotates about x only) keeps 3
+    DOFs: bouncing and the y-z sliding-rocking pair."""
+    asm, m, delta0 = _one_block("xYZ")
+    assert [c for _, c in asm.modes()["dofs"]] == ["y", "z", "X"]
+    f = np.sort(asm.modes()["frequency_hz"])
+    bounce = np.sqrt(KN * B * D / m) / (2 * np.pi)
+    np.testing.assert_allclose(f, np.sort(np.r_[bounce, _rocking_sliding(D, B, m, delta0)]), rtol=1e-5)
+
+
+def test_no_contact_is_an_error():
+    far = _box(0, 1, 0, 1, 5, 6)
+    asm = modal.Assembly([_box(-1, 1, -1, 1, -0.2, 0.0), far], moving=[False, True], density=RHO, kn=KN, kt=KT)
+    with pytest.raises(ValueError, match="no contact"):
+        asm.modes()

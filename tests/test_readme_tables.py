@@ -1,0 +1,78 @@
+"""README.md's generated tables (postprocess/readme_tables.py) on synthetic results."""
+import json
+
+import pytest
+
+from drystone import paths
+from postprocess import readme_tables as rt
+from postprocess import tilt
+from test_tilt_report import fake_run
+
+README = """intro
+<!-- begin:tilt -->
+old hand-copied numbers 14.78
+<!-- end:tilt -->
+middle
+<!-- begin:sacsayhuaman_table3 -->
+placeholder: run make sacsayhuaman
+<!-- end:sacsayhuaman_table3 -->
+end
+"""
+
+
+def _tilt_results(results):
+    seeds, ext = results / "tilt_seeds", results / "tilt_seeds_extruded"
+    for k, (a, ra, b, rb) in enumerate([(14.0, 14.6, 15.0, 15.3), (13.5, 14.1, 14.9, 15.1)]):
+        fake_run(seeds, f"seed_{k}", k, a, drop=ra)
+        fake_run(ext, f"seed_{k}", k, b, drop=rb)
+    tilt.build(seeds, results / "r", results / "n", results / "tilt", figures=False, extruded=ext)
+
+
+def test_blocks_replaced_from_reports_missing_ones_left_and_said(tmp_path):
+    _tilt_results(tmp_path)
+    new, done, skipped = rt.update(README, tmp_path)
+    assert done == ["tilt"] and len(skipped) == 1 and "sacsayhuaman_table3" in skipped[0]
+    assert "14.78" not in new and "placeholder: run make sacsayhuaman" in new
+    assert "15.30, 15.10: mean 15.20" in new and "results/tilt/summary.json" in new
+    assert new.startswith("intro\n<!-- begin:tilt -->\n|") and new.endswith("<!-- end:sacsayhuaman_table3 -->\nend\n")
+    again, _, _ = rt.update(new, tmp_path)
+    assert again == new  # idempotent
+
+
+def test_table_taken_from_a_report_heading(tmp_path):
+    (tmp_path / "sacsayhuaman").mkdir()
+    (tmp_path / "sacsayhuaman" / "report.md").write_text(
+        "# S\n\n## Sines\n\n| a |\n|---|\n| 1 |\n\n## Earthquake records: Table 3 (§5.4)\n\ntext\n\n"
+        "| record | pga |\n|---|---|\n| paruro | 0.2 |\n\nafter\n| x |\n")
+    new, done, _ = rt.update(README, tmp_path)
+    assert done == ["sacsayhuaman_table3"]
+    assert "| record | pga |\n|---|---|\n| paruro | 0.2 |\n\n_Generated" in new and "| x |" not in new
+
+
+def test_unknown_or_unclosed_blocks_are_errors(tmp_path):
+    with pytest.raises(ValueError, match="unknown"):
+        rt.update("<!-- begin:nope -->\nx\n<!-- end:nope -->\n", tmp_path)
+    with pytest.raises(ValueError, match="without"):
+        rt.update("<!-- begin:tilt -->\nx\n", tmp_path)
+
+
+def test_cli_check_and_write(tmp_path, capsys):
+    _tilt_results(tmp_path)
+    readme = tmp_path / "README.md"
+    readme.write_text(README)
+    assert rt.main([str(readme), "--results", str(tmp_path), "--check"]) == 1
+    assert readme.read_text() == README
+    assert rt.main([str(readme), "--results", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "tilt: generated" in out and "skipped sacsayhuaman_table3" in out
+    assert rt.main([str(readme), "--results", str(tmp_path), "--check"]) == 0
+
+
+def test_repository_readme_blocks_are_known_and_closed():
+    """The README's marked blocks all have a generator and an end marker; every result
+    table named in the issue is one of them."""
+    text = (paths.ROOT / "README.md").read_text()
+    names = rt.BEGIN.findall(text)
+    assert {"verification", "tilt", "ogawa"} <= set(names)
+    assert set(names) <= set(rt.BLOCKS)
+    assert [m.group(2) for m in rt.MARK.finditer(text)] == names
