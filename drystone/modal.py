@@ -17,6 +17,14 @@ X Y Z rotations) are left out. The generalised forces Q(q) are those of the proj
   tangential force: the static configuration's shear forces are not recorded);
 * gravity: m g at each centroid.
 
+The recorded settled state is not an equilibrium of this model: the tangential forces
+the joints stored while settling are not recorded, so the springs start unloaded there and
+inclined joints are out of balance (up to ~40 % of a stone's weight on the Sacsayhuaman
+wall). ``equilibrium`` therefore first finds the nearby static configuration q* with
+Q(q*) = 0 by Newton's method on K (the tangential springs anchored at the settled state
+carry the shear that balances the joints, as the stored forces would), and the modes are
+those of K(q*).
+
 K = -dQ/dq by central differences (``stiffness``): steps of ``rel_step`` times the median
 overlap depth V / A_c for translations and that divided by the block's size for
 rotations, so that no overlap changes topology within a step and the truncation error,
@@ -192,15 +200,47 @@ class Assembly:
         depth = float(np.median(rc["volume"] / rc["area"]))
         return np.array([rel_step * depth / (1.0 if c < 3 else self.size[b]) for b, c in self.dofs])
 
-    def stiffness(self, rel_step: float = 1e-3) -> np.ndarray:
-        """K = -dQ/dq (N/m, N, N m/rad) by central differences (``steps``)."""
+    def stiffness(self, rel_step: float = 1e-3, at=None) -> np.ndarray:
+        """K = -dQ/dq (N/m, N, N m/rad) by central differences (``steps``) at the
+        configuration ``at`` (default the static one, q = 0)."""
         h = self.steps(rel_step)
+        q0 = np.zeros(self.ndof) if at is None else np.asarray(at, float)
         K = np.empty((self.ndof, self.ndof))
         for k in range(self.ndof):
             e = np.zeros(self.ndof)
             e[k] = h[k]
-            K[:, k] = -(self.generalised_forces(e) - self.generalised_forces(-e)) / (2 * h[k])
+            K[:, k] = -(self.generalised_forces(q0 + e) - self.generalised_forces(q0 - e)) / (2 * h[k])
         return K
+
+    def residual(self, q) -> float:
+        """Largest out-of-balance force of the configuration q over the translation DOFs,
+        divided by the block's weight (-)."""
+        Q = self.generalised_forces(q)
+        g = float(np.linalg.norm(self.gravity))
+        return max((abs(Q[k]) / (self.mass[b] * g) for k, (b, c) in enumerate(self.dofs) if c < 3), default=0.0)
+
+    def equilibrium(self, tol: float = 1e-6, max_iter: int = 30, rel_step: float = 1e-3) -> tuple[np.ndarray, list]:
+        """The static configuration q* near q = 0 with Q(q*) = 0 (module docstring), by
+        Newton's method with step halving on the residual; returns (q*, the residual of
+        each iterate). Stops when the residual (``residual``) is below ``tol``."""
+        q = np.zeros(self.ndof)
+        hist = [self.residual(q)]
+        for _ in range(max_iter):
+            if hist[-1] < tol:
+                break
+            K = self.stiffness(rel_step, at=q)
+            dq = np.linalg.lstsq(K, self.generalised_forces(q), rcond=None)[0]
+            step = 1.0
+            while step > 1e-3:
+                r = self.residual(q + step * dq)
+                if r < hist[-1]:
+                    break
+                step *= 0.5
+            else:
+                break  # no descent: leave it to the caller's report
+            q = q + step * dq
+            hist.append(r)
+        return q, hist
 
     def mass_matrix(self) -> np.ndarray:
         """Block-diagonal mass matrix over the DOFs (kg, kg m^2)."""
@@ -229,14 +269,16 @@ class Assembly:
                 u[c] = shape[k]
         return u[:3] + np.cross(u[3:], np.asarray(point, float) - self.pos0[b])
 
-    def modes(self, rel_step: float = 1e-3, direction=(0.0, 1.0, 0.0)) -> dict:
+    def modes(self, rel_step: float = 1e-3, direction=(0.0, 1.0, 0.0), equilibrate: bool = True) -> dict:
         """Natural frequencies (Hz, ascending), mass-normalised mode shapes (ndof x nmodes),
         participation factors Gamma = phi^T M r and effective-mass ratios Gamma^2 / total
         mass for a base motion along ``direction``; the stiffness's relative asymmetry
         |K - K^T| / |K| (Frobenius) and the static residual (largest |Q(0)| over the
-        translation DOFs divided by the block's weight). Negative eigenvalues (an unstable
-        or unrestrained configuration) give negative 'frequencies' (-sqrt|lambda|)."""
-        K = self.stiffness(rel_step)
+        translation DOFs divided by the block's weight) before and after ``equilibrium``
+        (with ``equilibrate``, the modes are those at q*). Negative eigenvalues (an
+        unstable or unrestrained configuration) give negative 'frequencies' (-sqrt|lambda|)."""
+        q_star, hist = self.equilibrium(rel_step=rel_step) if equilibrate else (np.zeros(self.ndof), [])
+        K = self.stiffness(rel_step, at=q_star)
         M = self.mass_matrix()
         ks = 0.5 * (K + K.T)
         lam, phi = linalg.eigh(ks, M)
@@ -245,9 +287,12 @@ class Assembly:
         q0 = self.generalised_forces(np.zeros(self.ndof))
         w = np.array([self.mass[b] * np.linalg.norm(self.gravity) for b, c in self.dofs])
         tr = np.array([c < 3 for _, c in self.dofs])
+        tr_q = np.array([abs(v) for (b, c), v in zip(self.dofs, q_star) if c < 3])
         return {"frequency_hz": np.sign(lam) * np.sqrt(np.abs(lam)) / (2 * np.pi), "shapes": phi,
                 "participation": gamma, "effective_mass_ratio": gamma ** 2 / float(self.mass[self.moving].sum()),
                 "asymmetry": float(np.linalg.norm(K - K.T) / np.linalg.norm(K)),
                 "residual": float(np.max(np.abs(q0[tr]) / w[tr])) if tr.any() else 0.0,
+                "residual_at_equilibrium": hist[-1] if hist else None, "equilibrium_iterations": len(hist) - 1,
+                "equilibrium_max_translation_m": float(tr_q.max()) if len(tr_q) else 0.0,
                 "K": K, "M": M, "dofs": [(self.ids[b], _LETTERS[c]) for b, c in self.dofs],
                 "contacts": len(self.reference)}

@@ -23,7 +23,11 @@ content is then whatever an earlier run generated, or the placeholder telling wh
   at which the end blocks start to overturn (results/ogawa/summary.json; ``make ogawa``,
   ``make ogawa3d``);
 * ``sacsayhuaman_table3``: the first table under the "Table 3" heading of
-  results/sacsayhuaman/report.md (``make sacsayhuaman``).
+  results/sacsayhuaman/report.md (``make sacsayhuaman``);
+* ``free_decay``: damping ratio per mode of one block, both contact geometries
+  (results/free_decay/report.md; ``make free-decay``);
+* ``identification``: the table of the paper's peaks as FFT bins and the transfer-function
+  peaks (results/sacsayhuaman/identification.md; ``python -m sacsayhuaman identify``).
 
 An unknown block name in README.md is an error (exit 2), so is a begin without its end.
 ``--check`` writes nothing and exits 1 when README.md would change.
@@ -146,8 +150,23 @@ def sacsayhuaman_table3(results: Path) -> str:
     return first_table_after(p, "Table 3") + "\n\n" + _source_note(p, results=results)
 
 
+def free_decay(results: Path) -> str:
+    p = results / "free_decay" / "report.md"
+    return first_table_after(p, "Free decay") + "\n\n" + _source_note(p, results=results)
+
+
+def identification(results: Path) -> str:
+    p = results / "sacsayhuaman" / "identification.md"
+    out = [first_table_after(p, "FFT bins")]
+    try:
+        out.append(first_table_after(p, "(b) Transfer functions"))
+    except Missing:
+        pass
+    return "\n\n".join(out) + "\n\n" + _source_note(p, results=results)
+
+
 BLOCKS = {"verification": verification, "tilt": tilt, "tilt_checks": tilt_checks, "ogawa": ogawa,
-          "sacsayhuaman_table3": sacsayhuaman_table3}
+          "sacsayhuaman_table3": sacsayhuaman_table3, "free_decay": free_decay, "identification": identification}
 
 
 def update(text: str, results: Path, blocks: dict | None = None) -> tuple[str, list[str], list[str]]:

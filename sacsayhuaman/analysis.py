@@ -311,6 +311,8 @@ def modal_analysis(out: Path, n_modes: int = 12) -> dict:
                       "effective_mass_x": float(gamma_x[k] ** 2 / total), "control_points_y": cp_y,
                       "blocks_y": blocks_y})
     return {"modes": modes, "ndof": asm.ndof, "contacts": res_y["contacts"], "asymmetry": res_y["asymmetry"],
-            "residual": res_y["residual"], "sample_time_s": asm.sample_time_s,
+            "residual": res_y["residual"], "residual_at_equilibrium": res_y["residual_at_equilibrium"],
+            "equilibrium_iterations": res_y["equilibrium_iterations"],
+            "equilibrium_max_translation_m": res_y["equilibrium_max_translation_m"], "sample_time_s": asm.sample_time_s,
             "cumulative_effective_mass_y": float(sum(m["effective_mass_y"] for m in modes)),
             "negative_modes": int((res_y["frequency_hz"] < 0).sum())}

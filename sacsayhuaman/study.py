@@ -180,9 +180,13 @@ def identification_report(out: Path = OUT) -> Path:
               "", "## (c) Linearised modes on the joint springs", "",
               f"drystone/modal.py at the settled state (t = {modal['sample_time_s']:.2f} s of {st['modal_run'].name}): "
               f"{modal['ndof']} DOFs, {modal['contacts']} contacts, K_n V normal + K_t A_c tangential springs, gravity's "
-              f"geometric stiffness included; stiffness asymmetry {modal['asymmetry']:.1e}, static residual "
+              f"geometric stiffness included. The recorded settled state is out of balance by up to "
               f"{modal['residual']:.1e} of a block's weight (the tangential forces stored during settling are not "
-              f"recorded), {modal['negative_modes']} negative eigenvalues.", "",
+              f"recorded); the modes are taken at the static equilibrium next to it (Newton, "
+              f"{modal['equilibrium_iterations']} iterations, stones moved by at most "
+              f"{1e3 * modal['equilibrium_max_translation_m']:.3f} mm, residual "
+              f"{modal['residual_at_equilibrium']:.1e}); stiffness asymmetry {modal['asymmetry']:.1e}, "
+              f"{modal['negative_modes']} negative eigenvalues.", "",
               "| mode | f (Hz) | effective mass y | effective mass x | y of A, B, C, D (normalised) |",
               "|---|---|---|---|---|"]
     for i, m in enumerate(modal["modes"], 1):

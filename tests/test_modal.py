@@ -103,3 +103,24 @@ def test_no_contact_is_an_error():
     asm = modal.Assembly([_box(-1, 1, -1, 1, -0.2, 0.0), far], moving=[False, True], density=RHO, kn=KN, kt=KT)
     with pytest.raises(ValueError, match="no contact"):
         asm.modes()
+
+
+def test_equilibrium_carries_the_shear_a_settled_state_stored():
+    """Gravity tilted by 2 deg along x: at the as-built state the unloaded tangential
+    spring leaves W sin(2 deg) out of balance (the situation of a recorded settled state,
+    whose stored shear is not recorded). ``equilibrium`` finds the state where the spring
+    carries it: the residual falls below 1e-6 W, and the block's material point at the
+    contact (h_c below the centroid) has slid by W sin a / (K_t A) (0.1 %: the spring is
+    linear, the normal stays vertical), while the block leans (the joint stays closed:
+    the lean lifts the edge by less than the static penetration)."""
+    asm, m, delta0 = _one_block()
+    a = np.radians(2.0)
+    asm.gravity = modal.G * np.array([np.sin(a), 0.0, -np.cos(a)])
+    assert asm.residual(np.zeros(asm.ndof)) == pytest.approx(np.sin(a), rel=1e-3)
+    q, hist = asm.equilibrium()
+    assert hist[-1] < 1e-6
+    ux = q[[k for k, (b, c) in enumerate(asm.dofs) if c == 0][0]]
+    ty = q[[k for k, (b, c) in enumerate(asm.dofs) if c == 4][0]]
+    hc = H / 2 - delta0 / 2
+    assert ux - ty * hc == pytest.approx(m * modal.G * np.sin(a) / (KT * B * D), rel=1e-3)
+    assert 0 < ty * B / 2 < delta0
