@@ -80,6 +80,7 @@ def ring(outdir: Path, detection: str, xi: float, kind: str) -> dict:
     from postprocess import summary as summ
 
     out = Path(outdir) / kind
+    Path(outdir).mkdir(parents=True, exist_ok=True)
     c = case(detection, xi, kind)
     runner.run_dict(c, Path(outdir) / f"{kind}.toml", out_dir=out, quiet=True)
     h = summ.load_histories(out)
