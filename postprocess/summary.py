@@ -199,6 +199,7 @@ def build(spec: dict, out: Path) -> dict:
     # a last rest stage run until the kinetic energy settled: threshold, reached or not (None:
     # no such stage); velocity jumps of sines started as Eq. 9's displacement
     s["run"].update(settle=info.get("settle"), velocity_jumps=info.get("velocity_jumps", []))
+    s["run"]["contact_stability"] = contact_stability(spec, info)
     if any(st["kind"] == "tilt" for st in spec["stages"]):
         s["collapse"] = tilt_collapse(spec, h, info.get("collapse"))
         s["collapse_angle_deg"] = s["collapse"]["angle_deg"] if s["collapse"] else None
@@ -211,6 +212,21 @@ def build(spec: dict, out: Path) -> dict:
     rv = h["reaction"][-1]
     s["final_reaction_N"] = rv.tolist()
     return s
+
+
+def contact_stability(spec: dict, info: dict) -> dict | None:
+    """The largest omega dt any contact mode reached in the run (run_info's
+    ``max_contact_omega_dt``, omega the contact's highest modal frequency from the damping
+    kernel, drystone/contact.py) against the central-difference limit 2 (sqrt(1 + xi^2) - xi)
+    for the largest damping xi of the run's materials: a check of the automatic step, which
+    is estimated from block masses before the run (drystone/timestep.py). None for runs
+    without it (older runs, the stock law)."""
+    w = info.get("max_contact_omega_dt")
+    if w is None or not spec.get("materials"):
+        return None
+    xi = max(float(m.get("damping", 0.0)) for m in spec["materials"].values())
+    limit = 2.0 * (np.sqrt(1.0 + xi * xi) - xi)
+    return {"max_omega_dt": float(w), "limit": float(limit), "within": bool(w < limit)}
 
 
 def vertical_reaction(spec: dict, h: dict) -> np.ndarray:

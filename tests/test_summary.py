@@ -50,3 +50,14 @@ def test_block_faces_of_a_box():
     from postprocess import snapshots
     faces = snapshots.block_faces(np.asarray(bf.box_vertices((0, 0, 0), (1, 2, 3)), float))
     assert len(faces) == 6 and all(len(f) == 4 for f in faces)
+
+
+def test_contact_stability_against_the_central_difference_limit():
+    """omega dt of the fastest contact mode against 2 (sqrt(1 + xi^2) - xi), xi the largest
+    damping of the run's materials (0.8: limit 0.961)."""
+    from postprocess.summary import contact_stability
+    spec = {"materials": {"a": {"damping": 0.08}, "b": {"damping": 0.8}}}
+    c = contact_stability(spec, {"max_contact_omega_dt": 0.33})
+    assert c["limit"] == pytest.approx(2 * (np.sqrt(1.64) - 0.8)) and c["within"]
+    assert not contact_stability(spec, {"max_contact_omega_dt": 1.2})["within"]
+    assert contact_stability(spec, {}) is None
