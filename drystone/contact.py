@@ -323,8 +323,18 @@ def _jacobi_sqrt(B, out):
 
 
 @njit(cache=True)
-def _add_body(W, r, im, ii):
-    """W += G^T diag(im, ii) G for one body (see ``mobility``)."""
+def _cross3(a, b):
+    """a x b of two 3-vectors."""
+    out = np.empty(3)
+    out[0] = a[1] * b[2] - a[2] * b[1]
+    out[1] = a[2] * b[0] - a[0] * b[2]
+    out[2] = a[0] * b[1] - a[1] * b[0]
+    return out
+
+
+@njit(cache=True)
+def _skew3(r):
+    """[r]x of one 3-vector (``skew`` for one row)."""
     S = np.zeros((3, 3))
     S[0, 1] = -r[2]
     S[0, 2] = r[1]
@@ -332,6 +342,13 @@ def _add_body(W, r, im, ii):
     S[1, 2] = -r[0]
     S[2, 0] = -r[1]
     S[2, 1] = r[0]
+    return S
+
+
+@njit(cache=True)
+def _add_body(W, r, im, ii):
+    """W += G^T diag(im, ii) G for one body (see ``mobility``)."""
+    S = _skew3(r)
     IS = ii @ S
     SIS = S @ IS
     SI = S @ ii
@@ -372,13 +389,7 @@ def damping_wrenches(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, 
         K[:, :] = 0.0
         nc = n[c]
         kta = kt[c] * parea[c] if sticking[c] else 0.0
-        S = np.zeros((3, 3))
-        S[0, 1] = -nc[2]
-        S[0, 2] = nc[1]
-        S[1, 0] = nc[2]
-        S[1, 2] = -nc[0]
-        S[2, 0] = -nc[1]
-        S[2, 1] = nc[0]
+        S = _skew3(nc)
         Rr = S @ pj[c] @ S.T
         for a in range(3):
             for b in range(3):
@@ -446,10 +457,7 @@ def damping_wrenches(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, 
             fd[c, a] = fdn_c * nc[a] + tot[a] * sc - fs[c, a]
         N = fn_el[c] + fdn_c
         lv = lever[c]
-        mel = np.empty(3)
-        mel[0] = lv[1] * nc[2] - lv[2] * nc[1]
-        mel[1] = lv[2] * nc[0] - lv[0] * nc[2]
-        mel[2] = lv[0] * nc[1] - lv[1] * nc[0]
+        mel = _cross3(lv, nc)
         mdn = mm[0] * nc[0] + mm[1] * nc[1] + mm[2] * nc[2]
         mel_n = mel[0] * nc[0] + mel[1] * nc[1] + mel[2] * nc[2]
         for a in range(3):
@@ -457,14 +465,8 @@ def damping_wrenches(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, 
         mdi = np.empty(3)
         for a in range(3):
             mdi[a] = mm[a] - mdn * nc[a]
-        e0 = np.empty(3)
-        e1 = np.empty(3)
-        e0[0] = nc[1] * mel[2] - nc[2] * mel[1]
-        e0[1] = nc[2] * mel[0] - nc[0] * mel[2]
-        e0[2] = nc[0] * mel[1] - nc[1] * mel[0]
-        e1[0] = nc[1] * mdi[2] - nc[2] * mdi[1]
-        e1[1] = nc[2] * mdi[0] - nc[0] * mdi[2]
-        e1[2] = nc[0] * mdi[1] - nc[1] * mdi[0]
+        e0 = _cross3(nc, mel)
+        e1 = _cross3(nc, mdi)
         # pseudo-inverse of the patch second moment in the plane (2 x 2 in a basis t1, t2)
         t1 = np.empty(3)
         if abs(nc[0]) < 0.9:
@@ -472,10 +474,7 @@ def damping_wrenches(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, 
         else:
             t1[0], t1[1], t1[2] = nc[2], 0.0, -nc[0]
         t1 /= np.sqrt(t1[0] ** 2 + t1[1] ** 2 + t1[2] ** 2)
-        t2 = np.empty(3)
-        t2[0] = nc[1] * t1[2] - nc[2] * t1[1]
-        t2[1] = nc[2] * t1[0] - nc[0] * t1[2]
-        t2[2] = nc[0] * t1[1] - nc[1] * t1[0]
+        t2 = _cross3(nc, t1)
         Jc = pj[c]
         j11 = t1 @ Jc @ t1
         j12 = t1 @ Jc @ t2

@@ -71,6 +71,20 @@ class Shapes:
 
 
 @njit(cache=True)
+def _twice_area_vector(P, k):
+    """Twice the area vector (m^2) of the planar polygon P[:k] (counter-clockwise about it)."""
+    ax = 0.0
+    ay = 0.0
+    az = 0.0
+    for q in range(k):
+        j = q + 1 if q + 1 < k else 0
+        ax += P[q, 1] * P[j, 2] - P[q, 2] * P[j, 1]
+        ay += P[q, 2] * P[j, 0] - P[q, 0] * P[j, 2]
+        az += P[q, 0] * P[j, 1] - P[q, 1] * P[j, 0]
+    return ax, ay, az
+
+
+@njit(cache=True)
 def _clip(P, k, n0, n1, n2, d, Q):
     """Sutherland-Hodgman: keep the part of polygon P[:k] with n.x + d <= 0; into Q."""
     m = 0
@@ -159,14 +173,7 @@ def _volume(polys, counts, na, nt):
     for s in range(nt):
         k = counts[s]
         P = polys[s]
-        ax = 0.0
-        ay = 0.0
-        az = 0.0
-        for q in range(k):
-            j = q + 1 if q + 1 < k else 0
-            ax += P[q, 1] * P[j, 2] - P[q, 2] * P[j, 1]
-            ay += P[q, 2] * P[j, 0] - P[q, 0] * P[j, 2]
-            az += P[q, 0] * P[j, 1] - P[q, 1] * P[j, 0]
+        ax, ay, az = _twice_area_vector(P, k)
         if s >= na:  # a face of B inside A
             g[0] += 0.5 * ax
             g[1] += 0.5 * ay
@@ -200,14 +207,7 @@ def _patch(polys, counts, first, last, cen, g):
     for s in range(first, last):
         k = counts[s]
         P = polys[s]
-        ax = 0.0
-        ay = 0.0
-        az = 0.0
-        for q in range(k):
-            j = q + 1 if q + 1 < k else 0
-            ax += P[q, 1] * P[j, 2] - P[q, 2] * P[j, 1]
-            ay += P[q, 2] * P[j, 0] - P[q, 0] * P[j, 2]
-            az += P[q, 0] * P[j, 1] - P[q, 1] * P[j, 0]
+        ax, ay, az = _twice_area_vector(P, k)
         am = np.sqrt(ax * ax + ay * ay + az * az)
         if am <= 0.0:
             continue
