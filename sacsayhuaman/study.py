@@ -472,7 +472,8 @@ def report(out: Path = OUT) -> Path:
             lines.append(f"![0.2 g]({fig.point_a(at02, out / 'point_a_0.2g.png', 'records at 0.2 g').name})")
         recs = "; ".join(f"{r['record']}: {r['station']} {r['component']}" for r in
                          {r['record']: r for r in rows}.values())
-        lines += ["", f"Records (catalogue: user file or FEMA P695 analogue, docs/motions.md): {recs}."]
+        lines += ["", "Records (the catalogue: your file in data/records/user/ if present, else an ASSUMED FEMA P695 "
+                  f"analogue, docs/motions.md): {recs}."]
     else:
         lines.append("Not run: python -m sacsayhuaman table3")
     path = out / "report.md"
