@@ -15,6 +15,14 @@ import numpy as np  # noqa: E402
 from sacsayhuaman import analysis as an  # noqa: E402
 
 
+def _save(fig, path) -> Path:
+    """Save as PNG (120 dpi) and close."""
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return Path(path)
+
+
 def _finish(fig, ax, path, xlabel: str, ylabel: str, title: str) -> Path:
     """Labels, log grid, legend; save as PNG and close."""
     ax.set_xlabel(xlabel)
@@ -22,10 +30,7 @@ def _finish(fig, ax, path, xlabel: str, ylabel: str, title: str) -> Path:
     ax.set_title(title, fontsize=10)
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return Path(path)
+    return _save(fig, path)
 
 
 def identification(wn: dict, paper: dict, path: Path) -> Path:
@@ -130,10 +135,7 @@ def point_a(rows: list[dict], path: Path, title: str) -> Path:
     ax.set_title(f"Point A (block 35), {title} (cf. paper Figs. 27, 30, 33, 34)", fontsize=10)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, ncol=3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return Path(path)
+    return _save(fig, path)
 
 
 # --- identification done both ways (issue 11, item 3) -------------------------------------------------
@@ -172,10 +174,7 @@ def paper_fft(results: list[dict], paper: dict, path: Path, point: str = "A") ->
     ax.set_xlabel(f"frequency (Hz); minor ticks: the FFT grid k x 1000/4096 = k x {df:.6f} Hz")
     fig.suptitle("The paper's procedure (one 4.096 s FFT of an absolute displacement): peaks on its grid",
                  fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return Path(path)
+    return _save(fig, path)
 
 
 def transfer_functions(results: list[dict], modal: dict | None, path: Path, point: str = "A",
@@ -213,10 +212,7 @@ def transfer_functions(results: list[dict], modal: dict | None, path: Path, poin
     ax.legend(fontsize=7)
     ax.set_title("Transfer function base -> control point (H1, Welch averages) and coherence; circles: coherent peaks",
                  fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return Path(path)
+    return _save(fig, path)
 
 
 def mode_shapes(modal: dict, run: Path, path: Path, n: int = 6) -> Path:
