@@ -15,6 +15,15 @@ import numpy as np  # noqa: E402
 from sacsayhuaman import analysis as an  # noqa: E402
 
 
+def _frame_wall(ax) -> None:
+    """Frame a front elevation of the 8.64 x 4 m section (m), no ticks."""
+    ax.set_xlim(-0.5, 9.1)
+    ax.set_ylim(-0.5, 4.5)
+    ax.set_aspect("equal")
+    ax.set_xticks([])
+    ax.set_yticks([])
+
+
 def _save(fig, path) -> Path:
     """Save as PNG (120 dpi) and close."""
     fig.tight_layout()
@@ -105,11 +114,7 @@ def final_states(rows: list[dict], key: str, path: Path) -> Path:
             colour = "0.75" if roles[bid] == "fixed" else ("tab:red" if bid in res["collapsed"] else
                                                            cmap(norm(max(mm, 0.1))))
             ax.add_patch(Polygon(_front(v), closed=True, facecolor=colour, edgecolor="k", lw=0.4))
-        ax.set_xlim(-0.5, 9.1)
-        ax.set_ylim(-0.5, 4.5)
-        ax.set_aspect("equal")
-        ax.set_xticks([])
-        ax.set_yticks([])
+        _frame_wall(ax)
         label = f"{r.get('record', '')} {r[key]:g} g".strip()
         ax.set_title(f"{label}: max |u_y| {1e3 * res['max_out_of_plane_m']:.1f} mm"
                      + (f", {len(res['collapsed'])} collapsed" if res["collapsed"] else "")
@@ -239,11 +244,7 @@ def mode_shapes(modal: dict, run: Path, path: Path, n: int = 6) -> Path:
             val = y.get(b["id"])
             colour = "0.8" if val is None else cmap(0.5 + 0.5 * val / scale)
             ax.add_patch(Polygon(_front(v), closed=True, facecolor=colour, edgecolor="k", lw=0.4))
-        ax.set_xlim(-0.5, 9.1)
-        ax.set_ylim(-0.5, 4.5)
-        ax.set_aspect("equal")
-        ax.set_xticks([])
-        ax.set_yticks([])
+        _frame_wall(ax)
         ax.set_title(f"{m['frequency_hz']:.2f} Hz: effective mass y {m['effective_mass_y']:.1%}, "
                      f"x {m['effective_mass_x']:.1%}", fontsize=8)
     for ax in list(axes.flat)[len(modes):]:

@@ -123,6 +123,8 @@ class PenaltyCoulomb:
     def _yade_geometry(self, O, bodies_state):
         """Overlaps from YADE's interactions: (ia, ib, volume, normal, point, area)."""
         rows = self.gather(O)
+        # YADE may keep interactions between two non-moving bodies: no force, no geometry needed
+        rows = rows[self.moving[rows[:, 0].astype(int)] | self.moving[rows[:, 1].astype(int)]]
         pos, vel, angvel, rot = bodies_state
         ia = rows[:, 0].astype(int)
         ib = rows[:, 1].astype(int)
@@ -166,9 +168,6 @@ class PenaltyCoulomb:
             ia, ib, vol, n, c, area, parea, pc, pj = self._native_geometry(bodies_state)
         else:
             ia, ib, vol, n, c, area, parea, pc, pj = self._yade_geometry(O, bodies_state)
-        if not self.native:  # YADE may keep interactions between two non-moving bodies
-            keep = self.moving[ia] | self.moving[ib]
-            ia, ib, vol, n, c, area, parea, pc, pj = (a[keep] for a in (ia, ib, vol, n, c, area, parea, pc, pj))
         st = self.state
         if len(ia) == 0:
             st.clear()
