@@ -15,6 +15,7 @@ from pathlib import Path
 from drystone import collapse
 
 REQUIRED = object()
+MAX_TILT_DEG = 90.0  # deg: a tilt target (to_deg, max_deg) above vertical is refused
 
 
 class CaseError(ValueError):
@@ -57,7 +58,7 @@ SECTIONS: dict[str, dict[str, Key]] = {
     "time": {
         "step": Key("auto", "s", "time step, or 'auto' = safety x the critical step of the stiffest "
                     "contact; a step above the critical one is refused", (float, str)),
-        "safety": Key(0.5, "-", "safety factor applied to the critical step when step = 'auto'", float,
+        "safety": Key(0.5, "-", "safety factor in (0, 1] applied to the critical step when step = 'auto'", float,
                       positive=True),
     },
     "physics": {
@@ -114,7 +115,7 @@ STAGES: dict[str, dict[str, Key]] = {
         "amplitude": Key(0.5, "m/s^2", "sine acceleration amplitude (the paper's Eq. 9 uses 0.5)", float,
                          positive=True),
         "pga_g": Key(None, "g", "scale the motion to this peak ground acceleration", float, positive=True),
-        "record": Key(None, "-", "catalogue name or file of an acceleration record", str),
+        "record": Key(None, "-", "catalogue name, or file of an acceleration record (relative to the case file)", str),
         "seed": Key(0, "-", "white-noise seed", int),
         "start": Key("rest", "-", "how a sine starts (motion = 'sine' only): 'rest' = the acceleration "
                      "a(t) = -A sin(wt) from a base at rest (the base velocity grows from 0); 'displacement' = the "
@@ -142,15 +143,19 @@ STAGES: dict[str, dict[str, Key]] = {
 }
 
 
+def _kinds(spec: Key) -> tuple:
+    return spec.kind if isinstance(spec.kind, tuple) else (spec.kind,)
+
+
 def _check_value(where: str, key: str, spec: Key, value):
-    if isinstance(value, bool) and spec.kind is not bool:
-        raise CaseError(f"{where}: '{key}' must be {spec.kind}, got {value!r}")
-    kinds = spec.kind if isinstance(spec.kind, tuple) else (spec.kind,)
+    kinds = _kinds(spec)
+    names = "/".join(k.__name__ for k in kinds)
+    if isinstance(value, bool) and bool not in kinds:  # bool is an int subclass: true is not 1
+        raise CaseError(f"{where}: '{key}' must be of type {names}, got {value!r} (bool)")
     if float in kinds and isinstance(value, int) and not isinstance(value, bool):
         value = float(value)
     if not isinstance(value, kinds):
-        names = "/".join(k.__name__ for k in kinds)
-        raise CaseError(f"{where}: '{key}' must be of type {names}, got {value!r}")
+        raise CaseError(f"{where}: '{key}' must be of type {names}, got {value!r} ({type(value).__name__})")
     if spec.choices and value not in spec.choices:
         raise CaseError(f"{where}: '{key}' must be one of {list(spec.choices)}, got {value!r}")
     if isinstance(value, float):
@@ -164,6 +169,8 @@ def _check_value(where: str, key: str, spec: Key, value):
 
 
 def _fill(where: str, table: dict, keys: dict[str, Key]) -> dict:
+    if not isinstance(table, dict):
+        raise CaseError(f"{where}: must be a table of keys ({sorted(keys)}), got {table!r}")
     unknown = sorted(set(table) - set(keys))
     if unknown:
         raise CaseError(f"{where}: unknown key(s) {unknown}; allowed: {sorted(keys)}")
@@ -197,25 +204,64 @@ def _parse_value(text: str):
         return text  # a bare string
 
 
+def _index(node: list, part: str, dotted: str, bad) -> int:
+    """Index of ``part`` in the list at ``dotted`` (stages, forces: counted from 0)."""
+    n = len(node)
+    span = f"{dotted}.0 .. {dotted}.{n - 1}" if n else "none"
+    if not (part.isascii() and part.isdigit()):
+        raise bad(f"{dotted} are addressed by index from 0 ({span}; {dotted}.0 is the first), not {part!r}")
+    if int(part) >= n:
+        raise bad(f"there are {n} {dotted} ({span}; {dotted}.0 is the first): no {dotted}.{part}")
+    return int(part)
+
+
+def _declared(parts: list[str]) -> Key | None:
+    """The declaration of ``section.key``, if ``parts`` names one."""
+    return SECTIONS.get(parts[0], {}).get(parts[1]) if len(parts) == 2 else None
+
+
 def apply_overrides(data: dict, overrides: list[str], where: str) -> dict:
-    """Apply ``key.path=value`` overrides (values in TOML syntax, bare words as strings)."""
+    """Apply ``key.path=value`` overrides (values in TOML syntax, bare words as strings).
+    Arrays of tables are addressed by index from 0: ``stages.1.duration`` is the second
+    stage's. A path into a scalar, past the end of an array, or replacing a table by a
+    scalar raises CaseError naming the override."""
     data = copy.deepcopy(data)
     for item in overrides:
         if "=" not in item:
             raise CaseError(f"{where}: override {item!r} is not of the form key=value")
         path, text = item.split("=", 1)
-        parts = path.strip().split(".")
+        parts = [q.strip() for q in path.split(".")]
+
+        def bad(why, item=item):
+            return CaseError(f"{where}: override {item!r}: {why}")
+
+        if not all(parts):
+            raise bad("empty key (expected a dotted path such as time.step or stages.1.duration)")
+        value = _parse_value(text.strip())
         node = data
-        for p in parts[:-1]:
-            if p.isdigit() and isinstance(node, list):
-                node = node[int(p)]
+        for depth, part in enumerate(parts):
+            dotted = ".".join(parts[:depth])
+            key = _index(node, part, dotted, bad) if isinstance(node, list) else part
+            here = ".".join(parts[:depth + 1])
+            spec = _declared(parts[:depth + 1])
+            if depth == len(parts) - 1:  # the key to set
+                old = node[key] if isinstance(node, list) else node.get(key)
+                allowed = spec is not None and isinstance(value, _kinds(spec))
+                if depth == 0 and not isinstance(value, (dict, list)):
+                    raise bad(f"{here} is a section: set its keys ({here}.KEY=value), not {value!r}")
+                if isinstance(old, (dict, list)) and not isinstance(value, type(old)) and not allowed:
+                    what = "a table" if isinstance(old, dict) else "an array"
+                    raise bad(f"{here} is {what}: set its keys ({here}.KEY=value), not {value!r}")
+                node[key] = value
+            elif isinstance(node, dict) and key not in node:
+                if spec is not None and dict not in _kinds(spec):
+                    raise bad(f"{here} is a {'/'.join(k.__name__ for k in _kinds(spec))}, not a table: "
+                              f"it has no key {parts[depth + 1]!r}")
+                node = node.setdefault(key, {})
+            elif isinstance(node[key], (dict, list)):
+                node = node[key]
             else:
-                node = node.setdefault(p, {})
-        last = parts[-1]
-        if isinstance(node, list):
-            node[int(last)] = _parse_value(text.strip())
-        else:
-            node[last] = _parse_value(text.strip())
+                raise bad(f"{here} is {node[key]!r}, not a table: it has no key {parts[depth + 1]!r}")
     return data
 
 
@@ -241,6 +287,10 @@ def validate(raw: dict, where: str, base_dir: Path, stem: str = "case") -> dict:
     case = {name: _fill(f"{where} [{name}]", raw.get(name, {}), keys) for name, keys in SECTIONS.items()}
     if case["case"]["name"] is None:
         case["case"]["name"] = stem
+    _check_name(where, case["case"]["name"])
+    if case["time"]["safety"] > 1:
+        raise CaseError(f"{where}: [time] 'safety' must be in (0, 1] (the step is safety x the critical step; "
+                        f"above 1 the integration is unstable), got {case['time']['safety']!r}")
     geo = case["case"]["geometry"]
     if isinstance(geo, str):
         gp = (base_dir / geo) if not Path(geo).is_absolute() else Path(geo)
@@ -262,23 +312,31 @@ def validate(raw: dict, where: str, base_dir: Path, stem: str = "case") -> dict:
     if isinstance(cd, str) and cd != "auto" or isinstance(cd, float) and cd <= 0:
         raise CaseError(f"{where}: [output] 'collapse_displacement' must be > 0 (m) or 'auto', got {cd!r}")
     for k, c in enumerate(case["output"]["contacts"]):
-        if not isinstance(c, dict) or set(c) != {"name", "blocks"} or len(c["blocks"]) != 2:
-            raise CaseError(f"{where}: [output] contacts[{k}] must be {{name = '...', blocks = [a, b]}}")
+        if not (isinstance(c, dict) and set(c) == {"name", "blocks"} and isinstance(c["name"], str)
+                and isinstance(c["blocks"], list) and len(c["blocks"]) == 2 and all(map(_is_int, c["blocks"]))):
+            raise CaseError(f"{where}: [output] contacts[{k}] must be {{name = '...', blocks = [a, b]}} with "
+                            f"integer block ids, got {c!r}")
     mats = raw.get("materials", {})
+    if not isinstance(mats, dict):
+        raise CaseError(f"{where}: [materials] must be tables [materials.NAME], got {mats!r}")
     case["materials"] = {}
     for name, table in mats.items():
         filled = _fill(f"{where} [materials.{name}]", table, MATERIAL_OVERRIDE)
         case["materials"][name] = {k: v for k, v in filled.items() if v is not None}
     case["forces"] = []
+    if not isinstance(raw.get("forces", []), list):
+        raise CaseError(f"{where}: 'forces' must be an array of tables [[forces]], got {raw['forces']!r}")
     for k, f in enumerate(raw.get("forces", [])):
         w = f"{where} [[forces]] #{k + 1}"
         if not isinstance(f, dict):
             raise CaseError(f"{w}: must be a table")
         filled = _fill(w, f, FORCE)
         vec = filled["force"]
-        if len(vec) != 3 or not all(isinstance(x, (int, float)) and math.isfinite(x) for x in vec):
-            raise CaseError(f"{w}: 'force' must be three finite numbers (N)")
+        if len(vec) != 3 or not all(_is_number(x) and math.isfinite(x) for x in vec):
+            raise CaseError(f"{w}: 'force' must be three finite numbers (N), got {vec!r}")
         filled["force"] = [float(x) for x in vec]
+        if filled["end"] is not None and filled["end"] <= filled["start"]:
+            raise CaseError(f"{w}: 'end' ({filled['end']} s) must be after 'start' ({filled['start']} s)")
         case["forces"].append(filled)
     stages = raw.get("stages", [])
     if not isinstance(stages, list) or not stages:
@@ -295,6 +353,8 @@ def validate(raw: dict, where: str, base_dir: Path, stem: str = "case") -> dict:
         filled = _fill(w, body, STAGES[kind])
         filled["type"] = kind
         _check_stage(w, filled)
+        if kind == "excitation" and filled["motion"] == "record":
+            filled["record"] = _record(w, filled["record"], base_dir)
         if kind == "rest" and k != len(stages) - 1 and (filled["until_kinetic_below"] is not None
                                                         or filled["until_kinetic_below_per_weight"] is not None):
             raise CaseError(f"{w}: 'until_kinetic_below(_per_weight)' ends the run early: only the last stage may "
@@ -308,6 +368,37 @@ def validate(raw: dict, where: str, base_dir: Path, stem: str = "case") -> dict:
     return case
 
 
+def _is_int(x) -> bool:
+    return isinstance(x, int) and not isinstance(x, bool)
+
+
+def _is_number(x) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool)
+
+
+def _check_name(where: str, name: str):
+    """Results go to results/<name>/: the name must stay inside results/ (a relative path of
+    plain folder names; sweeps use <sweep>/<run>)."""
+    parts = name.split("/")
+    if not name.strip() or "\\" in name or any(q.strip() in ("", ".", "..") for q in parts):
+        raise CaseError(f"{where}: [case] 'name' = {name!r}: results go to results/<name>/, so the name must be "
+                        "a relative folder name (not empty or absolute, no '\\', no empty, '.' or '..' parts)")
+
+
+def _record(where: str, record: str, base_dir: Path) -> str:
+    """A catalogue name as given; a file path resolved against the case file's folder
+    (as 'geometry'), returned absolute."""
+    from motions import catalogue
+
+    if record in catalogue.names():
+        return record
+    rp = Path(record) if Path(record).is_absolute() else base_dir / record
+    if not rp.is_file():
+        raise CaseError(f"{where}: 'record' = {record!r} is neither a catalogue name ({', '.join(catalogue.names())}) "
+                        f"nor a file ({rp} not found; a path is relative to the case file's folder)")
+    return str(rp.resolve())
+
+
 def _check_stage(where: str, s: dict):
     kind = s["type"]
     if kind == "gravity" and s["ramp"] is None:
@@ -317,6 +408,10 @@ def _check_stage(where: str, s: dict):
     if kind == "tilt":
         if (s["to_deg"] is None) == (not s["until_collapse"]):
             raise CaseError(f"{where}: give either 'to_deg' or 'until_collapse = true'")
+        for key in ("to_deg", "max_deg"):
+            if s[key] is not None and s[key] > MAX_TILT_DEG:
+                raise CaseError(f"{where}: '{key}' = {s[key]:g} deg exceeds {MAX_TILT_DEG:g} deg (a platform "
+                                "tilted beyond vertical is upside down)")
     if kind == "excitation":
         m = s["motion"]
         if m == "sine" and s["frequency_hz"] is None:

@@ -3,9 +3,20 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import signal
 import sys
 
 from drystone import case as casemod
+
+
+def interrupt_on_sigterm() -> None:
+    """SIGTERM (kill, a scheduler ending a job) stops a run or sweep like Ctrl-C: YADE
+    processes are killed, finished runs recorded, exit 130 (python -m drystone)."""
+    def _interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, _interrupt)
 
 
 def main(argv=None) -> int:
@@ -55,13 +66,20 @@ def main(argv=None) -> int:
             from drystone import sweep
             backend = "dask" if a.dask else a.backend
             res = sweep.run(a.sweep, a.workers, backend, a.dask, a.threads, a.only)
-            return 1 if res["failed"] else 0
+            return 130 if res["interrupted"] else 1 if res["failed"] else 0
         elif a.cmd == "free-decay":
             from drystone import free_decay
             print(free_decay.report().read_text())
         elif a.cmd == "bench":
             from drystone import bench
             bench.main()
+    except KeyboardInterrupt:
+        print("interrupted: the results folder is unchanged", file=sys.stderr)
+        return 130
+    except BrokenPipeError:  # e.g. `drystone keys | head`: the reader left; say nothing more
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 1
     except casemod.CaseError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -32,18 +32,18 @@ class RunError(RuntimeError):
     """A run that could not be prepared or did not complete."""
 
 
-def _geometry(case: dict, where: str, out: Path) -> tuple[bf.BlockSet, dict]:
+def _geometry(case: dict, where: str, out: Path, check_overlaps: bool = True) -> tuple[bf.BlockSet, dict]:
     geo = case["case"]["geometry"]
     if isinstance(geo, str):
         data = json.loads(Path(geo).read_text()) if Path(geo).is_file() else None
-        bs = bf.load(geo)
+        bs = bf.load(geo, check_overlaps)
         source = {"file": geo, "sha256": hashlib.sha256(Path(geo).read_bytes()).hexdigest()}
     else:
         try:
             data = generators.generate(geo)
-        except KeyError as exc:
-            raise casemod.CaseError(f"{where}: [case] geometry: {exc.args[0]}") from None
-        bs = bf.parse(data, f"{where}: generated geometry {geo['generator']!r}")
+        except bf.GeometryError as exc:
+            raise casemod.CaseError(f"{where}: [case] geometry: {exc}") from None
+        bs = bf.parse(data, f"{where}: generated geometry {geo['generator']!r}", check_overlaps)
         source = {"generator": geo}
     bf.write(data, out / "geometry.json")
     return bs, source
@@ -62,6 +62,10 @@ def _materials(case: dict, bs: bf.BlockSet, where: str) -> dict:
             raise casemod.CaseError(f"{where}: [materials.{name}]: the geometry has no material {name!r} "
                                     f"(it has {sorted(mats)})")
         mats[name].update(over)
+        lo, hi = bf.DENSITY_RANGE
+        if not lo <= mats[name]["density"] <= hi:
+            raise casemod.CaseError(f"{where}: [materials.{name}] 'density' must be in [{lo:g}, {hi:g}] kg/m^3, "
+                                    f"got {mats[name]['density']:g}")
     return mats
 
 
@@ -84,6 +88,26 @@ def _excitation(s: dict, where: str, out: Path, k: int) -> tuple[np.ndarray, flo
     return acc, dt, meta
 
 
+def _check_force_depth(f: dict, k: int, bs: bf.BlockSet, mats: dict, where: str) -> None:
+    """Refuse an applied force the penalty contact cannot hold: pressed on its largest face,
+    the block would sink F / (K_n A) into its support, more than the depth at which the run
+    stops as tunnelling (drystone/stability.py)."""
+    from drystone import stability
+
+    b = bs.block(f["block"])
+    area = timestep.largest_face_area(b.vertices)
+    force = math.hypot(*f["force"])
+    depth = force / (mats[b.material]["kn"] * area)
+    # its support is not known here: the thinnest block of the geometry bounds it
+    limit = stability.TUNNEL_FRACTION * min(float(ph.extent(c.vertices).min()) for c in bs.blocks)
+    if depth > limit:
+        raise casemod.CaseError(
+            f"{where}: [[forces]] #{k + 1}: {force:.3g} N on block {f['block']} would press it {depth:.3g} m into "
+            f"its support (K_n {mats[b.material]['kn']:.3g} N/m^3 x its largest face {area:.3g} m^2), more than "
+            f"{limit:.3g} m ({stability.TUNNEL_FRACTION:g} x the thinnest block): the blocks would pass through "
+            "each other")
+
+
 def initial_relative_velocity(s: dict, meta: dict) -> list[float]:
     """Velocity (m/s, platform frame) every free block gets when an excitation stage begins.
 
@@ -104,9 +128,10 @@ def initial_relative_velocity(s: dict, meta: dict) -> list[float]:
     return [0.0 - v_b * c for c in AXES[s["direction"]]]
 
 
-def resolve(case: dict, where: str, out: Path) -> dict:
-    """Turn a validated case into the run specification YADE executes."""
-    bs, geo_source = _geometry(case, where, out)
+def resolve(case: dict, where: str, out: Path, check_overlaps: bool = True) -> dict:
+    """Turn a validated case into the run specification YADE executes (files it needs,
+    the geometry and excitation samples, are written into ``out``)."""
+    bs, geo_source = _geometry(case, where, out, check_overlaps)
     mats = _materials(case, bs, where)
     ids = set(bs.ids())
     free = set(bs.ids("free"))
@@ -114,9 +139,10 @@ def resolve(case: dict, where: str, out: Path) -> dict:
         for b in c["blocks"]:
             if b not in ids:
                 raise casemod.CaseError(f"{where}: [output] contact {c['name']!r}: no block {b} in the geometry")
-    for f in case["forces"]:
+    for k, f in enumerate(case["forces"]):
         if f["block"] not in free:
             raise casemod.CaseError(f"{where}: [[forces]] block {f['block']} is not a free block")
+        _check_force_depth(f, k, bs, mats, where)
     detection = case["contact"]["detection"]
     if detection == "native" and case["contact"]["law"] != "penalty_coulomb":
         raise casemod.CaseError(f"{where}: [contact] 'detection' = 'native' needs law = 'penalty_coulomb' "
@@ -169,6 +195,9 @@ def resolve(case: dict, where: str, out: Path) -> dict:
                       "until_collapse": s["until_collapse"], "reaction_drop": s["reaction_drop"],
                       "after_collapse": s["after_collapse"]}
         elif kind == "excitation":
+            if s["motion"] == "sine" and s["frequency_hz"] is not None and s["frequency_hz"] >= 0.5 / dt:
+                raise casemod.CaseError(f"{where}: [[stages]] #{k + 1}: 'frequency_hz' = {s['frequency_hz']:g} Hz is at "
+                                        f"or above the Nyquist frequency {0.5 / dt:g} Hz of the time step {dt:.3g} s")
             acc, sdt, meta = _excitation(s, where, out, k)
             dur = s["duration"] if s["duration"] is not None else (len(acc) - 1) * sdt
             params = {"acc_file": meta["acc_file"], "dt": sdt, "direction": AXES[s["direction"]],
@@ -184,6 +213,8 @@ def resolve(case: dict, where: str, out: Path) -> dict:
                 params = {}  # a plain rest: same fingerprint as before these keys existed
         stages.append({"kind": kind, "start": t, "end": t + dur, "params": params})
         t += dur
+
+    timestep.step_count_check(dt, t, where, crit)  # absurd step counts (slivers, kn = 1e300) refused
 
     threshold = {}
     cd = case["output"]["collapse_displacement"]
@@ -237,46 +268,122 @@ def _yade_command(spec_path: Path, threads: int) -> list[str]:
 NOISE = ("Welcome to Yade", "TCP python prompt", "XMLRPC info provider", "Running script", "Using python version")
 
 
-def run(case_path, overrides=None, out_dir=None, threads=1, quiet=False) -> dict:
-    """Validate, simulate and summarise one case; returns the summary dict."""
+class FolderLock:
+    """Exclusive lock on a results folder for the length of a run (``fcntl.flock`` on a
+    hidden file beside it, released by the kernel if the process dies). A second run into
+    the same folder is refused with RunError naming the holder's pid."""
+
+    def __init__(self, out: Path):
+        self.path = out.parent / f".{out.name}.lock"
+        self.fd = None
+
+    def __enter__(self):
+        import fcntl
+
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.read(fd, 64).decode(errors="replace").strip() or "?"
+            os.close(fd)
+            raise RunError(f"{self.path.parent / self.path.name[1:-5]}: another run (pid {holder}) is writing "
+                           f"this results folder; wait for it or use another --out") from None
+        os.ftruncate(fd, 0)
+        os.write(fd, str(os.getpid()).encode())
+        self.fd = fd
+        return self
+
+    def __exit__(self, *exc):
+        os.close(self.fd)  # releases the lock; the (empty) lock file stays, harmlessly
+
+
+def staging_folder(out: Path) -> Path:
+    """Where a run is built before it replaces ``out`` (same filesystem: an atomic rename)."""
+    return out.parent / f".{out.name}.partial"
+
+
+def _swap_in(stage: Path, out: Path) -> None:
+    """Replace ``out`` by the complete run in ``stage``; the old run is removed only after
+    the new one is in place."""
+    old = out.parent / f".{out.name}.old"
+    shutil.rmtree(old, ignore_errors=True)
+    if out.exists():
+        os.replace(out, old)
+    os.replace(stage, out)
+    shutil.rmtree(old, ignore_errors=True)
+
+
+def _simulate(spec_path: Path, threads: int, quiet: bool) -> int:
+    """Run YADE on ``spec_path`` (its log to log.txt beside it); returns YADE's exit code.
+    YADE runs in its own session, so a Ctrl-C reaches only this process, which then
+    kills YADE (no orphan) and re-raises."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(paths.ROOT), os.environ.get("PYTHONPATH", "")]),
+               PYTHONUNBUFFERED="1")
+    with open(spec_path.parent / "log.txt", "w") as log:
+        proc = subprocess.Popen(_yade_command(spec_path, threads), stdout=subprocess.PIPE,
+                                stderr=subprocess.STDOUT, text=True, env=env, cwd=paths.ROOT,
+                                start_new_session=True)
+        try:
+            for line in proc.stdout:
+                log.write(line)
+                log.flush()  # sweeps read the progress of running jobs from log.txt
+                if not quiet and not line.startswith(NOISE) and "verletDist is set to 0" not in line:
+                    print(line, end="", flush=True)
+            return proc.wait()
+        except BaseException:  # Ctrl-C, SIGTERM (sweep workers), errors: never leave YADE running
+            proc.kill()
+            proc.wait()
+            raise
+
+
+def run(case_path, overrides=None, out_dir=None, threads=1, quiet=False, check_overlaps=True) -> dict:
+    """Validate, simulate and summarise one case; returns the summary dict.
+
+    Nothing in the results folder changes until the new run is complete: the case, its
+    geometry, records and time step are checked and the run is built in a staging folder
+    beside it (``staging_folder``), then swapped in; a failed or interrupted run leaves the
+    previous results as they were (and its log in the staging folder). summary.json is
+    the last file written. The folder is locked for the run (``FolderLock``).
+    ``check_overlaps=False`` skips the geometry's pairwise overlap test (sweeps have run
+    it once for all their runs)."""
+    from postprocess import plots
     from postprocess import summary as summ  # plain Python
 
     case_path = Path(case_path)
     case = casemod.load(case_path, overrides or [])
     where = str(case_path)
     out = Path(out_dir) if out_dir else paths.RESULTS / case["case"]["name"]
-    out.mkdir(parents=True, exist_ok=True)
-    for stale in ("summary.json", "histories.npz", "run_info.json"):
-        (out / stale).unlink(missing_ok=True)
-    spec = resolve(case, where, out)
-    spec["provenance"] = provenance.collect(case_path, case, overrides or [])
-    spec_path = out / "spec.json"
-    spec_path.write_text(json.dumps(spec, indent=1))
-    if not quiet:
-        print(f"[{spec['name']}] dt = {spec['dt']:.3g} s (critical {spec['dt_critical']:.3g} s), "
-              f"{len(spec['blocks'])} blocks, {spec['stages'][-1]['end']:.2f} s simulated, law {spec['law']}",
-              flush=True)
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(paths.ROOT), os.environ.get("PYTHONPATH", "")]),
-               PYTHONUNBUFFERED="1")
-    t0 = time.time()
-    with open(out / "log.txt", "w") as log:
-        proc = subprocess.Popen(_yade_command(spec_path, threads), stdout=subprocess.PIPE,
-                                stderr=subprocess.STDOUT, text=True, env=env, cwd=paths.ROOT)
-        for line in proc.stdout:
-            log.write(line)
-            log.flush()  # sweeps read the progress of running jobs from log.txt
-            if not quiet and not line.startswith(NOISE) and "verletDist is set to 0" not in line:
-                print(line, end="", flush=True)
-        rc = proc.wait()
-    if rc != 0 or not (out / "histories.npz").is_file():
-        tail = (out / "log.txt").read_text().splitlines()[-20:]
-        raise RunError(f"{where}: YADE failed (exit {rc}); log {out / 'log.txt'}:\n" + "\n".join(tail))
-    from postprocess import plots
-
-    summary = summ.build(spec, out)
-    summary["wall_time_total_s"] = time.time() - t0
-    summ.write(summary, out)
-    figures = plots.standard(out)
+    with FolderLock(out):
+        stage = staging_folder(out)
+        shutil.rmtree(stage, ignore_errors=True)
+        stage.mkdir(parents=True)
+        t0 = time.time()
+        spec = resolve(case, where, stage, check_overlaps=check_overlaps)
+        spec["out_dir"] = str(out)  # where the run will live (YADE writes beside its spec.json)
+        spec["provenance"] = provenance.collect(case_path, case, overrides or [])
+        spec_path = stage / "spec.json"
+        spec_path.write_text(json.dumps(spec, indent=1))
+        if not quiet:
+            print(f"[{spec['name']}] dt = {spec['dt']:.3g} s (critical {spec['dt_critical']:.3g} s), "
+                  f"{len(spec['blocks'])} blocks, {spec['stages'][-1]['end']:.2f} s simulated, law {spec['law']}, "
+                  f"{spec['stages'][-1]['end'] / spec['dt']:.0f} steps", flush=True)
+        rc = _simulate(spec_path, threads, quiet)
+        if (stage / "failure.txt").is_file():  # stopped by a stability check (drystone/stability.py)
+            raise RunError(f"{where}: the simulation was stopped: {(stage / 'failure.txt').read_text().strip()}; "
+                           f"{out} is unchanged; log {stage / 'log.txt'}")
+        if rc != 0 or not (stage / "histories.npz").is_file():
+            tail = (stage / "log.txt").read_text(errors="replace").splitlines()[-20:]
+            raise RunError(f"{where}: YADE failed (exit {rc}); {out} is unchanged; log {stage / 'log.txt'}:\n"
+                           + "\n".join(tail))
+        summary = summ.build(spec, stage)
+        summary["wall_time_total_s"] = time.time() - t0
+        figures = plots.standard(stage, summary)
+        try:
+            summ.write(summary, stage)  # last: the marker of a complete run
+        except ValueError as exc:
+            raise RunError(f"{where}: {exc}; {out} is unchanged") from None
+        _swap_in(stage, out)
     if not quiet:
         print(f"[{spec['name']}] results in {out}: summary.json, histories.npz, "
               + ", ".join(f.name for f in figures), flush=True)

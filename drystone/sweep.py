@@ -140,10 +140,14 @@ def validate(jobs: list[Job]) -> dict[str, str]:
     from geometry.blockfile import GeometryError
 
     prints = {}
+    checked = set()  # geometries whose pairwise overlap test has run (once per geometry)
     with tempfile.TemporaryDirectory() as tmp:
         for j in jobs:
             try:
-                spec = runner.resolve(casemod.load(j.case, j.overrides), j.case, Path(tmp))
+                case = casemod.load(j.case, j.overrides)
+                geo = json.dumps(case["case"]["geometry"], sort_keys=True)
+                spec = runner.resolve(case, j.case, Path(tmp), check_overlaps=geo not in checked)
+                checked.add(geo)
             except (casemod.CaseError, GeometryError) as exc:
                 raise casemod.CaseError(f"run {j.name!r}: {exc}") from None
             prints[j.name] = runner.fingerprint(spec)
@@ -162,10 +166,23 @@ def finished(job: Job, fingerprint: str | None = None) -> bool:
         return False
     try:
         done = json.loads(s.read_text())["inputs"]["provenance"]["overrides"]
-        if done != job.overrides:
+        if done != job.overrides or not _histories_intact(out):
             return False
         return fingerprint is None or runner.fingerprint(json.loads((out / "spec.json").read_text())) == fingerprint
-    except (KeyError, ValueError, OSError):
+    except (KeyError, TypeError, ValueError, OSError):  # unreadable, or not the dict a run writes
+        return False
+
+
+def _histories_intact(out: Path) -> bool:
+    """histories.npz and run_info.json are there and readable (every member's CRC checked)."""
+    import zipfile
+    import zlib
+
+    try:
+        json.loads((out / "run_info.json").read_text())
+        with zipfile.ZipFile(out / "histories.npz") as z:
+            return z.testzip() is None and "t.npy" in z.namelist()
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error):
         return False
 
 
@@ -183,26 +200,37 @@ def _resummarise(job: Job, status: dict) -> None:
 
 def run_job(job: Job) -> dict:
     """Run one job (in a worker process); never raises: returns a status dict."""
+    global _IN_RUN
     from drystone import runner
 
     out = Path(job.out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "FAILED.txt").unlink(missing_ok=True)
     t0 = time.time()
+    _IN_RUN = True
     try:
-        s = runner.run(job.case, job.overrides, out_dir=out, threads=job.threads, quiet=True)
+        # the geometry's overlap test ran once for the whole sweep (validate)
+        s = runner.run(job.case, job.overrides, out_dir=out, threads=job.threads, quiet=True, check_overlaps=False)
+        (out / "FAILED.txt").unlink(missing_ok=True)  # an earlier failure of this run
         return {"name": job.name, "status": "done", "wall_s": time.time() - t0,
                 "collapse_angle_deg": s.get("collapse_angle_deg")}
     except Exception as exc:  # noqa: BLE001 - one failed run must not stop the sweep
         msg = f"{type(exc).__name__}: {exc}\n\n{traceback.format_exc()}"
+        out.mkdir(parents=True, exist_ok=True)
         (out / "FAILED.txt").write_text(msg)
         return {"name": job.name, "status": "failed", "wall_s": time.time() - t0, "error": str(exc)[-2000:],
-                "log": str(out / "log.txt")}
+                "log": str(runner.staging_folder(out) / "log.txt")}
+    except BaseException:  # SIGTERM from the sweep (_worker_init): the run has killed its YADE
+        if threading.current_thread() is threading.main_thread() and _IN_RUN and os.getpid() != _MAIN_PID:
+            os._exit(143)  # a pool worker: end here, do not take the next queued run
+        raise
+    finally:
+        _IN_RUN = False
 
 
 def _progress_line(job: Job) -> str:
     """The last progress line of a running job's YADE log (simulated time and percent)."""
-    log = Path(job.out_dir) / "log.txt"
+    from drystone import runner
+
+    log = runner.staging_folder(Path(job.out_dir)) / "log.txt"  # a run is built there
     try:
         lines = [ln for ln in log.read_text(errors="replace").splitlines() if "%)" in ln]
     except OSError:
@@ -259,8 +287,10 @@ def run(path, workers: int | None = None, backend: str = "local", dask_address: 
     beat.start()
     t0 = time.time()
     done = 0
+    interrupted = False
+    results = _execute(todo, workers, backend, dask_address)
     try:
-        for res in _execute(todo, workers, backend, dask_address):
+        for res in results:
             done += 1
             status[res["name"]].update(res)
             beat.running.discard(res["name"])
@@ -273,14 +303,24 @@ def run(path, workers: int | None = None, backend: str = "local", dask_address: 
             print(f"[{name}] {done}/{len(todo)} {res['name']}: {res['status']} in {res['wall_s']:.0f} s "
                   f"(elapsed {el:.0f} s, ETA {eta:.0f} s){extra}", flush=True)
             _write_status(root, name, path, status)
+    except KeyboardInterrupt:
+        interrupted = True
+        print(f"\n[{name}] interrupted: stopping the running runs (their results folders are unchanged)", flush=True)
     finally:
+        results.close()  # stops the workers and their YADE processes (_execute)
         beat.stop.set()
+        for n in beat.running:
+            if status[n]["status"] == "pending":
+                status[n]["status"] = "interrupted"
         _write_status(root, name, path, status)
     failed = [n for n, s in status.items() if s["status"] == "failed"]
     if failed:
         print(f"[{name}] {len(failed)} run(s) failed: {failed}; see FAILED.txt and log.txt in their folders",
               flush=True)
-    return {"name": name, "root": str(root), "runs": status, "failed": failed}
+    if interrupted:
+        n_done = sum(s["status"] == "done" for s in status.values())
+        print(f"[{name}] {n_done} run(s) finished before the interrupt; status in {root / 'sweep.json'}", flush=True)
+    return {"name": name, "root": str(root), "runs": status, "failed": failed, "interrupted": interrupted}
 
 
 def _write_status(root: Path, name: str, path, status: dict) -> None:
@@ -295,14 +335,44 @@ def _execute(jobs: list[Job], workers: int, backend: str, address: str | None):
     if not jobs:
         return
     if backend == "local":
-        with ProcessPoolExecutor(max_workers=workers) as ex:
-            futures = [ex.submit(run_job, j) for j in jobs]
+        ex = ProcessPoolExecutor(max_workers=workers, initializer=_worker_init)
+        futures = [ex.submit(run_job, j) for j in jobs]
+        complete = False
+        try:
             for f in as_completed(futures):
                 yield f.result()
+            complete = True
+        finally:  # Ctrl-C or an error: nothing queued starts, running workers stop
+            if not complete:
+                for f in futures:
+                    f.cancel()
+                for proc in list((ex._processes or {}).values()):
+                    if proc.is_alive():
+                        proc.terminate()  # SIGTERM: the worker kills its YADE (runner._simulate)
+            ex.shutdown(wait=True, cancel_futures=True)
     elif backend == "dask":
         yield from _execute_dask(jobs, workers, address)
     else:
         raise ValueError(f"unknown sweep backend {backend!r}: local or dask")
+
+
+_IN_RUN = False  # a pool worker is inside run_job
+_MAIN_PID = os.getpid()  # the process that imported this module first (pool workers fork or spawn later)
+
+
+def _worker_init():
+    """Pool workers leave Ctrl-C to the sweep's main process. SIGTERM ends a worker: inside
+    a run it raises SystemExit, so the run kills its YADE process on the way out (and
+    run_job then ends the worker); between runs it exits at once."""
+    import signal
+
+    def _exit(signum, frame):
+        if _IN_RUN:
+            raise SystemExit(128 + signum)
+        os._exit(128 + signum)
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, _exit)
 
 
 def _execute_dask(jobs: list[Job], workers: int, address: str | None):
@@ -323,6 +393,7 @@ def _execute_dask(jobs: list[Job], workers: int, address: str | None):
         for f in dask_completed(futures):
             yield f.result()
     finally:
+        client.cancel(futures)  # Ctrl-C: nothing more is started
         client.close()
         if cluster is not None:
             cluster.close()

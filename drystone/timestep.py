@@ -9,10 +9,17 @@ central-difference limit is dt_crit = (2 / omega)(sqrt(1 + xi^2) - xi).
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from drystone import contact as law
+from drystone.case import CaseError
 from geometry import polyhedron as ph
+
+# Most steps a run may take: ~2 days of YADE at ~3 ms per step (a wall of a few dozen
+# polyhedra). More means a degenerate input (a sliver block, an absurd kn or density).
+MAX_STEPS = 5e7
 
 
 def largest_face_area(vertices) -> float:
@@ -45,3 +52,19 @@ def critical_step(blocks, materials) -> tuple[float, dict]:
     if worst is None:
         raise ValueError("no free block")
     return worst
+
+
+def step_count_check(dt: float, duration: float, where: str, detail: dict | None = None) -> float:
+    """Number of steps duration / dt (s / s); raises CaseError naming dt, the steps and the
+    critical block (``detail`` from ``critical_step``) when it exceeds MAX_STEPS or dt is
+    not a positive number."""
+    steps = duration / dt if dt > 0 and math.isfinite(dt) else math.inf
+    if steps <= MAX_STEPS:
+        return steps
+    block = ""
+    if detail:
+        block = (f"; the critical step is set by block {detail['block']} (mass {detail['mass_kg']:.3g} kg, "
+                 f"contact stiffness {detail['stiffness_N_per_m']:.3g} N/m): check its size and its material's "
+                 "density and kn")
+    raise CaseError(f"{where}: the time step {dt:.3g} s over {duration:g} s simulated gives {steps:.3g} steps, more "
+                    f"than {MAX_STEPS:.0e} (about 2 days at 3 ms per step){block}")

@@ -27,11 +27,22 @@ mean. ``joints`` override mu and/or damping for one pair of blocks.
 
 Blocks: ``id`` an integer (the paper's numbering); ``role`` one of ``free`` (moves),
 ``fixed`` (fixed to the platform, e.g. a wall's first course) or ``platform`` (the
-base; fixed); ``vertices`` the corners of a convex block (the block is their convex
-hull; a vertex deeper than the tolerance inside the hull means a non-convex shape and
-is refused); ``blocked_dofs`` optional YADE-style subset of ``xyzXYZ`` for free blocks
-(x, y, z translations and rotations about them, global axes). Control points are
-points attached to a block (given in the initial configuration).
+base; fixed); ``vertices`` the corners of a convex block, each listed once, as
+[x, y, z] numbers (the block is their convex hull); ``blocked_dofs`` optional
+YADE-style subset of ``xyzXYZ`` for free blocks (x, y, z translations and rotations
+about them, global axes). Control points are points attached to a block (given in the
+initial configuration).
+
+Convexity: the format has no faces, so YADE builds each block as the convex hull of its
+vertices, and a non-convex stone would silently become its hull (an L-shaped block
++17 % mass). Every vertex must therefore be a corner of the hull: a vertex inside it,
+on one of its faces or edges (a re-entrant corner; an extruded L has its re-entrant
+corners on the hull's faces), or repeating another vertex, is refused (``not_convex``;
+tolerance ``CORNER_REL_TOL`` x the block's size). Repeated vertices are refused, not
+merged: a file lists each corner once, so that it is the block that runs.
+
+Numbers: every coordinate, position and material value a finite JSON number (not a
+string, not true/false); ids integers; ``density`` within ``DENSITY_RANGE``.
 
 Axes: x along the wall, y through its thickness (out of plane), z up.
 """
@@ -51,8 +62,15 @@ from . import polyhedron as ph
 FORMAT = "drystone.blocks"
 VERSION = 1
 ROLES = ("free", "fixed", "platform")
-#: vertex deeper than this inside the hull of its block's vertices: non-convex (m)
-CONVEX_TOL = 1e-9
+#: a vertex standing out of the block's other vertices by less than this x the block's
+#: size (the diagonal of its bounding box) is not a corner (far above round-off, far below
+#: any real stone's corner)
+CORNER_REL_TOL = 1e-9
+#: accepted material densities (kg/m^3): from below the lightest solids a block could be
+#: made of (pumice, timber, aerated concrete: 300-900) to above the densest metal (osmium,
+#: 22590). Outside it is a unit mistake (2.3 for g/cm^3, 2.3e6 for kg/dm^3 read as kg/m^3)
+#: or garbage (1e-300 gives weightless blocks and a meaningless time step).
+DENSITY_RANGE = (100.0, 100000.0)
 #: largest accepted initial overlap thickness between two blocks (m); 1 um is far below
 #: the elastic penetration of any case here (tens of um and more) and far above round-off.
 OVERLAP_TOL = 1e-6
@@ -87,6 +105,13 @@ class Block:
     vertices: np.ndarray  # (n, 3) m
     blocked_dofs: str = ""
     label: str = ""
+    _planes: tuple | None = field(default=None, repr=False, compare=False)
+
+    def planes(self) -> tuple[np.ndarray, np.ndarray]:
+        """Outward unit face normals (f, 3) and offsets (f,) m of the block (cached)."""
+        if self._planes is None:
+            self._planes = ph.planes(ph.hull(self.vertices))
+        return self._planes
 
     @property
     def volume(self) -> float:
@@ -149,8 +174,19 @@ class BlockSet:
         return out
 
 
+def is_number(x) -> bool:
+    """A finite int or float (numpy's too), not a bool and not a string."""
+    return (isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, (bool, np.bool_))
+            and math.isfinite(x))
+
+
+def is_int(x) -> bool:
+    """An int (numpy's too), not a bool and not a float such as 1.0."""
+    return isinstance(x, (int, np.integer)) and not isinstance(x, (bool, np.bool_))
+
+
 def _positive(where: str, key: str, value, allow_zero=False) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+    if not is_number(value):
         raise GeometryError(f"{where}: '{key}' must be a finite number, got {value!r}")
     if value < 0 or (value == 0 and not allow_zero):
         raise GeometryError(f"{where}: '{key}' must be {'>= 0' if allow_zero else '> 0'}, got {value}")
@@ -177,8 +213,62 @@ def _material(where: str, name: str, d: dict) -> Material:
             raise GeometryError(f"{w}: 'friction_angle_deg' must be below 90, got {phi}")
         mu = math.tan(math.radians(phi))
     damping = _positive(w, "damping", d.get("damping", 0.0), allow_zero=True)
-    return Material(name, _positive(w, "density", d["density"]), _positive(w, "kn", d["kn"]),
-                    _positive(w, "kt", d["kt"]), mu, damping)
+    density = _positive(w, "density", d["density"])
+    lo, hi = DENSITY_RANGE
+    if not lo <= density <= hi:
+        raise GeometryError(f"{w}: 'density' must be in [{lo:g}, {hi:g}] kg/m^3, got {density:g}")
+    return Material(name, density, _positive(w, "kn", d["kn"]), _positive(w, "kt", d["kt"]), mu, damping)
+
+
+def _not_a_number(x) -> str:
+    return "a non-finite number" if isinstance(x, (float, np.floating)) else f"{x!r}, which is not a number"
+
+
+def _point(where: str, key: str, value) -> np.ndarray:
+    """[x, y, z] finite numbers (m) as an array, or GeometryError naming ``key``."""
+    if not isinstance(value, (list, tuple, np.ndarray)) or len(value) != 3:
+        raise GeometryError(f"{where}: '{key}' must be [x, y, z] (three numbers, m), got {value!r}")
+    for x in value:
+        if not is_number(x):
+            raise GeometryError(f"{where}: '{key}' contains {_not_a_number(x)}: {list(value)!r}")
+    return np.array(value, dtype=float)
+
+
+def _vertices(where: str, value) -> np.ndarray:
+    """The (n, 3) vertex array of a block (m), or GeometryError naming the vertex."""
+    if not isinstance(value, (list, tuple, np.ndarray)):
+        raise GeometryError(f"{where}: 'vertices' must be a list of [x, y, z] numbers, got {value!r}")
+    for i, p in enumerate(value):
+        if not isinstance(p, (list, tuple, np.ndarray)) or len(p) != 3:
+            raise GeometryError(f"{where}: 'vertices': vertex {i} must be [x, y, z] (three numbers, m), got {p!r}")
+        for x in p:
+            if not is_number(x):
+                raise GeometryError(f"{where}: vertices contain {_not_a_number(x)}: vertex {i} = {list(p)!r}")
+    return np.array(value, dtype=float).reshape(-1, 3)
+
+
+def not_convex(verts: np.ndarray, h=None) -> str | None:
+    """Why ``verts`` (m) are not the distinct corners of their convex hull, naming the
+    vertex index and coordinates; None if they are. ``h``: their hull, if at hand."""
+    v = np.asarray(verts, dtype=float)
+    h = ph.hull(v) if h is None else h
+    tol = CORNER_REL_TOL * float(np.linalg.norm(np.ptp(v, axis=0)))
+    dist = np.linalg.norm(v[:, None, :] - v[None, :, :], axis=2)
+    i, j = np.nonzero(np.triu(dist <= tol, k=1))
+    if len(i):
+        return (f"vertices {i[0]} and {j[0]} coincide at ({_xyz(v[i[0]])}) m: list each corner once "
+                "(repeated vertices are refused, not merged)")
+    bad = np.flatnonzero(~(ph.corner_gaps(v, h) > tol))
+    if len(bad):
+        which = ", ".join(f"vertex {k} at ({_xyz(v[k])}) m" for k in bad[:4]) + (", ..." if len(bad) > 4 else "")
+        return (f"not convex: {which} {'is not a corner' if len(bad) == 1 else 'are not corners'} of the block's convex hull "
+                "(inside it, or on a face or an edge of it: a re-entrant corner); YADE would build the hull, a "
+                "bigger block: split the stone into convex blocks")
+    return None
+
+
+def _xyz(p) -> str:
+    return ", ".join(f"{x:.6g}" for x in p)
 
 
 def parse(data: dict, where: str = "<blocks>", check_overlaps: bool = True) -> BlockSet:
@@ -190,7 +280,7 @@ def parse(data: dict, where: str = "<blocks>", check_overlaps: bool = True) -> B
         raise GeometryError(f"{where}: unknown key(s) {sorted(unknown)}; allowed {sorted(TOP_KEYS)}")
     if data.get("format") != FORMAT:
         raise GeometryError(f"{where}: 'format' must be '{FORMAT}', got {data.get('format')!r}")
-    if data.get("version") != VERSION:
+    if not is_int(data.get("version")) or data.get("version") != VERSION:
         raise GeometryError(f"{where}: unsupported 'version' {data.get('version')!r} (this reader: {VERSION})")
     units = data.get("units", {"length": "m", "mass": "kg"})
     if units != {"length": "m", "mass": "kg"}:
@@ -209,8 +299,9 @@ def parse(data: dict, where: str = "<blocks>", check_overlaps: bool = True) -> B
         if not isinstance(b, dict):
             raise GeometryError(f"{where}: blocks[{k}] must be an object")
         bid = b.get("id")
-        if isinstance(bid, bool) or not isinstance(bid, int):
+        if not is_int(bid):
             raise GeometryError(f"{where}: blocks[{k}]: 'id' must be an integer, got {bid!r}")
+        bid = int(bid)
         w = f"{where}: block {bid}"
         unknown = set(b) - BLOCK_KEYS
         if unknown:
@@ -222,22 +313,17 @@ def parse(data: dict, where: str = "<blocks>", check_overlaps: bool = True) -> B
         if role not in ROLES:
             raise GeometryError(f"{w}: 'role' must be one of {ROLES}, got {role!r}")
         mat = b.get("material")
-        if mat not in materials:
+        if not isinstance(mat, str) or mat not in materials:
             raise GeometryError(f"{w}: unknown material {mat!r} (defined: {sorted(materials)})")
+        verts = _vertices(w, b.get("vertices"))
         try:
-            verts = np.array(b.get("vertices"), dtype=float)
-        except (TypeError, ValueError) as exc:
-            raise GeometryError(f"{w}: 'vertices' must be a list of [x, y, z] numbers ({exc})") from None
-        try:
-            ph.hull(verts)
-            inner = ph.inner_vertices(verts, CONVEX_TOL)
+            h = ph.hull(verts)
         except ph.HullError as exc:
             raise GeometryError(f"{w}: {exc}") from None
-        if inner:
-            raise GeometryError(
-                f"{w}: not convex: vertex index(es) {inner} lie inside the hull of the others "
-                "(YADE polyhedra are convex; split the stone into convex blocks)")
-        vol = ph.volume_centroid(verts)[0]
+        problem = not_convex(verts, h)
+        if problem:
+            raise GeometryError(f"{w}: {problem}")
+        vol = ph.volume_centroid(verts, h)[0]
         if not vol > 0:
             raise GeometryError(f"{w}: volume must be positive, got {vol}")
         dofs = b.get("blocked_dofs", "")
@@ -245,63 +331,102 @@ def parse(data: dict, where: str = "<blocks>", check_overlaps: bool = True) -> B
             raise GeometryError(f"{w}: 'blocked_dofs' must be a subset of 'xyzXYZ', got {dofs!r}")
         if dofs and role != "free":
             raise GeometryError(f"{w}: 'blocked_dofs' only applies to free blocks (role is {role!r})")
-        blocks.append(Block(bid, role, mat, verts, dofs, str(b.get("label", ""))))
+        label = b.get("label", "")
+        if not isinstance(label, str):
+            raise GeometryError(f"{w}: 'label' must be a string, got {label!r}")
+        blocks.append(Block(bid, role, mat, verts, dofs, label, ph.planes(h)))
 
     if not any(b.role == "free" for b in blocks):
         raise GeometryError(f"{where}: no block has role 'free': nothing would move")
 
     joints = data.get("joints", [])
+    if not isinstance(joints, list):
+        raise GeometryError(f"{where}: 'joints' must be a list, got {joints!r}")
     for k, j in enumerate(joints):
         w = f"{where}: joints[{k}]"
         if not isinstance(j, dict) or set(j) - JOINT_KEYS or "blocks" not in j:
             raise GeometryError(f"{w}: must be an object with 'blocks' and any of 'mu', 'damping'")
         pair = j["blocks"]
-        if not (isinstance(pair, list) and len(pair) == 2 and all(p in seen for p in pair) and pair[0] != pair[1]):
+        if not (isinstance(pair, list) and len(pair) == 2 and all(is_int(p) for p in pair)):
+            raise GeometryError(f"{w}: 'blocks' must be two integer block ids, got {pair!r}")
+        if not (all(p in seen for p in pair) and pair[0] != pair[1]):
             raise GeometryError(f"{w}: 'blocks' must name two different existing block ids, got {pair!r}")
         for key in ("mu", "damping"):
             if key in j:
                 _positive(w, key, j[key], allow_zero=True)
     cps = data.get("control_points", [])
+    if not isinstance(cps, list):
+        raise GeometryError(f"{where}: 'control_points' must be a list, got {cps!r}")
     names = set()
     for k, c in enumerate(cps):
         w = f"{where}: control_points[{k}]"
         if not isinstance(c, dict) or set(c) != CP_KEYS:
             raise GeometryError(f"{w}: must have exactly the keys {sorted(CP_KEYS)}")
+        if not isinstance(c["name"], str) or not c["name"]:
+            raise GeometryError(f"{w}: 'name' must be a non-empty string, got {c['name']!r}")
+        w = f"{where}: control point {c['name']!r}"
+        if not is_int(c["block"]):
+            raise GeometryError(f"{w}: 'block' must be an integer block id, got {c['block']!r}")
         if c["block"] not in seen:
             raise GeometryError(f"{w}: block {c['block']!r} does not exist")
-        pos = np.asarray(c["position"], dtype=float)
-        if pos.shape != (3,) or not np.all(np.isfinite(pos)):
-            raise GeometryError(f"{w}: 'position' must be three finite numbers")
+        _point(w, "position", c["position"])
         if c["name"] in names:
             raise GeometryError(f"{w}: duplicate control point name {c['name']!r}")
         names.add(c["name"])
+    gen = data.get("generator", {})
+    if not isinstance(gen, dict):
+        raise GeometryError(f"{where}: 'generator' must be an object, got {gen!r}")
 
     bs = BlockSet(str(data.get("name", "")), materials, blocks, list(joints), list(cps),
-                  str(data.get("description", "")), str(data.get("source", "")),
-                  dict(data.get("generator", {})))
+                  str(data.get("description", "")), str(data.get("source", "")), dict(gen))
     if check_overlaps:
         check_no_overlaps(bs, where)
     return bs
 
 
+def candidate_pairs(lo: np.ndarray, hi: np.ndarray, tol: float = 0.0) -> list[tuple[int, int]]:
+    """Pairs (i, j), i < j, of axis-aligned boxes (corners ``lo``, ``hi``, (n, 3) m) that
+    overlap by more than ``tol`` (m) along every axis, sorted. Sort and sweep on x:
+    O(n log n) plus the pairs that overlap along x."""
+    order = np.argsort(lo[:, 0], kind="stable")
+    lo_x = lo[order, 0]
+    pairs = []
+    for k, i in enumerate(order.tolist()):
+        end = np.searchsorted(lo_x, hi[i, 0] - tol, side="left")  # boxes starting before i ends
+        near = order[k + 1:end]
+        hit = near[np.all(lo[near] < hi[i] - tol, axis=1) & np.all(lo[i] < hi[near] - tol, axis=1)]
+        pairs += [(min(i, j), max(i, j)) for j in hit.tolist()]
+    return sorted(pairs)
+
+
+def _face_separates(planes, vertices, tol: float) -> bool:
+    """Whether a face plane of one block has all ``vertices`` of the other at most ``tol``
+    (m) inside it: their overlap then lies in a slab ``tol`` thick, so it is <= tol thick
+    (the exact test could not refuse the pair)."""
+    n, d = planes
+    return bool(np.max(np.min(vertices @ n.T + d, axis=0)) >= -tol)
+
+
 def check_no_overlaps(bs: BlockSet, where: str = "<blocks>", tol: float = OVERLAP_TOL) -> None:
-    """Refuse two blocks overlapping by more than ``tol`` (m). Pairs of non-moving
-    blocks (fixed/platform) are not checked: they never interact."""
-    lo = {b.id: b.vertices.min(axis=0) for b in bs.blocks}
-    hi = {b.id: b.vertices.max(axis=0) for b in bs.blocks}
+    """Refuse two blocks overlapping by more than ``tol`` (m), naming the first such pair in
+    file order. Pairs of non-moving blocks (fixed/platform) are not checked: they never
+    interact. Only pairs whose bounding boxes overlap by more than ``tol`` (found by a sort
+    and sweep: O(n log n) for n blocks) and that no face plane of either separates (within
+    ``tol``) get the exact, linear-programme, test."""
     bl = bs.blocks
-    for i in range(len(bl)):
-        for j in range(i + 1, len(bl)):
-            a, b = bl[i], bl[j]
-            if a.role != "free" and b.role != "free":
-                continue
-            if np.any(lo[a.id] >= hi[b.id] - tol) or np.any(lo[b.id] >= hi[a.id] - tol):
-                continue
-            t = ph.overlap_thickness(a.vertices, b.vertices)
-            if t > tol:
-                raise GeometryError(
-                    f"{where}: blocks {a.id} and {b.id} interpenetrate by {t:.3g} m "
-                    f"(tolerance {tol:g} m)")
+    lo = np.array([b.vertices.min(axis=0) for b in bl]).reshape(-1, 3)
+    hi = np.array([b.vertices.max(axis=0) for b in bl]).reshape(-1, 3)
+    for i, j in candidate_pairs(lo, hi, tol):
+        a, b = bl[i], bl[j]
+        if a.role != "free" and b.role != "free":
+            continue
+        if _face_separates(a.planes(), b.vertices, tol) or _face_separates(b.planes(), a.vertices, tol):
+            continue
+        t = ph.planes_overlap(a.planes(), b.planes())
+        if t > tol:
+            raise GeometryError(
+                f"{where}: blocks {a.id} and {b.id} interpenetrate by {t:.3g} m "
+                f"(tolerance {tol:g} m)")
 
 
 def load(path, check_overlaps: bool = True) -> BlockSet:

@@ -27,6 +27,7 @@ from __future__ import annotations
 import math
 
 from . import blockfile as bf
+from . import params as pc
 
 L, W, H = 0.220, 0.105, 0.050  # block length (x), width (y), height (z), m
 PIVOT_LEVER = 0.050  # m, distance from block 4's edge to block 3's far edge
@@ -40,6 +41,7 @@ ASSUMED = ["four-block layout ASSUMED (the paper's Figure 6 is not available): b
 
 def make(density=2200.0, kn=1.96e7, kt=0.82e7, friction_angle_deg=38.0, damping=0.08) -> dict:
     """The four-block model as a block-file dict (paper §3.1 values by default)."""
+    pc.material("four_blocks", density, kn, kt, damping, friction_angle_deg=friction_angle_deg)
     stand = (PIVOT_LEVER, W, L)  # blocks 3 and 4 on end
     blocks = [
         {"id": 1, "role": "free", "material": "stone",

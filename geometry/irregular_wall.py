@@ -22,7 +22,7 @@ import numpy as np
 
 import drystone
 from . import blockfile as bf
-from . import polyhedron as ph
+from . import params as pc
 
 PLATFORM_THICKNESS = 0.05  # m
 G = 9.81
@@ -33,7 +33,7 @@ def thickness_for_weight(weight: float, density: float, length: float, height: f
     return weight / (density * g * length * height)
 
 
-def _bed_joints(rng, length, height, n_courses, slope_max, min_course, irregularity):
+def _bed_joints(gen, rng, length, height, n_courses, slope_max, min_course, irregularity):
     """Bed joints as (z at x = 0, slope) per boundary, bottom and top level."""
     mean = height / n_courses
     for _ in range(1000):
@@ -44,10 +44,11 @@ def _bed_joints(rng, length, height, n_courses, slope_max, min_course, irregular
         lo = np.minimum(np.diff(z0), np.diff(z0) + np.diff(slope) * length)
         if lo.min() >= min_course:
             return list(zip(z0, slope))
-    raise ValueError("could not place bed joints: lower the irregularity or the number of courses")
+    raise bf.GeometryError(f"geometry generator {gen!r}: could not place the bed joints: lower 'irregularity' "
+                           f"({irregularity}) or the number of courses ({n_courses})")
 
 
-def _head_joints(rng, length, lmin, lmax, avoid, gap):
+def _head_joints(gen, rng, length, lmin, lmax, avoid, gap):
     """Joint positions along a bed joint: 0, ..., length, stones in [lmin, lmax] where
     possible, no joint within ``gap`` of any position in ``avoid``."""
     for _ in range(2000):
@@ -65,10 +66,11 @@ def _head_joints(rng, length, lmin, lmax, avoid, gap):
         if ok:
             xs.append(length)
             return xs
-    raise ValueError("could not stagger the head joints: widen the stone length range or lower the stagger")
+    raise bf.GeometryError(f"geometry generator {gen!r}: could not stagger the head joints: widen 'stone_length' "
+                           f"({lmin:g}-{lmax:g} m) or lower 'stagger'")
 
 
-def _counted_joints(rng, length, n, avoid, gap, min_fraction=0.5):
+def _counted_joints(gen, rng, length, n, avoid, gap, min_fraction=0.5):
     """Joint positions for exactly n stones: random lengths (Dirichlet, concentration 4)
     of at least ``min_fraction`` x length / n, no joint within ``gap`` of ``avoid``."""
     lmin = min_fraction * length / n
@@ -80,7 +82,8 @@ def _counted_joints(rng, length, n, avoid, gap, min_fraction=0.5):
         xs[-1] = length
         if all(abs(x - a) >= gap for x in xs[1:-1] for a in avoid):
             return xs.tolist()
-    raise ValueError(f"could not place {n} staggered stones in a course: lower the stagger")
+    raise bf.GeometryError(f"geometry generator {gen!r}: could not place {n} staggered stones in a course: "
+                           "lower 'stagger' or the stone count ('stones_per_course')")
 
 
 FLUSH = {None: 0.0, "+y": 1.0, "-y": -1.0}
@@ -104,7 +107,8 @@ def _area(quad):
 
 def make(length=1.5, height=0.375, thickness=0.108, courses=7, stone_length=(0.10, 0.20), irregularity=0.3,
          stagger=0.25, seed=0, density=2300.0, kn=2e8, kt=1e8, mu=0.4, damping=0.8, first_course="fixed",
-         name="irregular_wall", stones_per_course=None, depth_spread=0.0, flush=None) -> dict:
+         name="irregular_wall", stones_per_course=None, depth_spread=0.0, flush=None, *,
+         _generator="irregular_wall") -> dict:
     """An irregular wall as a block-file dict.
 
     ``stones_per_course``: optional list of stone counts per course (bottom first); it
@@ -117,21 +121,37 @@ def make(length=1.5, height=0.375, thickness=0.108, courses=7, stone_length=(0.1
     stone's depth is thickness x (1 +- depth_spread), rescaled to keep the wall's volume
     (``stone_depths``). ``flush``: None centres every stone on the wall's mid-plane (both
     faces ragged); "+y" or "-y" keeps that face fair.
+    Other parameters: sizes > 0 m, ``courses`` an integer >= 1, ``stone_length`` [min, max]
+    with 0 < min < max <= length (m), ``stagger`` in [0, 1), ``seed`` an integer >= 0,
+    ``first_course`` "fixed" or "free". ``_generator``: the name errors give (for the
+    generators built on this one). Bad values raise GeometryError.
     """
-    if not 0 <= irregularity < 1:
-        raise ValueError(f"irregularity must be in [0, 1), got {irregularity}")
+    g = _generator
+    for k, v in (("length", length), ("height", height), ("thickness", thickness)):
+        pc.positive(g, k, v, "m")
+    pc.integer(g, "courses", courses, lo=1)
+    pc.numbers(g, "stone_length", stone_length, 2, lo=0, lo_open=True, unit="m")
     lmin, lmax = stone_length
-    if not 0 < lmin < lmax <= length:
-        raise ValueError(f"stone_length must be 0 < min < max <= length, got {stone_length}")
-    if not 0 <= depth_spread < 1:
-        raise ValueError(f"depth_spread must be in [0, 1), got {depth_spread}")
-    if flush not in FLUSH:
-        raise ValueError(f"flush must be one of {list(FLUSH)}, got {flush!r}")
+    if not lmin < lmax <= length:
+        raise pc.fail(g, "stone_length", f"[min, max] with 0 < min < max <= length ({length} m)", stone_length)
+    pc.number(g, "irregularity", irregularity, 0, 1, hi_open=True)
+    pc.number(g, "stagger", stagger, 0, 1, hi_open=True)
+    pc.integer(g, "seed", seed, lo=0)
+    pc.material(g, density, kn, kt, damping, mu=mu)
+    pc.choice(g, "first_course", first_course, ["fixed", "free"])
+    if not isinstance(name, str) or not name:
+        raise pc.fail(g, "name", "a non-empty string", name)
+    if stones_per_course is not None and not (isinstance(stones_per_course, (list, tuple)) and stones_per_course
+                                              and all(bf.is_int(n) and n >= 1 for n in stones_per_course)):
+        raise pc.fail(g, "stones_per_course", "a non-empty list of integers >= 1 (bottom course first)",
+                      stones_per_course)
+    pc.number(g, "depth_spread", depth_spread, 0, 1, hi_open=True)
+    pc.choice(g, "flush", flush, list(FLUSH))
     rng = np.random.default_rng(seed)
     if stones_per_course is not None:
         courses = len(stones_per_course)
     ch = height / courses
-    beds = _bed_joints(rng, length, height, courses, 0.4 * irregularity * ch / length, 0.5 * ch, irregularity)
+    beds = _bed_joints(g, rng, length, height, courses, 0.4 * irregularity * ch / length, 0.5 * ch, irregularity)
     lean_max = 0.5 * irregularity * ch
     gap = stagger * 0.5 * (lmin + lmax)
 
@@ -144,9 +164,9 @@ def make(length=1.5, height=0.375, thickness=0.108, courses=7, stone_length=(0.1
     for k in range(courses):
         if stones_per_course is not None:
             gap = stagger * length / stones_per_course[k]
-            xb = _counted_joints(rng, length, stones_per_course[k], previous_top[1:-1], gap)
+            xb = _counted_joints(g, rng, length, stones_per_course[k], previous_top[1:-1], gap)
         else:
-            xb = _head_joints(rng, length, lmin, lmax, previous_top[1:-1], gap)
+            xb = _head_joints(g, rng, length, lmin, lmax, previous_top[1:-1], gap)
         lean = [0.0] + [rng.uniform(-lean_max, lean_max) for _ in xb[1:-1]] + [0.0]
         xt = [x + d for x, d in zip(xb, lean)]
         for j in range(len(xb) - 1):
@@ -161,8 +181,10 @@ def make(length=1.5, height=0.375, thickness=0.108, courses=7, stone_length=(0.1
                                            (length + 2 * lmax, 2 * half + 2 * lmax, PLATFORM_THICKNESS))}]
     for bid, ((k, quad), d, yc) in enumerate(zip(faces, depths, centres), start=1):
         verts = [[x, y, z] for x, z in quad for y in (yc - d / 2, yc + d / 2)]
-        if ph.inner_vertices(verts, 1e-12):
-            raise ValueError(f"stone {bid} came out non-convex; lower the irregularity")
+        problem = bf.not_convex(verts)
+        if problem:
+            raise bf.GeometryError(f"geometry generator {g!r}: stone {bid} came out wrong ({problem}); "
+                                   "lower 'irregularity'")
         blocks.append({"id": bid, "role": first_course if k == 0 else "free", "material": "stone",
                        "vertices": verts, "label": f"course {k + 1}"})
     params = dict(length=length, height=height, thickness=thickness, courses=courses,
@@ -180,6 +202,10 @@ def make(length=1.5, height=0.375, thickness=0.108, courses=7, stone_length=(0.1
 SANTA_CRUZ_DEPTH_SPREAD = 1 / 3  # = the stone lengths' spread, 0.10-0.20 m around 0.15 m
 
 
+#: parameters of ``make`` that ``tilt_wall`` passes on
+TILT_OVER = ("irregularity", "stagger", "first_course", "stones_per_course", "flush")
+
+
 def tilt_wall(seed=0, weight=1371.0, density=2300.0, kn=2e8, kt=1e8, mu=0.4, damping=0.8,
               depth_spread=SANTA_CRUZ_DEPTH_SPREAD, **over) -> dict:
     """The Santa-Cruz et al. tilt-table wall of the Sacsayhuaman paper §3.2: 1500 mm long,
@@ -189,12 +215,19 @@ def tilt_wall(seed=0, weight=1371.0, density=2300.0, kn=2e8, kt=1e8, mu=0.4, dam
     (§3.2), so by default every stone has a depth of its own, 0.108 m x (1 +- 1/3) (the
     relative spread of the stone lengths: stones irregular alike in all three dimensions),
     centred on the mid-plane; ``depth_spread = 0`` gives stones extruded through 0.108 m.
-    Contact properties: Table 1, FEM column."""
+    Contact properties: Table 1, FEM column. ``over``: any of TILT_OVER, passed to ``make``."""
+    g = "tilt_wall"
+    unknown = sorted(set(over) - set(TILT_OVER))
+    if unknown:
+        allowed = ["seed", "weight", "density", "kn", "kt", "mu", "damping", "depth_spread", *TILT_OVER]
+        raise bf.GeometryError(f"geometry generator {g!r}: unknown parameter(s) {unknown}; allowed: {allowed}")
+    pc.positive(g, "weight", weight, "N")
+    pc.material(g, density, kn, kt, damping, mu=mu)
     length, height = 1.5, 0.375
     t = thickness_for_weight(weight, density, length, height)
     d = make(length=length, height=height, thickness=t, courses=7, stone_length=(0.10, 0.20), seed=seed,
              density=density, kn=kn, kt=kt, mu=mu, damping=damping, name="tilt_wall",
-             depth_spread=depth_spread, **over)
+             depth_spread=depth_spread, _generator=g, **over)
     g = d["generator"]
     assumed = [f"tilt wall generated (seed {seed}), not the tested walls' stones: the real outlines are not available "
                "(ASSUMED)",

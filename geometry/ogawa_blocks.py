@@ -33,6 +33,7 @@ damping 0.08 (its §3.1 value for small blocks), assumed.
 from __future__ import annotations
 
 from . import blockfile as bf
+from . import params as pc
 
 A = B = 0.100  # m, lengths of blocks 1 and 2 along x
 C = E = 0.050  # m, lengths of blocks 3 and 5
@@ -63,8 +64,7 @@ ASSUMED_COMMON = ["density 2600 kg/m^3 ASSUMED (not in the paper; a sliding resp
 
 def dimensions(orientation: str = DEFAULT_ORIENTATION) -> tuple[float, float]:
     """(thickness along y, height of each row) in m for a named reading of the paper."""
-    if orientation not in ORIENTATIONS:
-        raise ValueError(f"ogawa_blocks: orientation must be one of {sorted(ORIENTATIONS)}, not {orientation!r}")
+    pc.choice("ogawa_blocks", "orientation", orientation, sorted(ORIENTATIONS))
     return ORIENTATIONS[orientation]
 
 
@@ -72,6 +72,10 @@ def make(mu10=0.4, mu20=0.4, mu31=0.4, mu41=0.4, mu42=0.4, mu52=0.4, mu_vertical
          density=2600.0, kn=2e8, kt=1e8, damping=0.08, orientation=DEFAULT_ORIENTATION) -> dict:
     """The five blocks on the base as a block-file dict (SI units); ``orientation`` is
     ``"upright"`` or ``"flat"`` (module docstring: both are assumed readings)."""
+    g = "ogawa_blocks"
+    for k, v in dict(mu10=mu10, mu20=mu20, mu31=mu31, mu41=mu41, mu42=mu42, mu52=mu52, mu_vertical=mu_vertical).items():
+        pc.number(g, k, v, lo=0)
+    pc.material(g, density, kn, kt, damping, mu=0.0)
     t, h = dimensions(orientation)
     x0 = 0.0
     boxes = {

@@ -6,7 +6,10 @@ Input: a folder with one text file per stone named ``<id>.csv`` or ``<id>.txt`` 
 the stone's number, e.g. the paper's Figure 19c), two columns x z per line (comma, space or
 tab separated; ``#`` comments and one header line allowed), at least 3 vertices, the
 polygon convex (YADE polyhedra are convex: split a re-entrant stone into convex parts,
-each its own file). A 0.1 m platform slab is added under the lowest stone.
+each its own file). Repeated points and points on a straight edge between their
+neighbours (within ``FLAT_REL_TOL`` x the outline's size) are dropped: they are not
+corners, and the block file takes corners only. A 0.1 m platform slab is added under the
+lowest stone.
 
 Roles: ``layout = "sacsayhuaman"`` applies the paper's (stones 1-7 fixed, side blocks 8,
 9, 14, 15, 24, 25, 34 free only in z, y and about x, control points A-D at the top of
@@ -19,11 +22,17 @@ import re
 from pathlib import Path
 
 import numpy as np
+from scipy.spatial import ConvexHull
 
 from . import blockfile as bf
+from . import params as pc
 
 PLATFORM_THICKNESS = 0.1  # m
-CONVEX_TOL = 1e-9  # m^2: cross products below this count as collinear
+CONVEX_TOL = 1e-9  # m^2: outlines of less area than this are refused
+#: a point less than this x the outline's size off the line through its neighbours is not a
+#: corner (dropped if on the line, refused if inward); 1e-6 is far below any digitising
+#: precision and far above the block file's corner tolerance (blockfile.CORNER_REL_TOL)
+FLAT_REL_TOL = 1e-6
 
 
 class OutlineError(bf.GeometryError):
@@ -53,34 +62,67 @@ def read_outline(path) -> np.ndarray:
         p = p[:-1]  # closed polygon written with its first vertex repeated
     if len(p) < 3:
         raise OutlineError(f"{path}: a stone outline needs at least 3 vertices, got {len(p)}")
-    area2 = np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1])
+    area2 = _area2(p)
     if abs(area2) < 2 * CONVEX_TOL:
         raise OutlineError(f"{path}: the outline has no area")
     if area2 < 0:
         p = p[::-1]
-    e = np.roll(p, -1, axis=0) - p
-    cross = e[:, 0] * np.roll(e[:, 1], -1) - e[:, 1] * np.roll(e[:, 0], -1)
-    bad = np.flatnonzero(cross < -CONVEX_TOL)
+    tol = FLAT_REL_TOL * float(np.linalg.norm(np.ptp(p, axis=0)))
+    out = _outward(p)
+    while len(p) > 3 and np.min(np.abs(out)) <= tol:  # drop repeated points and points on an edge
+        p = np.delete(p, np.argmin(np.abs(out)), axis=0)
+        out = _outward(p)
+    bad = np.flatnonzero(out < -tol)
     if len(bad):
-        v = p[(bad[0] + 1) % len(p)]
+        v = p[bad[0]]
         raise OutlineError(f"{path}: stone outline is not convex (re-entrant corner at x = {v[0]:.4g}, "
                            f"z = {v[1]:.4g} m); split it into convex stones")
+    area, hull_area = _area2(p) / 2, ConvexHull(p).volume
+    if abs(area - hull_area) > FLAT_REL_TOL * hull_area:
+        raise OutlineError(f"{path}: stone outline is not convex: its area, {area:.6g} m^2, is not its convex "
+                           f"hull's, {hull_area:.6g} m^2 (does it cross itself?)")
     return p
+
+
+def _area2(p: np.ndarray) -> float:
+    """Twice the signed area (m^2) of a polygon (n, 2): > 0 counter-clockwise."""
+    return float(np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1]))
+
+
+def _outward(p: np.ndarray) -> np.ndarray:
+    """Per vertex of a counter-clockwise polygon (n, 2), its distance (m) outside the line
+    through its two neighbours (< 0: a re-entrant corner; -inf: the neighbours coincide)."""
+    prev, nxt = np.roll(p, 1, axis=0), np.roll(p, -1, axis=0)
+    chord = nxt - prev
+    length = np.linalg.norm(chord, axis=1)
+    d = p - prev
+    cross = d[:, 0] * chord[:, 1] - d[:, 1] * chord[:, 0]
+    return np.where(length > 0, cross / np.where(length > 0, length, 1.0), -np.inf)
 
 
 def make(folder, thickness: float, layout: str | None = None, fix_bottom: bool = True, density=2300.0, kn=2e8,
          kt=1e8, mu=0.4, damping=0.8, name=None) -> dict:
-    """A block-file dict from the outline files in ``folder`` (see the module docstring)."""
+    """A block-file dict from the outline files in ``folder`` (see the module docstring);
+    ``thickness`` > 0 m, ``layout`` None or "sacsayhuaman"."""
+    g = "outlines"
+    if not isinstance(folder, (str, Path)):
+        raise pc.fail(g, "folder", "a folder path", folder)
+    pc.positive(g, "thickness", thickness, "m")
+    pc.choice(g, "layout", layout, [None, "sacsayhuaman"])
+    pc.choice(g, "fix_bottom", fix_bottom, [True, False])
+    pc.material(g, density, kn, kt, damping, mu=mu)
+    if name is not None and not isinstance(name, str):
+        raise pc.fail(g, "name", "a string", name)
     folder = Path(folder)
     files = sorted(f for f in folder.glob("*") if f.suffix.lower() in (".csv", ".txt"))
     if not files:
         raise OutlineError(f"{folder}: no outline files (<id>.csv or <id>.txt)")
-    if not thickness > 0:
-        raise OutlineError(f"thickness must be > 0 m, got {thickness}")
     stones = {}
     for f in files:
         if not f.stem.isdigit() or int(f.stem) == 0:
             raise OutlineError(f"{f}: outline files are named by the stone's id, a positive integer (1.csv ...)")
+        if int(f.stem) in stones:
+            raise OutlineError(f"{f}: a second outline for stone {int(f.stem)}")
         stones[int(f.stem)] = read_outline(f)
     h = thickness / 2.0
     blocks = []
@@ -112,8 +154,6 @@ def make(folder, thickness: float, layout: str | None = None, fix_bottom: bool =
             top = p[np.isclose(p[:, 1], p[:, 1].max(), atol=1e-6)]
             control_points.append({"name": cp, "block": bid, "position": [float(top[:, 0].mean()), 0.0,
                                                                             float(top[:, 1].max())]})
-    elif layout is not None:
-        raise OutlineError(f"unknown layout {layout!r}: 'sacsayhuaman' or none")
     elif fix_bottom:
         for b in blocks:
             if np.min(np.asarray(b["vertices"])[:, 2]) <= zmin + 1e-6:

@@ -36,22 +36,30 @@ def planes(h: ConvexHull) -> tuple[np.ndarray, np.ndarray]:
     return eq[:, :3], eq[:, 3]
 
 
-def inner_vertices(vertices, tol: float) -> list[int]:
-    """Indices of vertices lying deeper than ``tol`` (m) inside the hull of all vertices.
-
-    Such a vertex means the intended block is not convex (a re-entrant corner), since a
-    block is built as the convex hull of its vertices.
-    """
+def corner_gaps(vertices, h: ConvexHull | None = None) -> np.ndarray:
+    """How far (m) each vertex stands out of the others along its vertex normal (the sum of
+    the outward normals of the hull triangles that meet at it): min over j != i of
+    n_i . (v_i - v_j). Positive for a corner of the hull; about 0 for a point on a face or
+    an edge of the hull (or a repeated point); -inf for a point that Qhull does not list
+    as a hull vertex (inside the hull, or on its surface). ``h``: the hull, if at hand."""
     v = np.asarray(vertices, dtype=float)
-    n, d = planes(hull(v))
-    depth = -(v @ n.T + d).max(axis=1)  # distance to the nearest face, >0 inside
-    return [int(i) for i in np.flatnonzero(depth > tol)]
+    h = hull(v) if h is None else h
+    nsum = np.zeros_like(v)
+    np.add.at(nsum, h.simplices, h.equations[:, None, :3])
+    norm = np.linalg.norm(nsum, axis=1)
+    p = (nsum / np.where(norm > 0, norm, 1.0)[:, None]) @ v.T  # p[i, j] = n_i . v_j
+    others = p.copy()
+    np.fill_diagonal(others, -np.inf)
+    gaps = np.full(len(v), -np.inf)
+    gaps[h.vertices] = (np.diag(p) - others.max(axis=1))[h.vertices]
+    return gaps
 
 
-def volume_centroid(vertices) -> tuple[float, np.ndarray]:
-    """Volume (m^3) and centroid (m) of the convex hull of ``vertices``."""
+def volume_centroid(vertices, h: ConvexHull | None = None) -> tuple[float, np.ndarray]:
+    """Volume (m^3) and centroid (m) of the convex hull of ``vertices`` (``h``: that hull,
+    if at hand)."""
     v = np.asarray(vertices, dtype=float)
-    h = hull(v)
+    h = hull(v) if h is None else h
     c0 = v[h.vertices].mean(axis=0)
     tets = v[h.simplices] - c0  # (f, 3, 3): each face triangle with apex c0
     vol6 = np.abs(np.einsum("ij,ij->i", tets[:, 0], np.cross(tets[:, 1], tets[:, 2])))
@@ -73,8 +81,12 @@ def overlap_thickness(va, vb) -> float:
     For two blocks pressed face to face by a depth d this is exactly d; for blocks that
     share a face it is 0. Solved as a Chebyshev-centre linear programme.
     """
-    na, da = planes(hull(va))
-    nb, db = planes(hull(vb))
+    return planes_overlap(planes(hull(va)), planes(hull(vb)))
+
+
+def planes_overlap(pa: tuple[np.ndarray, np.ndarray], pb: tuple[np.ndarray, np.ndarray]) -> float:
+    """``overlap_thickness`` (m) of two hulls given by their ``planes``."""
+    (na, da), (nb, db) = pa, pb
     n = np.vstack([na, nb])
     d = np.concatenate([da, db])
     # maximise r subject to n.x + d + r <= 0 (unit normals), r >= 0

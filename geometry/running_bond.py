@@ -12,6 +12,7 @@ from __future__ import annotations
 import sys
 
 from . import blockfile as bf
+from . import params as pc
 
 LENGTH, HEIGHT, THICKNESS = 8.64, 4.0, 0.8  # m
 COURSES, PER_COURSE = 5, 8
@@ -20,7 +21,14 @@ PLATFORM = (10.0, 2.0, 0.2)  # m, top at z = 0
 
 def make(length=LENGTH, height=HEIGHT, thickness=THICKNESS, courses=COURSES, per_course=PER_COURSE,
          density=2300.0, kn=2e8, kt=1e8, mu=0.4, damping=0.8) -> dict:
-    """The running-bond wall as a block-file dict (SI units)."""
+    """The running-bond wall as a block-file dict (SI units): sizes > 0 m, ``courses`` an
+    integer >= 1, ``per_course`` an integer >= 2 (even courses have a half and a 1.5 block)."""
+    g = "running_bond"
+    for k, v in (("length", length), ("height", height), ("thickness", thickness)):
+        pc.positive(g, k, v, "m")
+    pc.integer(g, "courses", courses, lo=1)
+    pc.integer(g, "per_course", per_course, lo=2)
+    pc.material(g, density, kn, kt, damping, mu=mu)
     unit = length / per_course
     ch = height / courses
     blocks = [{"id": 0, "role": "platform", "material": "stone",

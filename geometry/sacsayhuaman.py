@@ -45,10 +45,11 @@ def _number(course: list[int], k: int) -> list[int]:
 
 
 def make(seed=0, irregularity=0.5, density=2300.0, kn=2e8, kt=1e8, mu=0.4, damping=0.8) -> dict:
-    """The generated 40-stone section as a block-file dict."""
+    """The generated 40-stone section as a block-file dict (``seed`` an integer >= 0,
+    ``irregularity`` in [0, 1); bad values raise GeometryError)."""
     d = iw.make(length=8.64, height=4.0, thickness=0.8, stones_per_course=COURSES, irregularity=irregularity,
                 stagger=0.2, seed=seed, density=density, kn=kn, kt=kt, mu=mu, damping=damping,
-                name="sacsayhuaman")
+                name="sacsayhuaman", _generator="sacsayhuaman")
     platform = d["blocks"][0]
     stones = d["blocks"][1:]
     out, new_id, pos = [platform], 1, 0

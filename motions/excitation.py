@@ -5,10 +5,14 @@ m/s^2 at step ``dt`` (s) (the record's own step; the load programme interpolates
 linearly between samples, or use ``motions.processing.resample``), and ``meta`` the
 record's ``metadata()`` plus ``motion`` and ``record`` (catalogue name or file) for the
 provenance of the run. Stage keys used: ``motion`` (sine, white_noise or record),
-``record`` (catalogue name, see ``motions.catalogue.names()``, or a file path,
-absolute, relative to the working directory or to the repository root),
+``record`` (catalogue name, see ``motions.catalogue.names()``, or a file path; a case
+file's path is relative to the case file's folder, made absolute by ``drystone.case``;
+called directly, a relative path is tried in the working directory, then the repository
+root),
 ``frequency_hz``/``amplitude`` (sine), ``seed`` (white noise), ``pga_g`` (scale to this
-PGA, exact) and ``duration`` (s; a longer record is trimmed to it, with a note).
+PGA, exact) and ``duration`` (s; a longer record is trimmed to it, with a note). Bad
+parameters (a sine too fast for its samples, too many samples) raise ValueError, which
+``drystone.runner`` reports as a CaseError naming the case file and stage.
 """
 from __future__ import annotations
 

@@ -6,7 +6,8 @@
   for ``duration`` s (10 s in the paper). ``pga_g`` replaces A by pga_g x 9.80665 (same
   shape). The default step gives 64 samples per period, so that the peaks fall on samples
   and the sampled PGA is exactly A; the displacement amplitude A / omega^2 is in
-  ``info["displacement_amplitude_m"]``.
+  ``info["displacement_amplitude_m"]``. A given ``dt`` must put ``frequency_hz`` below
+  its Nyquist frequency 1 / (2 dt).
 * ``white_noise(duration=30, fmax_hz=20, rate_hz=1000, peak_displacement=0.9e-3,
   seed=0, fmin_hz=None, spectrum="acceleration")``: band-limited white noise: random
   phases (numpy ``default_rng(seed)``) with a flat Fourier amplitude from ``fmin_hz``
@@ -21,6 +22,8 @@
   frequency domain (acceleration, m/s^2); it starts at rest (zero displacement and
   velocity at t = 0) and, being periodic, ends where it started.
 * ``white_noise_displacement(record)``: the displacement (m) of such a record from rest.
+
+Both refuse (ValueError, before allocating) a motion of more than ``MAX_SAMPLES`` samples.
 """
 from __future__ import annotations
 
@@ -29,6 +32,13 @@ import numpy as np
 from motions.record import G, Record
 
 SAMPLES_PER_PERIOD = 64  # a multiple of 4: the peaks fall on samples, the sampled PGA is exact
+MAX_SAMPLES = 10 ** 7  # 80 MB per float64 array; a 60 s record at 200 Hz has 12,000 samples
+
+
+def _check_samples(n: float, what: str):
+    """Refuse (ValueError) a motion of more than MAX_SAMPLES samples, before allocating it."""
+    if not n <= MAX_SAMPLES:
+        raise ValueError(f"{what} would need {n:.3g} samples, more than {MAX_SAMPLES:.0e}")
 
 
 def sine(frequency_hz: float, duration: float = 10.0, amplitude: float = 0.5, pga_g: float | None = None,
@@ -40,6 +50,13 @@ def sine(frequency_hz: float, duration: float = 10.0, amplitude: float = 0.5, pg
     amp = float(amplitude) if pga_g is None else float(pga_g) * G
     if dt is None:
         dt = 1.0 / (SAMPLES_PER_PERIOD * f)
+    elif not 0 < dt:
+        raise ValueError(f"sine sample step dt must be positive, got {dt}")
+    elif not f < 0.5 / dt:
+        raise ValueError(f"sine frequency_hz = {f:g} Hz is at or above the Nyquist frequency {0.5 / dt:g} Hz of "
+                         f"its sample step dt = {dt:g} s")
+    _check_samples(duration / dt + 1,
+                   f"a sine of frequency_hz = {f:g} Hz over duration = {duration:g} s (dt = {dt:.3g} s)")
     n = int(round(duration / dt)) + 1
     t = np.arange(n) * dt
     w = 2 * np.pi * f
@@ -60,6 +77,7 @@ def white_noise(duration: float = 30.0, fmax_hz: float = 20.0, rate_hz: float = 
     if spectrum not in ("acceleration", "displacement"):
         raise ValueError(f"spectrum must be 'acceleration' or 'displacement', got {spectrum!r}")
     dt = 1.0 / float(rate_hz)
+    _check_samples(duration * rate_hz, f"a white noise of duration = {duration:g} s at rate_hz = {rate_hz:g} Hz")
     n = int(round(duration * rate_hz))
     if not 0 < fmax_hz < 0.5 * rate_hz:
         raise ValueError(f"fmax_hz must be in (0, {0.5 * rate_hz}) Hz, got {fmax_hz}")

@@ -108,11 +108,12 @@ def control_points(h: dict, path: Path) -> Path:
     return path
 
 
-def standard(out: Path) -> list[Path]:
-    """All standard figures of the run in folder ``out``; returns their paths."""
+def standard(out: Path, summary: dict | None = None) -> list[Path]:
+    """All standard figures of the run in folder ``out`` (its summary.json, or ``summary``
+    before that is written); returns their paths."""
     out = Path(out)
     spec = json.loads((out / "spec.json").read_text())
-    s = json.loads((out / "summary.json").read_text())
+    s = summary if summary is not None else json.loads((out / "summary.json").read_text())
     h = summ.load_histories(out)
     made = []
     an = spec.get("analysis", {})

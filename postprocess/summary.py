@@ -304,10 +304,29 @@ def tilt_collapse(spec: dict, h: dict, detected: dict | None) -> dict | None:
     return col
 
 
+def _non_finite_keys(d, prefix="") -> list[str]:
+    """Dotted keys of the non-finite floats in a nested dict/list."""
+    out = []
+    items = d.items() if isinstance(d, dict) else enumerate(d) if isinstance(d, (list, tuple)) else []
+    for k, v in items:
+        key = f"{prefix}.{k}" if prefix else str(k)
+        if isinstance(v, float) and not np.isfinite(v):
+            out.append(key)
+        elif isinstance(v, (dict, list, tuple)):
+            out += _non_finite_keys(v, key)
+    return out
+
+
 def write(summary: dict, out: Path) -> Path:
-    """Write summary.json atomically (it is the marker of a complete run)."""
+    """Write summary.json atomically (it is the marker of a complete run). A non-finite
+    number raises ValueError naming it (JSON has no NaN or Infinity)."""
     p = Path(out) / "summary.json"
     tmp = p.with_suffix(".tmp")
-    tmp.write_text(json.dumps(summary, indent=1, default=float))
+    try:
+        text = json.dumps(summary, indent=1, default=float, allow_nan=False)
+    except ValueError:
+        raise ValueError(f"{p}: the summary has non-finite numbers ({', '.join(_non_finite_keys(summary)[:10])}); "
+                         "not written") from None
+    tmp.write_text(text)
     os.replace(tmp, p)
     return p

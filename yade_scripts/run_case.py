@@ -22,7 +22,8 @@ from yade import log
 # the runner puts the repository root on PYTHONPATH (under yade -x, __file__ is not this file)
 from drystone.loading import LoadProgramme, Stage  # noqa: E402
 from drystone import contact as law  # noqa: E402
-from drystone import rotations  # noqa: E402
+from drystone import rotations, stability  # noqa: E402
+from geometry import polyhedron as ph  # noqa: E402
 from yade_scripts import contact_engine as ce  # noqa: E402
 from yade_scripts import scene as sc  # noqa: E402
 
@@ -40,10 +41,10 @@ def _state_row(s) -> tuple:
 
 
 class Driver:
-    def __init__(self, spec: dict):
+    def __init__(self, spec: dict, out: Path | None = None):
         self.spec = spec
         self.O = yade.Omega()
-        self.out = Path(spec["out_dir"])
+        self.out = Path(out if out is not None else spec["out_dir"])  # the folder of spec.json
         self.tables = sc.build(spec)
         self.newton = self.tables["newton"]
         self.yid, self.bid = self.tables["yid"], self.tables["bid"]
@@ -98,6 +99,11 @@ class Driver:
         self.t_print = self.t_wall0
         self.done = False
         self.python_time = 0.0  # s spent in this per-step Python engine
+        # blow-up checks at every recorded sample (drystone/stability.py)
+        self.energy = stability.EnergyWatch(self.w_free)
+        self.failure = None
+        sizes = {b["id"]: float(ph.extent(np.asarray(b["vertices"])).min()) for b in spec["blocks"]}
+        self.size = np.array([sizes[self.bid[i]] for i in range(nb)])
 
     # -- helpers ----------------------------------------------------------------
     def _pair_props(self, ya, yb):
@@ -130,6 +136,7 @@ class Driver:
         if self.law_name == "penalty_coulomb":
             self._read_states(ids)
             self.engine.step(O, (self.pos, self.vel, self.angvel, self.rot))
+            self._check_depth()
         for y, f, start, end in self.forces:
             if start <= t < end:
                 O.forces.addF(y, f)
@@ -165,7 +172,9 @@ class Driver:
             for i in self.dyn:
                 state = self.states[int(i)]
                 free = np.array([c not in (state.blockedDOFs or "") for c in "xyz"], float)
+                v0 = np.array(tuple(state.vel))
                 state.vel = state.vel + yade.Vector3(*(dv * free))
+                self.energy.inject(0.5 * self.mass[i] * (np.sum((v0 + dv * free) ** 2) - np.sum(v0 ** 2)))
             self.jumps.append({"stage": k + 1, "time_s": float(self.O.time), "relative_velocity_m_s": dv.tolist()})
             print(f"[{self.spec['name']}] stage {k + 1}: base velocity jump, free blocks get {dv.tolist()} m/s "
                   "relative to the platform", flush=True)
@@ -213,6 +222,7 @@ class Driver:
         x_half = self.pos[d] - 0.5 * O.dt * self.vel[d]
         h["potential"].append(-float(np.sum(m * (x_half @ g))))
         h["elastic"].append(0.5 * sum(self.engine.elastic) if self.law_name == "penalty_coulomb" else np.nan)
+        self._check_stable(t, ke, h["elastic"][-1], g, st)
         for name, ya, yb in self.named:
             hc = self.hc[name]
             row = np.flatnonzero(((st.id1 == ya) & (st.id2 == yb)) | ((st.id1 == yb) & (st.id2 == ya))) if len(st.fn) else []
@@ -235,6 +245,40 @@ class Driver:
             hc["area"].append(float(st.area[r]))
             hc["volume"].append(float(st.volume[r]))
         self._check_collapse(t, R)
+
+    def _check_depth(self):
+        """Every step (a tunnelling block can pass through in less than a sample)."""
+        st = self.engine.state
+        if self.failure is None and len(st.fn):
+            with np.errstate(divide="ignore", invalid="ignore"):
+                deep = st.volume > stability.TUNNEL_FRACTION * st.area * np.minimum(self.size[st.id1], self.size[st.id2])
+            if deep.any():
+                names = [f"{self.bid[int(a)]}-{self.bid[int(b)]}" for a, b in zip(st.id1, st.id2)]
+                self._fail(stability.tunnelling(st.volume, st.area, self.size[st.id1], self.size[st.id2], names))
+
+    def _fail(self, msg):
+        self.failure = msg
+        print(f"[{self.spec['name']}] error: {msg}", flush=True)
+        self.O.pause()
+
+    def _check_stable(self, t, ke, elastic, g, st):
+        """Stop the run (no histories, exit 3, failure.txt) at the first sample whose numbers
+        are not physics: non-finite state, energy grown past the loads' work, tunnelling."""
+        if self.failure is not None:
+            return
+        d = self.dyn
+        msg = stability.non_finite(t, positions=self.pos[d], velocities=self.vel[d], angular_velocities=self.angvel[d],
+                                   orientations=self.quat[d], kinetic_energy=ke)
+        if msg is None:
+            forces = [(int(np.flatnonzero(d == y)[0]), np.array(tuple(f))) for y, f, a, b in self.forces
+                      if a <= t < b and y in d]
+            p = stability.load_power(self.mass[d], self.vel[d], g, forces)
+            msg = self.energy.update(t, ke, 0.0 if np.isnan(elastic) else elastic, p)
+        if msg is None and len(st.fn):
+            names = [f"{self.bid[int(a)]}-{self.bid[int(b)]}" for a, b in zip(st.id1, st.id2)]
+            msg = stability.tunnelling(st.volume, st.area, self.size[st.id1], self.size[st.id2], names)
+        if msg is not None:
+            self._fail(msg)
 
     def _check_settled(self, t, ke_b):
         """A last rest stage with ``until_kinetic_below(_per_weight)``: stop the run once the
@@ -294,7 +338,12 @@ class Driver:
         wall0 = time.time()
         O.run(self.steps_total, True)
         wall = time.time() - wall0
-        self._record(O.time)
+        if self.failure is None:
+            self._record(O.time)
+        if self.failure is not None:  # no histories: nothing that looks like a result
+            (self.out / "failure.txt").write_text(self.failure + "\n")
+            sys.stdout.flush()
+            os._exit(3)
         self.save(wall)
 
     def save(self, wall):
@@ -331,7 +380,7 @@ def main(argv):
     if len(argv) != 1:
         raise SystemExit("usage: yade -n -x yade_scripts/run_case.py SPEC.json")
     spec = json.loads(Path(argv[0]).read_text())
-    Driver(spec).run()
+    Driver(spec, Path(argv[0]).resolve().parent).run()
 
 
 main(sys.argv[1:])
