@@ -65,26 +65,26 @@ settlement4: setup
 	$(RUN) run cases/settlement4.toml -j $(JOBS)
 
 ogawa: setup
-	$(PY) -m ogawa insitu
-	$(PY) -m ogawa study
+	$(PY) -m drystone.studies.ogawa insitu
+	$(PY) -m drystone.studies.ogawa study
 
 ogawa3d: setup
-	$(PY) -m ogawa study3d --workers $(JOBS)
+	$(PY) -m drystone.studies.ogawa study3d --workers $(JOBS)
 	$(MAKE) ogawa-pga
 
 ogawa-pga: setup
 	$(RUN) sweep cases/sweeps/ogawa_pga.toml --workers $(JOBS)
 	$(RUN) sweep cases/sweeps/ogawa_cumulative.toml --workers $(JOBS)
-	$(PY) -m ogawa refresh
+	$(PY) -m drystone.studies.ogawa refresh
 
 readme: setup
-	$(PY) -m postprocess.readme_tables README.md
+	$(PY) -m drystone.postprocess.readme_tables README.md
 
 demo: setup
 	$(RUN) run cases/gravity4.toml -j $(JOBS)
 	$(RUN) run cases/settlement4.toml -j $(JOBS)
 	$(RUN) compare results/gravity4 results/settlement4
-	$(PY) -m sacsayhuaman demo --workers $(JOBS)
+	$(PY) -m drystone.studies.sacsayhuaman demo --workers $(JOBS)
 
 bench: setup
 	$(RUN) bench
@@ -93,11 +93,11 @@ free-decay: setup
 	$(RUN) free-decay
 
 records: setup
-	$(PY) -m motions records
+	$(PY) -m drystone.motions records
 
 spectrum: setup
 	@test -n "$(FILE)" || { echo "usage: make spectrum FILE=path/to/record [ARGS='--component EW --units gal --dt 0.01']"; exit 2; }
-	$(PY) -m motions spectrum "$(FILE)" $(ARGS)
+	$(PY) -m drystone.motions spectrum "$(FILE)" $(ARGS)
 
 sweep: setup
 	@test -n "$(SWEEP)" || { echo "usage: make sweep SWEEP=cases/sweeps/x.toml [DASK=tcp://host:8786|local]"; exit 2; }
@@ -106,28 +106,28 @@ sweep: setup
 tilt: setup
 	$(RUN) sweep cases/sweeps/tilt_seeds.toml --workers $(JOBS)
 	$(RUN) sweep cases/sweeps/tilt_seeds_extruded.toml --workers $(JOBS)
-	$(PY) -m postprocess.tilt
+	$(PY) -m drystone.studies.tilt
 
 tilt-rate: setup
 	$(RUN) sweep cases/sweeps/tilt_rate.toml --workers $(JOBS)
-	$(PY) -m postprocess.tilt
+	$(PY) -m drystone.studies.tilt
 
 tilt-sensitivity: setup
 	$(RUN) sweep cases/sweeps/tilt_sensitivity.toml --workers $(JOBS)
-	$(PY) -m postprocess.tilt
+	$(PY) -m drystone.studies.tilt
 
 sacsayhuaman: setup
-	$(PY) -m sacsayhuaman all --workers $(JOBS) $(if $(DASK),--dask $(DASK))
+	$(PY) -m drystone.studies.sacsayhuaman all --workers $(JOBS) $(if $(DASK),--dask $(DASK))
 
 sacsayhuaman-report: setup
-	$(PY) -m sacsayhuaman report
+	$(PY) -m drystone.studies.sacsayhuaman report
 
 tilt-report: setup
-	$(PY) -m postprocess.tilt
+	$(PY) -m drystone.studies.tilt
 
 vtk: setup
 	@test -n "$(DIR)" || { echo "usage: make vtk DIR=results/<run folder> [EVERY=5]"; exit 2; }
-	$(PY) -m postprocess.vtk $(DIR) --every $(or $(EVERY),1)
+	$(PY) -m drystone.postprocess.vtk $(DIR) --every $(or $(EVERY),1)
 
 clean:
 	rm -rf results

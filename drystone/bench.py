@@ -70,8 +70,8 @@ def sacsayhuaman_times(workdir: Path) -> list[dict]:
     short white-noise run times the analysis's steps (gravity 2 s + the motion; a sine
     also has 2 s of rest, a record 2 s), beside the paper's Abaqus times on 8 cores, and
     the times of finished study runs where there are some."""
-    from motions import catalogue
-    from postprocess import compare
+    from drystone.motions import catalogue
+    from drystone.postprocess import compare
 
     case = {"case": {"name": "bench_sacsayhuaman", "geometry": {"generator": "sacsayhuaman", "seed": 0}},
             "stages": [{"type": "gravity", "duration": 0.5, "ramp": 0.25},

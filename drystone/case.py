@@ -388,7 +388,7 @@ def _check_name(where: str, name: str):
 def _record(where: str, record: str, base_dir: Path) -> str:
     """A catalogue name as given; a file path resolved against the case file's folder
     (as 'geometry'), returned absolute."""
-    from motions import catalogue
+    from drystone.motions import catalogue
 
     if record in catalogue.names():
         return record

@@ -60,7 +60,7 @@ def main(argv=None) -> int:
             else:
                 print(casemod.describe())
         elif a.cmd == "compare":
-            from postprocess import compare
+            from drystone.postprocess import compare
             print(compare.report(a.folders))
         elif a.cmd == "sweep":
             from drystone import sweep
@@ -85,7 +85,7 @@ def main(argv=None) -> int:
         return 2
     except Exception as exc:  # noqa: BLE001 - report any failure clearly and exit non-zero
         from drystone.runner import RunError
-        from geometry.blockfile import GeometryError
+        from drystone.geometry.blockfile import GeometryError
         if isinstance(exc, (RunError, GeometryError)):
             print(f"error: {exc}", file=sys.stderr)
             return 2

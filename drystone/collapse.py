@@ -1,6 +1,6 @@
 """Collapse angle of a tilt run from its recorded motion (plain Python, no YADE).
 
-A tilt run stops shortly after a collapse is *detected* (yade_scripts/run_case.py: the
+A tilt run stops shortly after a collapse is *detected* (drystone/yade_scripts/run_case.py: the
 vertical reaction drops or a block moves more than its threshold). Detection lags the
 instability by the time the blocks need to move far, and at a faster tilt rate more tilt
 goes by in that time. The collapse angle is therefore the tilt where the motion that led
@@ -71,7 +71,7 @@ def reaction_drop(t, tilt_deg, reaction_N, weight_N, active=None, drop=REACTION_
     any tilt (the platform carries all of it; along the platform's normal it would fall as
     cos(tilt), 3 % at 14 deg, without any collapse); it drops only while blocks accelerate
     downwards, i.e. fall. This is the rule the run itself uses to stop
-    (yade_scripts/run_case.py, evaluated at the same recorded samples), so when the run's
+    (drystone/yade_scripts/run_case.py, evaluated at the same recorded samples), so when the run's
     criterion was ``reaction_drop`` the angle equals its detection angle.
 
     ``t`` (n,) s, ``tilt_deg`` (n,) deg, ``reaction_N`` (n,) N, ``active`` (n,) bool or

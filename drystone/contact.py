@@ -1,5 +1,5 @@
 """The penalty–Coulomb–damping contact law of the Sacsayhuaman paper (Eqs. 5–8), as numpy
-kernels over arrays of contacts. No YADE import: ``yade_scripts/contact_engine.py`` feeds
+kernels over arrays of contacts. No YADE import: ``drystone/yade_scripts/contact_engine.py`` feeds
 these functions the contact geometry YADE computes and applies the forces they return.
 
 Conventions (per contact k): ``n`` is the unit normal pointing from body A (YADE id1) to

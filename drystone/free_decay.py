@@ -77,7 +77,7 @@ def ring(outdir: Path, detection: str, xi: float, kind: str) -> dict:
     """Run one free decay (YADE) and return the time (s) and the modal velocities after the
     release: {'t', 'bouncing'} or {'t', 'mode_1', 'mode_2'} (m/s or the modal unit)."""
     from drystone import runner
-    from postprocess import summary as summ
+    from drystone.postprocess import summary as summ
 
     out = Path(outdir) / kind
     Path(outdir).mkdir(parents=True, exist_ok=True)

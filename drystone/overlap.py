@@ -40,7 +40,7 @@ class Shapes:
     """The blocks' local geometry as padded arrays for the kernels (from vertex lists)."""
 
     def __init__(self, local_vertices: list):
-        from geometry import polyhedron as ph
+        from drystone.geometry import polyhedron as ph
 
         nb = len(local_vertices)
         geo = [ph.faces(v) for v in local_vertices]

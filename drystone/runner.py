@@ -20,9 +20,9 @@ import numpy as np
 
 from drystone import case as casemod
 from drystone import paths, provenance, timestep
-from geometry import blockfile as bf
-from geometry import generators
-from geometry import polyhedron as ph
+from drystone.geometry import blockfile as bf
+from drystone.geometry import generators
+from drystone.geometry import polyhedron as ph
 
 TOWARDS = {"+x": [1.0, 0.0, 0.0], "-x": [-1.0, 0.0, 0.0], "+y": [0.0, 1.0, 0.0], "-y": [0.0, -1.0, 0.0]}
 AXES = {"x": [1.0, 0.0, 0.0], "y": [0.0, 1.0, 0.0], "z": [0.0, 0.0, 1.0]}
@@ -71,8 +71,8 @@ def _materials(case: dict, bs: bf.BlockSet, where: str) -> dict:
 
 def _excitation(s: dict, where: str, out: Path, k: int) -> tuple[np.ndarray, float, dict]:
     """Acceleration samples (m/s^2), their step (s) and metadata for an excitation stage
-    (sine, white noise or record: motions/excitation.py), saved beside the run."""
-    from motions import excitation as mex
+    (sine, white noise or record: drystone/motions/excitation.py), saved beside the run."""
+    from drystone.motions import excitation as mex
 
     try:
         acc, dt, meta = mex.for_stage(s)
@@ -261,7 +261,7 @@ def fingerprint(spec: dict) -> str:
 
 def _yade_command(spec_path: Path, threads: int) -> list[str]:
     yade = shutil.which("yade") or "/usr/bin/yade"
-    script = paths.ROOT / "yade_scripts" / "run_case.py"
+    script = paths.PACKAGE / "yade_scripts" / "run_case.py"
     return [sys.executable, yade, "-n", "-x", "-j", str(threads), str(script), str(spec_path)]
 
 
@@ -318,8 +318,7 @@ def _simulate(spec_path: Path, threads: int, quiet: bool) -> int:
     """Run YADE on ``spec_path`` (its log to log.txt beside it); returns YADE's exit code.
     YADE runs in its own session, so a Ctrl-C reaches only this process, which then
     kills YADE (no orphan) and re-raises."""
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(paths.ROOT), os.environ.get("PYTHONPATH", "")]),
-               PYTHONUNBUFFERED="1")
+    env = dict(os.environ, PYTHONUNBUFFERED="1")  # YADE runs this interpreter: drystone is installed
     with open(spec_path.parent / "log.txt", "w") as log:
         proc = subprocess.Popen(_yade_command(spec_path, threads), stdout=subprocess.PIPE,
                                 stderr=subprocess.STDOUT, text=True, env=env, cwd=paths.ROOT,
@@ -347,8 +346,8 @@ def run(case_path, overrides=None, out_dir=None, threads=1, quiet=False, check_o
     the last file written. The folder is locked for the run (``FolderLock``).
     ``check_overlaps=False`` skips the geometry's pairwise overlap test (sweeps have run
     it once for all their runs)."""
-    from postprocess import plots
-    from postprocess import summary as summ  # plain Python
+    from drystone.postprocess import plots
+    from drystone.postprocess import summary as summ  # plain Python
 
     case_path = Path(case_path)
     case = casemod.load(case_path, overrides or [])
@@ -393,7 +392,7 @@ def run(case_path, overrides=None, out_dir=None, threads=1, quiet=False, check_o
 def resummarise(out) -> dict:
     """Rebuild a finished run's summary.json from its spec, histories and run info with
     the current post-processing (e.g. the collapse onset rule); the figures are kept."""
-    from postprocess import summary as summ
+    from drystone.postprocess import summary as summ
 
     out = Path(out)
     old = json.loads((out / "summary.json").read_text())

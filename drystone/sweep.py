@@ -137,7 +137,7 @@ def validate(jobs: list[Job]) -> dict[str, str]:
     import tempfile
 
     from drystone import runner
-    from geometry.blockfile import GeometryError
+    from drystone.geometry.blockfile import GeometryError
 
     prints = {}
     checked = set()  # geometries whose pairwise overlap test has run (once per geometry)

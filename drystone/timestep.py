@@ -15,7 +15,7 @@ import numpy as np
 
 from drystone import contact as law
 from drystone.case import CaseError
-from geometry import polyhedron as ph
+from drystone.geometry import polyhedron as ph
 
 # Most steps a run may take: ~2 days of YADE at ~3 ms per step (a wall of a few dozen
 # polyhedra). More means a degenerate input (a sliver block, an absurd kn or density).

@@ -40,7 +40,7 @@ def run_case(case: dict, outdir: Path, name: str = "case", **kw) -> tuple[dict, 
     import json
 
     from drystone import runner
-    from postprocess import summary as summ
+    from drystone.postprocess import summary as summ
 
     out = outdir / name
     s = runner.run_dict(case, outdir / f"{name}.toml", out_dir=out, quiet=True)

@@ -6,9 +6,9 @@ import sys
 import numpy as np
 import pytest
 
-from geometry import blockfile as bf
-from geometry import four_blocks
-from geometry import polyhedron as ph
+from drystone.geometry import blockfile as bf
+from drystone.geometry import four_blocks
+from drystone.geometry import polyhedron as ph
 
 
 def one_block(**over):
@@ -87,8 +87,8 @@ def test_cli_validate_exit_code(tmp_path):
     d = one_block()
     d["blocks"][1]["vertices"] = bf.box_vertices((0, 0, 0.0), (0.2, 0.3, 0.2))
     bad.write_text(json.dumps(d))
-    ok = subprocess.run([sys.executable, "-m", "geometry", "validate", str(good)], capture_output=True, text=True)
+    ok = subprocess.run([sys.executable, "-m", "drystone.geometry", "validate", str(good)], capture_output=True, text=True)
     assert ok.returncode == 0, ok.stderr
-    ko = subprocess.run([sys.executable, "-m", "geometry", "validate", str(bad)], capture_output=True, text=True)
+    ko = subprocess.run([sys.executable, "-m", "drystone.geometry", "validate", str(bad)], capture_output=True, text=True)
     assert ko.returncode != 0
     assert "blocks 0 and 7 interpenetrate" in ko.stderr and str(bad) in ko.stderr

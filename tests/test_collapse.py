@@ -127,7 +127,7 @@ def test_summary_reaction_is_along_the_true_vertical():
     normal it would be W cos(tilt): 0.95 W at 18.2 deg, a false collapse); blocks that
     fall from 14.3 deg unload it. The reaction-drop angle is found within one sample."""
     from drystone.loading import LoadProgramme, Stage
-    from postprocess import summary as summ
+    from drystone.postprocess import summary as summ
 
     stages = [{"kind": "gravity", "start": 0.0, "end": 1.0, "params": {"ramp": 0.5}},
               {"kind": "tilt", "start": 1.0, "end": 31.0,

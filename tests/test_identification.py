@@ -1,4 +1,4 @@
-"""Identification (postprocess/identification.py, motions.generators.white_noise):
+"""Identification (drystone/postprocess/identification.py, motions.generators.white_noise):
 
 * the paper's procedure (one 4096-point FFT at 1000 Hz) can only give k x 1000/4096 Hz,
   and the paper's eight peaks are such bins;
@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 from scipy import linalg, signal
 
-from motions import generators
-from postprocess import compare
-from postprocess import identification as idf
+from drystone.motions import generators
+from drystone.postprocess import compare
+from drystone.postprocess import identification as idf
 
 
 def test_paper_peaks_are_fft_bins_of_a_4096_point_window():

@@ -138,7 +138,7 @@ def test_modes_of_a_two_block_tower_match_its_free_vibration(tmp_path):
     from conftest import have_yade, run_case
     if not have_yade():
         pytest.skip("YADE is not installed")
-    from postprocess import identification as idf
+    from drystone.postprocess import identification as idf
 
     size = [0.2, 0.2, 0.4]
     w_top = RHO * 0.016 * modal.G

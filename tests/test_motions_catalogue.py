@@ -7,8 +7,8 @@ import json
 import numpy as np
 import pytest
 
-from motions import catalogue, cli, excitation, fema
-from motions.record import G
+from drystone.motions import catalogue, cli, excitation, fema
+from drystone.motions.record import G
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
 

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from scipy.integrate import cumulative_trapezoid
 
-from motions import generators, processing as pr
-from motions.record import G, Record
-from postprocess import spectra as sp
+from drystone.motions import generators, processing as pr
+from drystone.motions.record import G, Record
+from drystone.postprocess import spectra as sp
 
 
 def noisy(seed=3, n=2000, dt=0.01):
@@ -97,7 +97,7 @@ def test_integrate_with_drift_control():
     v = cumulative_trapezoid(k.record.acc, dx=dt, initial=0.0)
     np.testing.assert_allclose(k.velocity, v, atol=1e-9)
     assert any("drift control" in h for h in k.record.history)
-    from motions import fema
+    from drystone.motions import fema
 
     kobe = pr.integrate(fema.load(7, "a"), highpass_hz=0.1, poly_order=6)
     assert abs(kobe.displacement[-1]) < 0.02 * np.abs(kobe.displacement).max()

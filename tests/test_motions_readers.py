@@ -9,9 +9,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from motions import readers
-from motions.readers import RecordFormatError
-from motions.record import G
+from drystone.motions import readers
+from drystone.motions.readers import RecordFormatError
+from drystone.motions.record import G
 
 AT2_WEST2 = """PEER NGA STRONG MOTION DATABASE RECORD
 Kobe, Japan, 1/16/1995, Nishi-Akashi, 0

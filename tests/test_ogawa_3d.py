@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from conftest import requires_yade, run_case
-from ogawa import mrb1d
+from drystone.studies.ogawa import mrb1d
 
 pytestmark = [requires_yade, pytest.mark.yade]
 G = 9.81
@@ -43,8 +43,8 @@ def test_five_blocks_short_kobe_end_to_end(outdir):
     """2 s of the Kobe record (the strong part, 818 gal = 0.834 g) twice on the five-block model:
     finite residuals per run, below the base's own displacement range over the window
     (no block can slide farther than the base moves under it)."""
-    from motions import catalogue, processing
-    from ogawa.study import KOBE_PGA_G
+    from drystone.motions import catalogue, processing
+    from drystone.studies.ogawa.study import KOBE_PGA_G
     rec = processing.trim(processing.scale_to_pga(catalogue.get("kobe1995"), pga_g=KOBE_PGA_G), 6.0, 8.0)
     path = outdir / "kobe_window.txt"
     np.savetxt(path, np.column_stack([rec.time - rec.time[0], rec.acc]), header="units = m/s^2\nevent = Kobe window")

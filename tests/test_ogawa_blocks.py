@@ -1,9 +1,9 @@
-"""The two readings of Ogawa et al.'s "100x50x100 mm" blocks (geometry/ogawa_blocks.py)."""
+"""The two readings of Ogawa et al.'s "100x50x100 mm" blocks (drystone/geometry/ogawa_blocks.py)."""
 import numpy as np
 import pytest
 
-from geometry import blockfile as bf
-from geometry import ogawa_blocks as ob
+from drystone.geometry import blockfile as bf
+from drystone.geometry import ogawa_blocks as ob
 
 
 def _dims(d):

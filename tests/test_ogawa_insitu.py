@@ -1,5 +1,5 @@
 """Ogawa et al. Tables 1-3 as data: the paper's averages are recomputed."""
-from ogawa import insitu
+from drystone.studies.ogawa import insitu
 
 
 def test_averages_match_the_paper():

@@ -1,8 +1,8 @@
-"""The paper's 1D friction/impact model (ogawa/mrb1d.py) against closed forms."""
+"""The paper's 1D friction/impact model (drystone/studies/ogawa/mrb1d.py) against closed forms."""
 import numpy as np
 import pytest
 
-from ogawa import mrb1d
+from drystone.studies.ogawa import mrb1d
 from reference import sliding_block
 
 G = mrb1d.G

@@ -4,8 +4,8 @@ import json
 import numpy as np
 import pytest
 
-from ogawa import study
-from motions import catalogue, processing
+from drystone.studies.ogawa import study
+from drystone.motions import catalogue, processing
 
 
 def test_study_short_record(tmp_path):
@@ -41,7 +41,7 @@ def test_experimental_pattern():
 
 def test_experimental_pattern_with_fallen_blocks():
     """A block that fell off (None) counts as moving most; ties at the top are no pattern."""
-    from ogawa.study import experimental_pattern
+    from drystone.studies.ogawa.study import experimental_pattern
     assert experimental_pattern([1.0, 0.5, 5.0, 4.0, 2.0])
     assert experimental_pattern([1.0, 0.5, None, None, 2.0])
     assert not experimental_pattern([1.0, 0.5, None, None, None])  # block 5 fell too: no order among them
@@ -95,8 +95,8 @@ def _fake_3d_run(folder, orientation, pga, n_runs=1, tipped=(), slide_mm=10.0):
     """A finished 3D run folder: every block slid slide_mm x (run number) along x; blocks in
     ``tipped`` rotated 40 deg about y after the last run (past the upright end blocks'
     tipping angle atan(50/100) = 26.6 deg, short of the flat ones' 45 deg)."""
-    from geometry import blockfile as bf
-    from geometry import ogawa_blocks as ob
+    from drystone.geometry import blockfile as bf
+    from drystone.geometry import ogawa_blocks as ob
     folder.mkdir(parents=True)
     bf.write(ob.make(orientation=orientation), folder / "geometry.json")
     ids = np.arange(1, 6)

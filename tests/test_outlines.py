@@ -1,10 +1,10 @@
-"""User outlines extruded to blocks (geometry/outlines.py)."""
+"""User outlines extruded to blocks (drystone/geometry/outlines.py)."""
 import numpy as np
 import pytest
 
-from geometry import blockfile as bf
-from geometry import outlines as ol
-from geometry import sacsayhuaman as sw
+from drystone.geometry import blockfile as bf
+from drystone.geometry import outlines as ol
+from drystone.geometry import sacsayhuaman as sw
 
 
 def write(folder, name, text):

@@ -5,7 +5,7 @@ import pytest
 from scipy.spatial import HalfspaceIntersection
 
 from drystone import overlap as ov
-from geometry import polyhedron as ph
+from drystone.geometry import polyhedron as ph
 
 
 def box(lo, hi):

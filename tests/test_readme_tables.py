@@ -1,11 +1,11 @@
-"""README.md's generated tables (postprocess/readme_tables.py) on synthetic results."""
+"""README.md's generated tables (drystone/postprocess/readme_tables.py) on synthetic results."""
 import json
 
 import pytest
 
 from drystone import paths
-from postprocess import readme_tables as rt
-from postprocess import tilt
+from drystone.postprocess import readme_tables as rt
+from drystone.studies import tilt
 from test_tilt_report import fake_run
 
 README = """intro

@@ -7,7 +7,7 @@ import pytest
 
 from drystone import case as casemod
 from drystone import paths, runner, timestep
-from motions import excitation, generators
+from drystone.motions import excitation, generators
 
 BOX = '{generator = "boxes_on_platform", boxes = [{id = 1, center_xy = [0.0, 0.0], size = [0.2, 0.2, 0.2]}]}'
 GOOD = f"""

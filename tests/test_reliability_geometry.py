@@ -12,10 +12,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from geometry import blockfile as bf
-from geometry import generators
-from geometry import outlines as ol
-from geometry import polyhedron as ph
+from drystone.geometry import blockfile as bf
+from drystone.geometry import generators
+from drystone.geometry import outlines as ol
+from drystone.geometry import polyhedron as ph
 
 ROOT = Path(__file__).resolve().parents[1]
 L_OUTLINE = [(0, 0), (2, 0), (2, 1), (1, 1), (1, 2), (0, 2)]  # (x, z) m, re-entrant corner (1, 1)
@@ -61,7 +61,7 @@ def test_l_shaped_block_is_refused_not_replaced_by_its_hull(tmp_path):
     msg = load_error(tmp_path, blocks_file(v))
     assert "block 1: not convex: vertex 6 at (1, -0.25, 1) m, vertex 7 at (1, 0.25, 1) m are not corners" in msg
     p = tmp_path / "bad.json"
-    cli = subprocess.run([sys.executable, "-m", "geometry", "validate", str(p)], capture_output=True, text=True,
+    cli = subprocess.run([sys.executable, "-m", "drystone.geometry", "validate", str(p)], capture_output=True, text=True,
                          cwd=ROOT)
     assert cli.returncode == 1 and "not convex" in cli.stderr and "Traceback" not in cli.stderr
 
@@ -176,7 +176,7 @@ def test_bad_generator_parameters_are_named(spec, words):
 
 def test_geometry_make_cli_reports_a_bad_parameter(tmp_path):
     out = tmp_path / "w.json"
-    r = subprocess.run([sys.executable, "-m", "geometry", "make", "running_bond", str(out), "courses=0"],
+    r = subprocess.run([sys.executable, "-m", "drystone.geometry", "make", "running_bond", str(out), "courses=0"],
                        capture_output=True, text=True, cwd=ROOT)
     assert r.returncode == 1 and "error: geometry generator 'running_bond': parameter 'courses'" in r.stderr
     assert "Traceback" not in r.stderr and not out.exists()

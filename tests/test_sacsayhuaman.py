@@ -9,13 +9,13 @@ import pytest
 
 from conftest import requires_yade
 from drystone import sweep
-from postprocess import compare
-from sacsayhuaman import analysis as an
-from sacsayhuaman import figures as fig
+from drystone.postprocess import compare
+from drystone.studies.sacsayhuaman import analysis as an
+from drystone.studies.sacsayhuaman import figures as fig
 
 
 def _res(max_oop_m, stones, collapsed=(), all_collapsed=False, norm_m=None, norm_stones=None, settled=True):
-    """A residuals() result (sacsayhuaman/analysis.py) written by hand."""
+    """A residuals() result (drystone/studies/sacsayhuaman/analysis.py) written by hand."""
     return {"max_out_of_plane_m": max_oop_m, "stones": list(stones), "collapsed": list(collapsed),
             "all_collapsed": all_collapsed, "max_norm_m": max_oop_m if norm_m is None else norm_m,
             "norm_stones": list(stones if norm_stones is None else norm_stones), "settled": settled}
@@ -117,7 +117,7 @@ def test_unsettled_run_is_said_so(tmp_path):
     assert r["settled"] is False and r["settle"]["final_kinetic_J"] == 3.2
     md = an.table3_markdown([an.table3_row("paruro2014", 0.3, r)], compare.paper("sacsayhuaman")["table3"])
     assert f"100.0 (35) {an.NOT_SETTLED}" in md and "had not died out" in md
-    from sacsayhuaman import study
+    from drystone.studies.sacsayhuaman import study
     assert "had not died out" in " ".join(study._unsettled_note([an.table3_row("paruro2014", 0.3, r)]))
 
 
@@ -126,7 +126,7 @@ def test_resonance_and_settle_overrides_follow_the_record_case():
     the rest-until-settled of cases/sacsayhuaman/record.toml (one threshold for every residual)."""
     from drystone import case as casemod
     from drystone import paths
-    from sacsayhuaman import study
+    from drystone.studies.sacsayhuaman import study
     assert study.resonance_frequencies(2.0) == {"paper": 0.976, "wall": 2.0}
     assert study.resonance_frequencies(0.9765) == {"paper": 0.976}
     sine = casemod.load(paths.CASES / "sacsayhuaman" / "sine.toml", study.settle_overrides())
@@ -180,7 +180,7 @@ def test_record_sweep_two_pgas_resumes_and_tabulates(outdir, backend):
     assert res["failed"] == []
     res = sweep.run(p, workers=2, results=outdir / "res", **kw)
     assert all(r["status"].startswith("skipped") for r in res["runs"].values())
-    from sacsayhuaman import study
+    from drystone.studies.sacsayhuaman import study
     rows = study.table3_rows(Path(res["root"]))
     assert [r["pga_g"] for r in sorted(rows, key=lambda r: r["pga_g"])] == [0.1, 0.8]
     lo, hi = sorted(rows, key=lambda r: r["pga_g"])

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from postprocess import spectra as sp
+from drystone.postprocess import spectra as sp
 
 
 @pytest.mark.parametrize("window", ["hann", "tukey", None])
@@ -98,7 +98,7 @@ def test_response_spectrum_matches_the_fema_package_values():
     Landers Coolwater record the two agree within 0.5 % from 0.1 s up; for the 100 Hz Kobe
     record within 0.5 % from 0.5 s (shorter periods: the stored values come from a
     coarser integration scheme; ours is exact for linear interpolation)."""
-    from motions import fema
+    from drystone.motions import fema
 
     with fema.open_file("farfield") as f:
         s = f["spectra/table"][()]

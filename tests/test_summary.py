@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from drystone import rotations
-from postprocess import summary as summ
+from drystone.postprocess import summary as summ
 
 
 def synthetic(n=200):
@@ -46,8 +46,8 @@ def test_relative_rotation_vectors():
 
 def test_block_faces_of_a_box():
     """A box has 6 quadrilateral faces."""
-    from geometry import blockfile as bf
-    from postprocess import snapshots
+    from drystone.geometry import blockfile as bf
+    from drystone.postprocess import snapshots
     faces = snapshots.block_faces(np.asarray(bf.box_vertices((0, 0, 0), (1, 2, 3)), float))
     assert len(faces) == 6 and all(len(f) == 4 for f in faces)
 
@@ -55,7 +55,7 @@ def test_block_faces_of_a_box():
 def test_contact_stability_against_the_central_difference_limit():
     """omega dt of the fastest contact mode against 2 (sqrt(1 + xi^2) - xi), xi the largest
     damping of the run's materials (0.8: limit 0.961)."""
-    from postprocess.summary import contact_stability
+    from drystone.postprocess.summary import contact_stability
     spec = {"materials": {"a": {"damping": 0.08}, "b": {"damping": 0.8}}}
     c = contact_stability(spec, {"max_contact_omega_dt": 0.33})
     assert c["limit"] == pytest.approx(2 * (np.sqrt(1.64) - 0.8)) and c["within"]

@@ -54,7 +54,7 @@ def test_toppling_block_at_both_quasi_static_rates(outdir):
     0.2 deg/s), with xi = 0.08 it does not. Asserted: the paper's 0.2 deg/s and the
     lightly damped 1 deg/s within the 0.3 deg of the sanity checks; the damped fast run
     later, never earlier, than both. The rate limit of issue 5 (0.2 deg) is checked on the
-    wall itself (`make tilt-rate`, postprocess/tilt.py)."""
+    wall itself (`make tilt-rate`, drystone/studies/tilt.py)."""
     expected = analytic.toppling_tilt_deg(0.2, 0.4, 0.2, 2300, 2e8)
     angles = {}
     for rate, xi in ((0.2, 0.8), (1.0, 0.8), (1.0, 0.08)):

@@ -5,7 +5,7 @@ import pytest
 
 from conftest import requires_yade
 from drystone import paths, runner
-from postprocess import compare
+from drystone.postprocess import compare
 
 pytestmark = [requires_yade, pytest.mark.yade]
 W = 2200 * 0.220 * 0.105 * 0.050 * 9.81  # 24.93 N, paper §3.1

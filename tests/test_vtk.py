@@ -1,4 +1,4 @@
-"""VTK output (postprocess/vtk.py) on a synthetic run: a cube translated and turned on a
+"""VTK output (drystone/postprocess/vtk.py) on a synthetic run: a cube translated and turned on a
 platform, read back with the standard library's XML parser."""
 import json
 import xml.etree.ElementTree as ET
@@ -6,8 +6,8 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
-from geometry import blockfile as bf
-from postprocess import vtk
+from drystone.geometry import blockfile as bf
+from drystone.postprocess import vtk
 
 
 def fake_run(folder, dx, angle):

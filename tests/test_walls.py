@@ -1,9 +1,9 @@
-"""Irregular wall generator (geometry/irregular_wall.py)."""
+"""Irregular wall generator (drystone/geometry/irregular_wall.py)."""
 import numpy as np
 import pytest
 
-from geometry import blockfile as bf
-from geometry import irregular_wall as iw
+from drystone.geometry import blockfile as bf
+from drystone.geometry import irregular_wall as iw
 
 
 def stones(d):
@@ -69,8 +69,8 @@ def test_sacsayhuaman_numbering_roles_control_points(tmp_path):
     """40 stones numbered 1..40 (+ platform 0); 1-7 fixed on the platform; side blocks 8,
     9, 14, 15, 24, 25, 34 at the wall's ends with blocked_dofs 'xYZ'; A-D on top of 35, 38,
     39, 40 at z = 4 m; the stones tile 8.64 x 4 x 0.8 m."""
-    from geometry import sacsayhuaman as sw
-    from postprocess import snapshots
+    from drystone.geometry import sacsayhuaman as sw
+    from drystone.postprocess import snapshots
     d = sw.make(seed=1)
     bs = bf.parse(d)
     assert sorted(bs.ids()) == list(range(41))

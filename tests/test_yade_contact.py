@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from conftest import requires_yade, run_case
-from postprocess import summary as summ
+from drystone.postprocess import summary as summ
 
 pytestmark = [requires_yade, pytest.mark.yade]
 G = 9.81

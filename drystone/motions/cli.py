@@ -1,0 +1,108 @@
+"""Command line: ``python -m drystone.motions records`` and ``python -m drystone.motions spectrum FILE``.
+
+``records [--user-dir DIR] [--out DIR]`` resolves every paper record (user file or FEMA
+P695 analogue), re-runs the analogue rule, writes ``catalogue.json`` and one PNG per
+record to ``results/records/`` and prints a table; exit status 1 if the rule no longer
+gives the frozen analogues of ``motions.catalogue.ANALOGUES``.
+
+``spectrum FILE [--format F] [--component C] [--dt S] [--units U] [--out DIR]`` reads any
+supported record (FILE may also be a catalogue name), prints a JSON object (PGA in g,
+step, duration, predominant frequencies and band in Hz, ...) and writes the record plus
+spectrum PNG to ``results/spectra/``.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import sys
+from pathlib import Path
+
+import drystone
+from drystone.motions import analysis, catalogue, readers
+
+from drystone.paths import RESULTS, ROOT  # noqa: E402
+
+
+def _round(x, nd=4):
+    if isinstance(x, float):
+        return round(x, nd)
+    if isinstance(x, list):
+        return [_round(v, nd) for v in x]
+    if isinstance(x, dict):
+        return {k: _round(v, nd) for k, v in x.items()}
+    return x
+
+
+def cmd_records(args) -> int:
+    from drystone.postprocess.plots_motion import plot_record
+
+    out = Path(args.out) if args.out else RESULTS / "records"
+    out.mkdir(parents=True, exist_ok=True)
+    table = catalogue.build(user_dir=args.user_dir)
+    table["drystone_version"] = drystone.__version__
+    for name, e in table["records"].items():
+        r = catalogue.get(name, args.user_dir)
+        e["png"] = str(plot_record(r, out / f"{name}.png", title=f"{name}: {r.event}\n{r.station}, {r.component}, "
+                                                               f"PGA {r.pga_g:.3f} g"))
+    (out / "catalogue.json").write_text(json.dumps(table, indent=1))
+    print(f"{'name':<11} {'source':<9} {'station':<22} {'comp':<9} {'PGA g':>6} {'dur s':>6} {'dt s':>6}  band Hz")
+    bad = []
+    for name, e in table["records"].items():
+        lo, hi = e["predominant_band_hz"]
+        print(f"{name:<11} {e['source_kind'].split()[0]:<9} {e['station'][:22]:<22} {e['component'][:9]:<9} "
+              f"{e['pga_g']:6.3f} {e['duration_s']:6.1f} {e['dt_s']:6.3f}  {lo:.2f}-{hi:.2f}")
+        if not e["analogue"]["rule_matches_frozen"]:
+            bad.append(f"{name}: rule gives {e['analogue']['rule_gives']}, frozen {e['analogue']['frozen']}")
+    print(f"wrote {out / 'catalogue.json'}")
+    for b in bad:
+        print(f"error: analogue rule and frozen choice differ: {b}", file=sys.stderr)
+    return 1 if bad else 0
+
+
+def cmd_spectrum(args) -> int:
+    from drystone.postprocess.plots_motion import plot_record
+
+    p = Path(args.file)
+    if not p.is_file() and args.file in catalogue.names():
+        r = catalogue.get(args.file)
+        fmt = "catalogue"
+        stem = args.file
+    elif not p.is_file():
+        raise FileNotFoundError(f"{p}: no such record file (nor a catalogue name: {', '.join(catalogue.names())})")
+    else:
+        fmt = args.format or readers.detect_format(p)
+        r = readers.read(p, format=fmt, component=args.component, dt=args.dt, units=args.units)
+        stem = p.stem
+    d = analysis.describe(r)
+    out = Path(args.out) if args.out else RESULTS / "spectra"
+    comp = re.sub(r"[^A-Za-z0-9._-]+", "_", r.component)
+    png = plot_record(r, out / f"{stem}_{comp}.png", summary=d)
+    obj = {"file": str(args.file), "format": fmt, "event": r.event, "station": r.station, "component": r.component,
+           "units_in_file": r.units_in_file, "pga_g": d["pga_g"], "pga_m_s2": d["pga_m_s2"], "dt_s": r.dt,
+           "n_samples": r.n, "duration_s": r.duration, "predominant_frequencies_hz": d["predominant_frequencies_hz"],
+           "predominant_band_hz": d["predominant_band_hz"], "significant_duration_s": d["significant_duration_s"],
+           "onset_s": d["onset_s"], "spectrum_settings": analysis.SETTINGS, "history": r.history, "png": str(png)}
+    print(json.dumps(_round(obj), indent=1))
+    return 0
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m drystone.motions", description="ground-motion records and spectra")
+    sub = ap.add_subparsers(dest="cmd", required=True)
+    a = sub.add_parser("records", help="resolve the papers' records, write results/records/catalogue.json")
+    a.add_argument("--user-dir", default=None, help=f"folder of the user's record files (default {catalogue.USER_DIR})")
+    a.add_argument("--out", default=None, help="output folder (default results/records)")
+    b = sub.add_parser("spectrum", help="PGA, step, duration and predominant frequencies of a record file")
+    b.add_argument("file", help="record file (or a catalogue name)")
+    b.add_argument("--format", choices=readers.FORMATS, default=None, help="file format (default: guessed)")
+    b.add_argument("--component", default=None, help="component of a multi-component file (default NS)")
+    b.add_argument("--dt", type=float, default=None, help="time step (s) when the file does not give it")
+    b.add_argument("--units", default=None, help="units when the file does not declare them (gal, g, m/s^2)")
+    b.add_argument("--out", default=None, help="output folder for the PNG (default results/spectra)")
+    args = ap.parse_args(argv)
+    try:
+        return cmd_records(args) if args.cmd == "records" else cmd_spectrum(args)
+    except (readers.RecordFormatError, FileNotFoundError, KeyError, ValueError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
