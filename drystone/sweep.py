@@ -44,7 +44,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from drystone import case as casemod
-from drystone import paths
+from drystone import paths, tomlio
 
 SWEEP_KEYS = {"name", "case", "set"}
 RUN_KEYS = {"name", "set"}
@@ -102,7 +102,7 @@ def load(path, results: Path | None = None, threads: int = 1) -> tuple[str, list
         keys = list(grid)
         for combo in itertools.product(*(grid[k] for k in keys)):
             params = dict(zip(keys, combo))
-            runs.append((_run_name(params), [f"{k}={_toml(v)}" for k, v in params.items()], params))
+            runs.append((_run_name(params), [f"{k}={tomlio.value(v)}" for k, v in params.items()], params))
     for k, r in enumerate(raw.get("runs", [])):
         bad = sorted(set(r) - RUN_KEYS)
         if bad or "name" not in r:
@@ -119,14 +119,6 @@ def load(path, results: Path | None = None, threads: int = 1) -> tuple[str, list
     jobs = [Job(n, str(base), common + over + [f"case.name={name}/{n}"], str(root / n), threads, params)
             for n, over, params in runs]
     return name, jobs
-
-
-def _toml(v) -> str:
-    if isinstance(v, str):
-        return json.dumps(v)
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    return repr(v)
 
 
 def validate(jobs: list[Job]) -> dict[str, str]:

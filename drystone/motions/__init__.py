@@ -14,6 +14,6 @@ SI inside: accelerations in m/s^2, times in s; ``_g``/``_hz`` in names where not
 * ``motions.excitation.for_stage`` what the runner calls for an excitation stage
 * ``python -m drystone.motions records | spectrum FILE``  (``motions.cli``)
 
-Spectral tools for any signal are in ``postprocess.spectra``; see docs/motions.md.
+Spectral tools for any signal are in ``motions.spectra``; see docs/motions.md.
 """
 from drystone.motions.record import G, Record  # noqa: F401

@@ -2,10 +2,10 @@
 significant duration, arrival picks. Used by the catalogue and ``python -m drystone.motions spectrum``.
 
 Spectral settings (``SETTINGS``): Fourier amplitude spectrum of the linearly detrended
-acceleration with a 5 % cosine (Tukey) taper at each end (``postprocess.spectra``),
+acceleration with a 5 % cosine (Tukey) taper at each end (``motions.spectra``),
 Konno-Ohmachi smoothing (b = 40) evaluated on a logarithmic grid of 100 points per decade
 from 0.1 Hz to min(25 Hz, 0.8 x Nyquist); on that smoothed spectrum the predominant
-frequencies follow the peak rule of ``postprocess.spectra`` (height >= 0.5 and prominence
+frequencies follow the peak rule of ``motions.spectra`` (height >= 0.5 and prominence
 >= 0.1 of the maximum) and the predominant band is the half-amplitude band (level 0.5).
 
 Time measures: Arias-type cumulative energy I(t) = integral of a^2 (normalised to 1);
@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from drystone.motions.record import Record
-from drystone.postprocess import spectra as sp
+from drystone.motions import spectra as sp
 
 SETTINGS = {"window": "tukey", "detrend": "linear", "fmin_hz": 0.1, "fmax_hz": 25.0, "per_decade": 100,
             "konno_ohmachi_b": 40.0, "prominence": 0.1, "height": 0.5, "band_level": 0.5}

@@ -35,7 +35,7 @@ def _round(x, nd=4):
 
 
 def cmd_records(args) -> int:
-    from drystone.postprocess.plots_motion import plot_record
+    from drystone.motions.plots import plot_record
 
     out = Path(args.out) if args.out else RESULTS / "records"
     out.mkdir(parents=True, exist_ok=True)
@@ -61,7 +61,7 @@ def cmd_records(args) -> int:
 
 
 def cmd_spectrum(args) -> int:
-    from drystone.postprocess.plots_motion import plot_record
+    from drystone.motions.plots import plot_record
 
     p = Path(args.file)
     if not p.is_file() and args.file in catalogue.names():

@@ -18,10 +18,14 @@ import numpy as np
 from drystone import collapse, rotations
 
 
+#: summary.json's format name and version
+SUMMARY_FORMAT, SUMMARY_VERSION = "drystone-summary", 1
+
+
 def load_histories(out: Path) -> dict:
     """histories.npz as a dict of arrays; named contacts under ``contacts[name][key]``."""
     with np.load(Path(out) / "histories.npz") as z:
-        h = {k: z[k] for k in z.files}
+        h = {k: z[k] for k in z.files if k not in ("format", "version")}
     contacts: dict[str, dict] = {}
     for k in list(h):
         if k.startswith("contact:"):
@@ -178,6 +182,7 @@ def build(spec: dict, out: Path) -> dict:
     info = json.loads((out / "run_info.json").read_text())
     case = json.loads(json.dumps(spec["provenance"]))
     s = {
+        "format": SUMMARY_FORMAT, "version": SUMMARY_VERSION,
         "name": spec["name"],
         "law": spec["law"],
         "units": "SI (m, kg, s, N, rad); angles in deg where the key says so",

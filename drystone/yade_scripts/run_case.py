@@ -32,6 +32,10 @@ from drystone.yade_scripts import scene as sc  # noqa: E402
 log.setLevel("Polyhedra_support.cpp", log.ERROR)
 
 
+#: histories.npz's format name and version (arrays ``format`` and ``version``)
+HISTORIES_FORMAT, HISTORIES_VERSION = "drystone-histories", 1
+
+
 def _state_row(s) -> tuple:
     """(pos, vel, angVel, ori as x y z w) of one YADE State. Indexing the vectors is about
     7x faster than unpacking them (``*s.pos`` iterates through IndexError), which made
@@ -348,6 +352,7 @@ class Driver:
 
     def save(self, wall):
         arrays = {k: np.asarray(v) for k, v in self.h.items()}
+        arrays["format"], arrays["version"] = np.array(HISTORIES_FORMAT), np.array(HISTORIES_VERSION)
         arrays["block_ids"] = np.array([self.bid[int(i)] for i in self.dyn])
         arrays["mass"] = self.mass[self.dyn]
         arrays["pos0"] = self.pos0[self.dyn]

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drystone.postprocess import spectra
+from drystone.motions import spectra
 from drystone.postprocess import summary as summ
 
 #: identification peaks: local maxima of the Konno-Ohmachi-smoothed spectrum (b = 100, a
