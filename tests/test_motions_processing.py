@@ -8,7 +8,7 @@ from scipy.integrate import cumulative_trapezoid
 
 from drystone.motions import generators, processing as pr
 from drystone.motions.record import G, Record
-from drystone.postprocess import spectra as sp
+from drystone.motions import spectra as sp
 
 
 def noisy(seed=3, n=2000, dt=0.01):

@@ -1,10 +1,10 @@
-"""postprocess.spectra: Fourier amplitude, peak rule, band, response spectrum."""
+"""motions.spectra: Fourier amplitude, peak rule, band, response spectrum."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from drystone.postprocess import spectra as sp
+from drystone.motions import spectra as sp
 
 
 @pytest.mark.parametrize("window", ["hann", "tukey", None])
