@@ -78,7 +78,7 @@ ogawa-pga: setup
 	$(PY) -m drystone.studies.ogawa refresh
 
 readme: setup
-	$(PY) -m drystone.postprocess.readme_tables README.md
+	$(PY) -m drystone.studies.readme_tables README.md
 
 demo: setup
 	$(RUN) run cases/gravity4.toml -j $(JOBS)

@@ -7,12 +7,15 @@ key. ``python -m drystone keys`` prints the table below (README points to it).
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
 from drystone import collapse
+from drystone.geometry.blockfile import CONTACT_PROPERTIES, MATERIAL_PROPERTIES
+from drystone.units import GRAVITY
 
 REQUIRED = object()
 MAX_TILT_DEG = 90.0  # deg: a tilt target (to_deg, max_deg) above vertical is refused
@@ -34,6 +37,20 @@ class Key:
 
 
 # -- the declaration --------------------------------------------------------------
+_PROPERTY = {  # each material property (the names: blockfile.MATERIAL_PROPERTIES)
+    "density": Key(None, "kg/m^3", "density", float, positive=True),
+    "kn": Key(None, "N/m^3", "normal stiffness per unit area", float, positive=True),
+    "kt": Key(None, "N/m^3", "tangential stiffness per unit area", float, positive=True),
+    "mu": Key(None, "-", "friction coefficient", float, nonneg=True),
+    "damping": Key(None, "-", "contact damping, fraction of critical", float, nonneg=True)}
+#: [materials.NAME]: any material property of that material
+MATERIAL_OVERRIDE = {k: _PROPERTY[k] for k in MATERIAL_PROPERTIES}
+_EVERY = {"kn": "K_n", "kt": "K_t", "mu": "the friction coefficient",
+          "damping": "the contact damping (fraction of critical)"}
+#: [contact]: a contact property of every material
+CONTACT_OVERRIDE = {k: dataclasses.replace(_PROPERTY[k], meaning=f"override {_EVERY[k]} of every material")
+                    for k in CONTACT_PROPERTIES}
+
 SECTIONS: dict[str, dict[str, Key]] = {
     "case": {
         "name": Key(None, "-", "case name; results go to results/<name>/ (default: file stem)", str),
@@ -49,11 +66,7 @@ SECTIONS: dict[str, dict[str, Key]] = {
                          "normal and area from its gradient, compiled; penalty_coulomb only), yade (YADE's "
                          "polyhedra intersection, CGAL) or auto (native with penalty_coulomb, yade with the "
                          "stock law)", str, ("auto", "native", "yade")),
-        "kn": Key(None, "N/m^3", "override K_n of every material", float, positive=True),
-        "kt": Key(None, "N/m^3", "override K_t of every material", float, positive=True),
-        "mu": Key(None, "-", "override the friction coefficient of every material", float, nonneg=True),
-        "damping": Key(None, "-", "override the contact damping (fraction of critical) of every material",
-                       float, nonneg=True),
+        **CONTACT_OVERRIDE,
     },
     "time": {
         "step": Key("auto", "s", "time step, or 'auto' = safety x the critical step of the stiffest "
@@ -62,7 +75,7 @@ SECTIONS: dict[str, dict[str, Key]] = {
                       positive=True),
     },
     "physics": {
-        "gravity": Key(9.81, "m/s^2", "gravitational acceleration", float, positive=True),
+        "gravity": Key(GRAVITY, "m/s^2", "gravitational acceleration", float, positive=True),
     },
     "output": {
         "interval": Key(0.01, "s", "time between recorded samples", float, positive=True),
@@ -189,12 +202,6 @@ FORCE = {"block": Key(REQUIRED, "-", "id of the free block the force acts on (at
          "force": Key(REQUIRED, "N", "force vector [fx, fy, fz] in the platform frame", list),
          "start": Key(0.0, "s", "time the force is switched on", float, nonneg=True),
          "end": Key(None, "s", "time it is switched off (default: never)", float, positive=True)}
-
-MATERIAL_OVERRIDE = {"density": Key(None, "kg/m^3", "density", float, positive=True),
-                     "kn": Key(None, "N/m^3", "normal stiffness per unit area", float, positive=True),
-                     "kt": Key(None, "N/m^3", "tangential stiffness per unit area", float, positive=True),
-                     "mu": Key(None, "-", "friction coefficient", float, nonneg=True),
-                     "damping": Key(None, "-", "contact damping, fraction of critical", float, nonneg=True)}
 
 
 def _parse_value(text: str):

@@ -43,9 +43,20 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from drystone.geometry import blockfile as bf
+
 #: ignore contacts thinner than this (m) or with no volume: failed intersections in
 #: YADE leave such values behind
 MIN_DEPTH = 1e-18
+#: contact geometries: ``native`` (drystone.overlap; this law only) and ``yade`` (YADE's
+#: polyhedra intersection, CGAL)
+DETECTIONS = ("native", "yade")
+
+
+def default_detection(law: str) -> str:
+    """The contact geometry of a case with detection = "auto": native with the project's
+    law (penalty_coulomb), YADE's own with YADE's stock law (it runs on nothing else)."""
+    return "native" if law == "penalty_coulomb" else "yade"
 
 
 def cross(a, b) -> np.ndarray:
@@ -67,15 +78,18 @@ def combine(k1: float, k2: float) -> float:
     return 2.0 * k1 * k2 / (k1 + k2)
 
 
+#: how a pair of materials combines each contact property (blockfile.CONTACT_PROPERTIES):
+#: kn, kt in series, the smaller mu, the mean damping
+PAIR_RULES = {"kn": combine, "kt": combine, "mu": min, "damping": lambda a, b: 0.5 * (a + b)}
+
+
 def pair_properties(mat_a: dict, mat_b: dict, joint: dict | None = None) -> dict:
-    """Joint properties between two materials: kn, kt in series, the smaller mu, the mean
-    damping; ``joint`` overrides mu and damping for one pair of blocks."""
-    p = {"kn": combine(mat_a["kn"], mat_b["kn"]), "kt": combine(mat_a["kt"], mat_b["kt"]),
-         "mu": min(mat_a["mu"], mat_b["mu"]), "damping": 0.5 * (mat_a["damping"] + mat_b["damping"])}
-    if joint:
-        for k in ("mu", "damping"):
-            if k in joint:
-                p[k] = float(joint[k])
+    """Contact properties between two materials (``PAIR_RULES``); ``joint`` overrides
+    those of blockfile.JOINT_PROPERTIES (mu, damping) for one pair of blocks."""
+    p = {k: PAIR_RULES[k](mat_a[k], mat_b[k]) for k in bf.CONTACT_PROPERTIES}
+    for k in bf.JOINT_PROPERTIES:
+        if joint and k in joint:
+            p[k] = float(joint[k])
     return p
 
 

@@ -49,8 +49,7 @@ from scipy.spatial import ConvexHull
 
 from drystone import overlap
 from drystone.contact import combine
-
-G = 9.80665
+from drystone.units import GRAVITY as G  # default gravity, m/s^2
 _LETTERS = "xyzXYZ"
 
 
@@ -106,7 +105,8 @@ class Assembly:
     vertices: per block, world vertices (n, 3) m; moving: per block bool; density kg/m^3,
     kn, kt N/m^3 per block (pairs combine in series, ``drystone.contact.combine``);
     blocked: per block a string of blocked DOF letters (x y z X Y Z; "" for none); ids:
-    block ids for the tables; gravity: m/s^2 vector."""
+    block ids for the tables; gravity: m/s^2 vector, default (0, 0, -GRAVITY) (the analysis of a
+    run takes the run's own: ``drystone.postprocess.identification.wall_assembly``)."""
     vertices: list
     moving: np.ndarray
     density: np.ndarray

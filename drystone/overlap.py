@@ -45,8 +45,8 @@ class Shapes:
         nb = len(local_vertices)
         geo = [ph.faces(v) for v in local_vertices]
         maxv = max(len(v) for v in local_vertices)
-        maxf = max(len(g[0]) for g in geo)
-        maxk = max(len(p) for g in geo for p in g[2])
+        maxf = max(len(g.normals) for g in geo)
+        maxk = max(len(p) for g in geo for p in g.polygons)
         self.verts = np.zeros((nb, maxv, 3))
         self.nv = np.zeros(nb, np.int64)
         self.normals = np.zeros((nb, maxf, 3))
@@ -54,7 +54,7 @@ class Shapes:
         self.nf = np.zeros(nb, np.int64)
         self.faces = -np.ones((nb, maxf, maxk), np.int64)
         self.fk = np.zeros((nb, maxf), np.int64)
-        for i, (v, (n, d, polys)) in enumerate(zip(local_vertices, geo)):
+        for i, (v, (n, d, polys, _)) in enumerate(zip(local_vertices, geo)):
             v = np.asarray(v, float)
             self.verts[i, :len(v)] = v
             self.verts[i, len(v):] = v[0]

@@ -14,10 +14,12 @@ from pathlib import Path
 import numpy as np
 
 from drystone import case as casemod
+from drystone import contact
 from drystone import timestep
 from drystone.geometry import blockfile as bf
 from drystone.geometry import generators
 from drystone.geometry import polyhedron as ph
+from drystone.units import G_STANDARD
 
 TOWARDS = {"+x": [1.0, 0.0, 0.0], "-x": [-1.0, 0.0, 0.0], "+y": [0.0, 1.0, 0.0], "-y": [0.0, -1.0, 0.0]}
 AXES = {"x": [1.0, 0.0, 0.0], "y": [0.0, 1.0, 0.0], "z": [0.0, 0.0, 1.0]}
@@ -47,8 +49,8 @@ def _geometry(case: dict, where: str, out: Path, check_overlaps: bool = True) ->
 def _materials(case: dict, bs: bf.BlockSet, where: str) -> dict:
     mats = {}
     for name, m in bs.materials.items():
-        d = {"density": m.density, "kn": m.kn, "kt": m.kt, "mu": m.mu, "damping": m.damping}
-        for k in ("kn", "kt", "mu", "damping"):
+        d = {k: getattr(m, k) for k in bf.MATERIAL_PROPERTIES}
+        for k in bf.CONTACT_PROPERTIES:
             if case["contact"][k] is not None:
                 d[k] = case["contact"][k]
         mats[name] = d
@@ -79,7 +81,7 @@ def _excitation(s: dict, where: str, out: Path, k: int) -> tuple[np.ndarray, flo
     name = f"excitation_{k + 1}.npy"
     np.save(out / name, acc)
     meta = dict(meta, acc_file=name, dt_s=dt, pga_m_s2=float(np.abs(acc).max()),
-                pga_g=float(np.abs(acc).max() / 9.80665), direction=s["direction"])
+                pga_g=float(np.abs(acc).max() / G_STANDARD), direction=s["direction"])
     return acc, dt, meta
 
 
@@ -143,7 +145,7 @@ def resolve(case: dict, where: str, out: Path, check_overlaps: bool = True) -> d
         raise casemod.CaseError(f"{where}: [contact] 'detection' = 'native' needs law = 'penalty_coulomb' "
                                 f"(the stock law runs on YADE's own contact geometry)")
     if detection == "auto":
-        detection = "native" if case["contact"]["law"] == "penalty_coulomb" else "yade"
+        detection = contact.default_detection(case["contact"]["law"])
     tb = case["analysis"]["tilt_block"]
     if tb is not None and tb not in free:
         raise casemod.CaseError(f"{where}: [analysis] 'tilt_block' {tb} is not a free block")

@@ -1,10 +1,10 @@
-"""README.md's generated tables (drystone/postprocess/readme_tables.py) on synthetic results."""
+"""README.md's generated tables (drystone/studies/readme_tables.py) on synthetic results."""
 import json
 
 import pytest
 
 from drystone import paths
-from drystone.postprocess import readme_tables as rt
+from drystone.studies import readme_tables as rt
 from drystone.studies import tilt
 from test_tilt_report import fake_run
 

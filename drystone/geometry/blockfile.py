@@ -75,9 +75,18 @@ DENSITY_RANGE = (100.0, 100000.0)
 #: the elastic penetration of any case here (tens of um and more) and far above round-off.
 OVERLAP_TOL = 1e-6
 
-MATERIAL_KEYS = {"density", "kn", "kt", "mu", "friction_angle_deg", "damping", "description"}
+#: the properties of a material, each a number: density (kg/m^3), kn and kt (N/m^3), mu (-),
+#: damping (fraction of critical); the one list of them (``Material``, a case's
+#: [materials.NAME] overrides, the resolved spec.json materials)
+MATERIAL_PROPERTIES = ("density", "kn", "kt", "mu", "damping")
+#: those of a contact: a pair of materials combines them (``drystone.contact.pair_properties``)
+#: and a case's [contact] section overrides them for every material
+CONTACT_PROPERTIES = ("kn", "kt", "mu", "damping")
+#: those a joint (one pair of blocks) may override
+JOINT_PROPERTIES = ("mu", "damping")
+MATERIAL_KEYS = {*MATERIAL_PROPERTIES, "friction_angle_deg", "description"}
 BLOCK_KEYS = {"id", "role", "material", "vertices", "blocked_dofs", "label"}
-JOINT_KEYS = {"blocks", "mu", "damping"}
+JOINT_KEYS = {"blocks", *JOINT_PROPERTIES}
 CP_KEYS = {"name", "block", "position"}
 TOP_KEYS = {"format", "version", "name", "description", "source", "units", "materials",
             "blocks", "joints", "control_points", "generator"}
@@ -89,6 +98,7 @@ class GeometryError(ValueError):
 
 @dataclass
 class Material:
+    """A named material: the fields after ``name`` are MATERIAL_PROPERTIES."""
     name: str
     density: float  # kg/m^3
     kn: float  # N/m^3
@@ -149,8 +159,7 @@ class BlockSet:
     def to_dict(self) -> dict:
         mats = {}
         for m in self.materials.values():
-            mats[m.name] = {"density": m.density, "kn": m.kn, "kt": m.kt, "mu": m.mu,
-                            "damping": m.damping}
+            mats[m.name] = {k: getattr(m, k) for k in MATERIAL_PROPERTIES}
         blocks = []
         for b in self.blocks:
             d = {"id": b.id, "role": b.role, "material": b.material,
@@ -351,7 +360,7 @@ def parse(data: dict, where: str = "<blocks>", check_overlaps: bool = True) -> B
             raise GeometryError(f"{w}: 'blocks' must be two integer block ids, got {pair!r}")
         if not (all(p in seen for p in pair) and pair[0] != pair[1]):
             raise GeometryError(f"{w}: 'blocks' must name two different existing block ids, got {pair!r}")
-        for key in ("mu", "damping"):
+        for key in JOINT_PROPERTIES:
             if key in j:
                 _positive(w, key, j[key], allow_zero=True)
     cps = data.get("control_points", [])

@@ -21,15 +21,16 @@ from __future__ import annotations
 import numpy as np
 
 import drystone
+from drystone.units import GRAVITY
 from . import blockfile as bf
 from . import params as pc
 
 PLATFORM_THICKNESS = 0.05  # m
-G = 9.81
 
 
-def thickness_for_weight(weight: float, density: float, length: float, height: float, g: float = G) -> float:
-    """Wall thickness (m) that gives ``weight`` (N): the stones tile the L x H face."""
+def thickness_for_weight(weight: float, density: float, length: float, height: float, g: float = GRAVITY) -> float:
+    """Wall thickness (m) that gives ``weight`` (N) under gravity ``g`` (m/s^2): the stones tile
+    the L x H face."""
     return weight / (density * g * length * height)
 
 
@@ -219,7 +220,7 @@ def tilt_wall(seed=0, weight=1371.0, density=2300.0, kn=2e8, kt=1e8, mu=0.4, dam
     g = "tilt_wall"
     unknown = sorted(set(over) - set(TILT_OVER))
     if unknown:
-        allowed = ["seed", "weight", "density", "kn", "kt", "mu", "damping", "depth_spread", *TILT_OVER]
+        allowed = ["seed", "weight", *bf.MATERIAL_PROPERTIES, "depth_spread", *TILT_OVER]
         raise bf.GeometryError(f"geometry generator {g!r}: unknown parameter(s) {unknown}; allowed: {allowed}")
     pc.positive(g, "weight", weight, "N")
     pc.material(g, density, kn, kt, damping, mu=mu)

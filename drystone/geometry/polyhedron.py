@@ -1,10 +1,13 @@
 """Convex polyhedron helpers (numpy/scipy only, no YADE).
 
 A block is the convex hull of its vertices (metres). These functions give the hull's
-volume (m^3), centroid (m), face planes, and the overlap between two hulls, which is
-what the block-file validator and the time-step estimate need.
+volume (m^3), centroid (m), its planar faces (``faces``: the one place hull triangles are
+merged into faces), and the overlap between two hulls, which is what the block-file
+validator, the time-step estimate and the contact kernels need.
 """
 from __future__ import annotations
+
+from typing import NamedTuple
 
 import numpy as np
 from scipy.optimize import linprog
@@ -31,7 +34,9 @@ def hull(vertices) -> ConvexHull:
 
 
 def planes(h: ConvexHull) -> tuple[np.ndarray, np.ndarray]:
-    """Outward unit normals N (m, 3) and offsets d (m) with N @ x + d <= 0 inside."""
+    """Outward unit normals N (m, 3) and offsets d (m) with N @ x + d <= 0 inside: the plane
+    of every hull triangle, not merged into faces (a face cut into k triangles gives k equal
+    rows; half-space tests need no more, and no rounding); ``faces`` merges them."""
     eq = h.equations
     return eq[:, :3], eq[:, 3]
 
@@ -100,23 +105,38 @@ def planes_overlap(pa: tuple[np.ndarray, np.ndarray], pb: tuple[np.ndarray, np.n
     return float(2.0 * res.x[3])
 
 
-def faces(vertices) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
-    """The hull's faces as polygons: outward unit normals N (f, 3), offsets d (f,) with
-    N @ x + d <= 0 inside, and per face the indices of its vertices ordered counter-
-    clockwise seen from outside (coplanar hull triangles merged)."""
+#: decimals to which a hull triangle's plane (unit normal; offset, m) is rounded to tell
+#: which triangles make up one planar face: 1e-9 is far above Qhull's round-off on
+#: block-sized coordinates (~1e-15) and far below the angle (rad) or the step (m) between
+#: two faces of a real block
+FACE_DECIMALS = 9
+
+
+class Faces(NamedTuple):
+    """The planar faces of a convex hull (``faces``)."""
+    normals: np.ndarray  # (f, 3) outward unit normals
+    offsets: np.ndarray  # (f,) m: normals @ x + offsets <= 0 inside
+    polygons: list  # per face, its vertex indices counter-clockwise seen from outside
+    areas: np.ndarray  # (f,) m^2
+
+
+def faces(vertices, h: ConvexHull | None = None) -> Faces:
+    """The hull's planar faces: the hull triangles whose planes agree to FACE_DECIMALS
+    decimals merged, each face with the plane of its first triangle, its vertices ordered
+    counter-clockwise seen from outside and its area (the sum of its triangles', in Qhull's
+    order). ``h``: the hull of ``vertices``, if at hand."""
     v = np.asarray(vertices, dtype=float)
-    h = hull(v)
-    groups: dict[tuple, set] = {}
-    eqs: dict[tuple, np.ndarray] = {}
-    for simplex, eq in zip(h.simplices, h.equations):
-        key = tuple(np.round(eq, 8))
-        groups.setdefault(key, set()).update(int(i) for i in simplex)
-        eqs.setdefault(key, eq)
-    normals, offsets, polys = [], [], []
-    for key, idx in groups.items():
-        eq = eqs[key]
+    h = hull(v) if h is None else h
+    tri = v[h.simplices]
+    tri_area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    groups: dict[tuple, list[int]] = {}
+    for k, eq in enumerate(h.equations):
+        groups.setdefault(tuple(np.round(eq, FACE_DECIMALS)), []).append(k)
+    normals, offsets, polys, areas = [], [], [], []
+    for ks in groups.values():
+        eq = h.equations[ks[0]]
         n = eq[:3]
-        idx = np.array(sorted(idx))
+        idx = np.unique(h.simplices[ks])
         p = v[idx]
         c = p.mean(axis=0)
         a = np.cross(n, [1.0, 0, 0] if abs(n[0]) < 0.9 else [0, 1.0, 0])
@@ -125,4 +145,8 @@ def faces(vertices) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
         polys.append(idx[np.argsort(np.arctan2((p - c) @ b, (p - c) @ a))])
         normals.append(n)
         offsets.append(eq[3])
-    return np.array(normals), np.array(offsets), polys
+        area = 0.0
+        for k in ks:
+            area += tri_area[k]
+        areas.append(area)
+    return Faces(np.array(normals), np.array(offsets), polys, np.array(areas))

@@ -55,7 +55,7 @@ TOML_KEYS = {"file", "format", "component", "units", "dt", "event", "station"}
 PAPER = {
     "kobe1995": {
         "event": "1995 Hyogo-ken Nanbu (Kobe) earthquake, 17 Jan 1995", "station": "JMA Kobe (Kobe Marine Observatory)",
-        "component": "NS", "used_by": "Ogawa et al.", "pga_g": 818.0 / 980.665,
+        "component": "NS", "used_by": "Ogawa et al.", "pga_g": 8.18 / G,  # 818 gal
         "description": "JMA Kobe record, NS component, PGA 818 gal = 0.834 g", "window_s": None},
     "paruro2014": {
         "event": "Paruro earthquake, 2014", "station": "Tambomachay (Cusco)", "component": "NS",

@@ -3,11 +3,11 @@
 * ``sine(frequency_hz, duration=10, amplitude=0.5, pga_g=None, dt=None)``: the
   Sacsayhuaman paper's Eq. 9, base displacement d(t) = (A / omega^2) sin(omega t) with
   A = 0.5 m/s^2 and omega = 2 pi f, hence acceleration a(t) = -A sin(omega t) (m/s^2),
-  for ``duration`` s (10 s in the paper). ``pga_g`` replaces A by pga_g x 9.80665 (same
-  shape). The default step gives 64 samples per period, so that the peaks fall on samples
-  and the sampled PGA is exactly A; the displacement amplitude A / omega^2 is in
-  ``info["displacement_amplitude_m"]``. A given ``dt`` must put ``frequency_hz`` below
-  its Nyquist frequency 1 / (2 dt).
+  for ``duration`` s (10 s in the paper). ``pga_g`` replaces A by pga_g x 1 g
+  (``drystone.units.G_STANDARD``; same shape). The default step gives 64 samples per
+  period, so that the peaks fall on samples and the sampled PGA is exactly A; the
+  displacement amplitude A / omega^2 is in ``info["displacement_amplitude_m"]``. A given
+  ``dt`` must put ``frequency_hz`` below its Nyquist frequency 1 / (2 dt).
 * ``white_noise(duration=30, fmax_hz=20, rate_hz=1000, peak_displacement=0.9e-3,
   seed=0, fmin_hz=None, spectrum="acceleration")``: band-limited white noise: random
   phases (numpy ``default_rng(seed)``) with a flat Fourier amplitude from ``fmin_hz``

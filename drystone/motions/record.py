@@ -20,8 +20,7 @@ from typing import Callable
 
 import numpy as np
 
-#: standard gravity (m/s^2), used for every conversion from or to g
-G = 9.80665
+from drystone.units import G_STANDARD as G  # 1 g (m/s^2), for every conversion from or to g
 
 #: factor to m/s^2 of each accepted unit name (lower case, spaces removed)
 UNIT_FACTORS = {
@@ -92,7 +91,7 @@ class Record:
 
     @property
     def pga_g(self) -> float:
-        """Peak ground acceleration in g (standard gravity 9.80665 m/s^2)."""
+        """Peak ground acceleration in g (standard gravity, ``drystone.units.G_STANDARD``)."""
         return self.pga / G
 
     # --- derived records -----------------------------------------------------------------

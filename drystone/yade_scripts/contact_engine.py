@@ -19,6 +19,7 @@ import yade
 
 from drystone import contact as law
 from drystone import overlap as ov
+from drystone.geometry import polyhedron as ph
 
 
 def _padded(rows) -> np.ndarray:
@@ -30,13 +31,6 @@ def _padded(rows) -> np.ndarray:
         out[i, : len(r)] = r
         out[i, len(r):] = r[0]
     return out
-
-
-def _face_normals(vertices) -> np.ndarray:
-    """Distinct outward unit face normals of the convex hull of ``vertices``."""
-    from scipy.spatial import ConvexHull
-    eq = ConvexHull(np.asarray(vertices, float)).equations[:, :3]
-    return np.unique(np.round(eq, 9), axis=0)
 
 
 class ContactState:
@@ -76,7 +70,7 @@ class PenaltyCoulomb:
     the overlap's extent (``drystone.contact.contact_area``).
     """
 
-    def __init__(self, pair_props, mass, local_vertices, detection="yade", inertia=None):
+    def __init__(self, pair_props, mass, local_vertices, detection, inertia=None):
         self.pair_props = pair_props
         self.mass = np.asarray(mass, float)
         self.moving = np.isfinite(self.mass)
@@ -88,7 +82,7 @@ class PenaltyCoulomb:
         self.shapes = ov.Shapes(local_vertices)  # overlaps (native) and contact patches (both)
         if not self.native:  # for the contact-area estimate on YADE's geometry
             self.vloc = _padded(local_vertices)  # repeated entries leave min/max/argmax unchanged
-            self.nloc = _padded([_face_normals(v) for v in local_vertices])
+            self.nloc = _padded([ph.faces(v).normals for v in local_vertices])
         self._shear: dict[tuple[int, int], np.ndarray] = {}
         self._props: dict[tuple[int, int], tuple] = {}
         self.state = ContactState()

@@ -65,7 +65,7 @@ def build(spec: dict) -> dict:
             dynamic.append(i)
     newton = yade.NewtonIntegrator(damping=0.0, gravity=(0, 0, 0), label="newton")
     step = yade.PyRunner(iterPeriod=1, command="_drystone_step()", label="drystone_step")
-    if spec.get("detection", "yade") == "native":
+    if spec["detection"] == "native":
         # contacts and all their forces come from contact_engine.PenaltyCoulomb (native)
         O.engines = [yade.ForceResetter(), step, newton]
     else:

@@ -1,5 +1,5 @@
 """python -m drystone.studies.ogawa study [--random N] [--runs R] [--substeps K]   1D friction studies
-python -m drystone.studies.ogawa study3d [--workers N]   3D YADE model for the named sets (long)
+python -m drystone.studies.ogawa study3d [--workers N]   3D YADE model for the named sets (long; a resumable sweep)
 python -m drystone.studies.ogawa refresh                 attach 3D results (named sets; the orientation / PGA / reset-vs-cumulative
                                         sweeps results/ogawa_pga, results/ogawa_cumulative), rewrite the report
 python -m drystone.studies.ogawa insitu                  check Tables 1-2 averages, draw the Table 3 figure"""

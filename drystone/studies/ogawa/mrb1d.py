@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-G = 9.81
+from drystone.units import GRAVITY as G  # m/s^2
 
 
 @dataclass

@@ -7,7 +7,7 @@ README.md marks each generated table with a pair of HTML comments::
     ...generated content...
     <!-- end:NAME -->
 
-``python -m drystone.postprocess.readme_tables [README.md] [--results DIR] [--check]`` (``make
+``python -m drystone.studies.readme_tables [README.md] [--results DIR] [--check]`` (``make
 readme``) replaces the content of every marked block whose source exists with a table
 built from it, and leaves a block whose source is missing as it is, saying so (its
 content is then whatever an earlier run generated, or the placeholder telling which
@@ -197,7 +197,7 @@ def update(text: str, results: Path, blocks: dict | None = None) -> tuple[str, l
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m drystone.postprocess.readme_tables", description=__doc__,
+    ap = argparse.ArgumentParser(prog="python -m drystone.studies.readme_tables", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("readme", nargs="?", default=str(paths.ROOT / "README.md"))
     ap.add_argument("--results", default=str(paths.RESULTS))
