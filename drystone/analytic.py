@@ -8,6 +8,8 @@ import math
 
 import numpy as np
 
+from drystone.units import GRAVITY
+
 
 def sliding_tilt_deg(mu: float) -> float:
     """Tilt at which a block slides on a tilting plane: atan(mu)."""
@@ -20,7 +22,7 @@ def rigid_toppling_tilt_deg(b: float, h: float) -> float:
     return math.degrees(math.atan2(b, h))
 
 
-def toppling_tilt_deg(b: float, h: float, t: float, density: float, kn: float, g: float = 9.81) -> float:
+def toppling_tilt_deg(b: float, h: float, t: float, density: float, kn: float, g: float = GRAVITY) -> float:
     """Tilt (deg) at which a rigid rectangular block (b along the tilt, thickness t, height
     h) topples on a penalty (Winkler) contact of stiffness kn per unit area (N/m^3).
 

@@ -27,6 +27,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from drystone.units import GRAVITY
+
 Z = np.array([0.0, 0.0, 1.0])
 
 
@@ -49,7 +51,7 @@ class LoadProgramme:
     ``rate_deg_s``, ``towards`` (unit horizontal 3-vector).
     """
 
-    def __init__(self, stages: list[Stage], gravity: float = 9.81):
+    def __init__(self, stages: list[Stage], gravity: float = GRAVITY):
         self.stages = stages
         self.gravity = float(gravity)
         self.end = stages[-1].end if stages else 0.0

@@ -14,6 +14,8 @@ A sweep file (TOML) names a base case and the runs as tables of overrides (the
     [[runs]]                         # and/or explicit runs (optional)
     name = "dem"
     set = ["contact.kn=5e7", "contact.kt=2.5e7", "contact.mu=0.7"]
+    out = "dem_wall"                 # optional: results/<out>/ instead of results/<name>/<run>/;
+                                     # no case.name is added (the run's own set may give one)
 
 Every run is validated (case keys, geometry, time step) before any of them starts. A run
 whose folder holds a ``summary.json`` made with the same overrides and the same inputs
@@ -47,7 +49,7 @@ from drystone import case as casemod
 from drystone import paths, tomlio
 
 SWEEP_KEYS = {"name", "case", "set"}
-RUN_KEYS = {"name", "set"}
+RUN_KEYS = {"name", "set", "out"}
 
 
 @dataclass
@@ -102,22 +104,28 @@ def load(path, results: Path | None = None, threads: int = 1) -> tuple[str, list
         keys = list(grid)
         for combo in itertools.product(*(grid[k] for k in keys)):
             params = dict(zip(keys, combo))
-            runs.append((_run_name(params), [f"{k}={tomlio.value(v)}" for k, v in params.items()], params))
+            runs.append((_run_name(params), [f"{k}={tomlio.value(v)}" for k, v in params.items()], params, None))
     for k, r in enumerate(raw.get("runs", [])):
         bad = sorted(set(r) - RUN_KEYS)
         if bad or "name" not in r:
-            raise casemod.CaseError(f"{where}: [[runs]] #{k + 1}: keys must be 'name' and optional 'set' (got "
-                                    f"{sorted(r)})")
+            raise casemod.CaseError(f"{where}: [[runs]] #{k + 1}: keys must be 'name' and optional 'set', 'out' "
+                                    f"(got {sorted(r)})")
+        out = r.get("out")
+        if out is not None and not (isinstance(out, str) and out.strip() and not Path(out).is_absolute()
+                                    and ".." not in Path(out).parts):
+            raise casemod.CaseError(f"{where}: [[runs]] #{k + 1}: 'out' must be a folder relative to the results "
+                                    f"folder (no '..'), got {out!r}")
         params = dict(item.split("=", 1) for item in r.get("set", []))
-        runs.append((r["name"], list(r.get("set", [])), params))
+        runs.append((r["name"], list(r.get("set", [])), params, out))
     if not runs:
         raise casemod.CaseError(f"{where}: the sweep has no runs (add [grid] or [[runs]])")
     names = [r[0] for r in runs]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
         raise casemod.CaseError(f"{where}: duplicate run name(s) {dup}")
-    jobs = [Job(n, str(base), common + over + [f"case.name={name}/{n}"], str(root / n), threads, params)
-            for n, over, params in runs]
+    jobs = [Job(n, str(base), common + over + ([] if out else [f"case.name={name}/{n}"]),
+                str(root.parent / out if out else root / n), threads, params)
+            for n, over, params, out in runs]
     return name, jobs
 
 
@@ -261,7 +269,7 @@ def run(path, workers: int | None = None, backend: str = "local", dask_address: 
             raise casemod.CaseError(f"{path}: no run(s) named {missing}; runs: {[j.name for j in jobs]}")
         jobs = [j for j in jobs if j.name in only]
     prints = validate(jobs)
-    root = Path(jobs[0].out_dir).parent
+    root = (results or paths.RESULTS) / name
     root.mkdir(parents=True, exist_ok=True)
     status = {j.name: {"name": j.name, "status": "pending", "params": j.params, "out_dir": j.out_dir} for j in jobs}
     todo = []

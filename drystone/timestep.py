@@ -24,14 +24,7 @@ MAX_STEPS = 5e7
 
 def largest_face_area(vertices) -> float:
     """Area (m^2) of the largest planar face of the convex hull of ``vertices``."""
-    h = ph.hull(vertices)
-    v = np.asarray(vertices, float)
-    tri = v[h.simplices]
-    areas = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
-    faces: dict[tuple, float] = {}
-    for k, a in zip(map(tuple, np.round(h.equations, 9)), areas):
-        faces[k] = faces.get(k, 0.0) + a
-    return max(faces.values())
+    return float(ph.faces(vertices).areas.max())
 
 
 def critical_step(blocks, materials) -> tuple[float, dict]:

@@ -22,11 +22,11 @@ def value(v) -> str:
 
 def sweep_file(name: str, case, runs, common=(), header: str = "") -> str:
     """A sweep file (drystone/sweep.py): base ``case`` path, ``common`` overrides and
-    ``runs`` as (run name, [overrides])."""
+    ``runs`` as (run name, [overrides]) or (run name, [overrides], out folder)."""
     lines = ([f"# {header}"] if header else []) + ["[sweep]", f"name = {value(name)}", f"case = {value(str(case))}",
                                                    f"set = {value(list(common))}", ""]
-    for rn, sets in runs:
-        lines += ["[[runs]]", f"name = {value(rn)}", f"set = {value(list(sets))}", ""]
+    for rn, sets, *out in runs:
+        lines += ["[[runs]]", f"name = {value(rn)}", *(f"out = {value(o)}" for o in out), f"set = {value(list(sets))}", ""]
     return "\n".join(lines)
 
 

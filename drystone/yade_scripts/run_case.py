@@ -69,7 +69,7 @@ class Driver:
         self.vloc = local_v
         self.law_name = spec["law"]
         inertia = np.array([tuple(O.bodies[i].state.inertia) for i in range(nb)])
-        self.engine = ce.PenaltyCoulomb(self._pair_props, self.mass, local_v, spec.get("detection", "yade"), inertia)
+        self.engine = ce.PenaltyCoulomb(self._pair_props, self.mass, local_v, spec["detection"], inertia)
         self.prog = LoadProgramme([Stage(**s) for s in spec["stages"]], spec["gravity"])
         for s in self.prog.stages:
             if s.kind == "excitation":
