@@ -47,6 +47,7 @@ import numpy as np
 from scipy import linalg
 from scipy.spatial import ConvexHull
 
+from drystone import contact as law
 from drystone import overlap
 from drystone.contact import combine
 from drystone.units import GRAVITY as G  # default gravity, m/s^2
@@ -269,6 +270,65 @@ class Assembly:
                 u[c] = shape[k]
         return u[:3] + np.cross(u[3:], np.asarray(point, float) - self.pos0[b])
 
+    def damping(self, xi, at=None) -> np.ndarray:
+        """Damping matrix C (ndof x ndof; N s/m, N s, N m s/rad) of the contact dashpots
+        distributed over each contact patch, as the dynamic law applies them
+        (``drystone.contact.damping_matrix``: every mode of one contact's pair of blocks gets
+        ``xi``), at the configuration ``at`` (default q = 0), every contact sticking. ``xi``:
+        fraction of critical, a scalar or one per block (a pair takes the mean). A wrench at
+        the patch centroid p acts on block b through T_b = [[1, -[p - x_b]x], [0, 1]]."""
+        q = np.zeros(self.ndof) if at is None else np.asarray(at, float)
+        xi_b = np.broadcast_to(np.asarray(xi, float), (len(self.vertices),))
+        pos, rot, _ = self._configuration(q)
+        s = self.shapes
+        ia, ib, _, _, n, area, pc, pj = overlap.contacts_with_patches(s.verts, s.nv, s.normals, s.offsets, s.nf,
+                                                                      s.faces, s.fk, pos, rot, self.moving, overlap.TOL)
+        C = np.zeros((self.ndof, self.ndof))
+        if len(ia) == 0:
+            return C
+        kn = np.array([combine(self.kn[i], self.kn[j]) for i, j in zip(ia, ib)])
+        kt = np.array([combine(self.kt[i], self.kt[j]) for i, j in zip(ia, ib)])
+        K = law.patch_stiffness(n, area, pj, kn, kt, np.ones(len(ia), bool))
+        inv_m = np.where(self.moving, 1.0 / self.mass, 0.0)
+        inv_i = np.array([rot[b] @ np.linalg.inv(self.inertia[b]) @ rot[b].T if self.moving[b]
+                          else np.zeros((3, 3)) for b in range(len(self.mass))])
+        ra, rb = pc - pos[ia], pc - pos[ib]
+        W = law.mobility(ra, rb, inv_m[ia], inv_m[ib], inv_i[ia], inv_i[ib])
+        Cl, _ = law.damping_matrix(K, W, 0.5 * (xi_b[ia] + xi_b[ib]))
+        for k in range(len(ia)):
+            B = np.zeros((6, self.ndof))
+            for b, sign, r in ((ia[k], -1.0, ra[k]), (ib[k], 1.0, rb[k])):
+                T = np.eye(6)
+                T[:3, 3:] = -_skew(r)
+                for d, (bb, c) in enumerate(self.dofs):
+                    if bb == b:
+                        B[:, d] += sign * T[:, c]
+            C += B.T @ Cl[k] @ B
+        return C
+
+    @staticmethod
+    def damped_modes(K, C, M) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Complex modes of M q'' + C q' + K q = 0 (state space): undamped-equivalent
+        frequency |lambda| / 2 pi (Hz), damping ratio -Re(lambda) / |lambda| and the
+        displacement parts of the eigenvectors (columns), ascending in frequency, one per
+        conjugate pair; overdamped (real) roots left out."""
+        n = len(M)
+        Minv = np.linalg.inv(M)
+        A = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ K, -Minv @ C]])
+        lam, V = np.linalg.eig(A)
+        keep = lam.imag > 1e-9 * np.abs(lam).max()
+        lam, V = lam[keep], V[:n, keep]
+        o = np.argsort(np.abs(lam))
+        return np.abs(lam[o]) / (2 * np.pi), -lam[o].real / np.abs(lam[o]), V[:, o]
+
+    def frequency_response(self, K, C, M, frequencies_hz, direction=(0.0, 1.0, 0.0)) -> np.ndarray:
+        """Complex DOF displacements relative to the base per unit base acceleration
+        (s^2; rows: frequencies) for a base motion along ``direction``:
+        X = -(K - w^2 M + i w C)^-1 M r."""
+        r = M @ self.influence(direction)
+        return np.array([np.linalg.solve(K - (2 * np.pi * f) ** 2 * M + 2j * np.pi * f * C, -r)
+                         for f in frequencies_hz])
+
     def modes(self, rel_step: float = 1e-3, direction=(0.0, 1.0, 0.0), equilibrate: bool = True) -> dict:
         """Natural frequencies (Hz, ascending), mass-normalised mode shapes (ndof x nmodes),
         participation factors Gamma = phi^T M r and effective-mass ratios Gamma^2 / total
@@ -294,5 +354,5 @@ class Assembly:
                 "residual": float(np.max(np.abs(q0[tr]) / w[tr])) if tr.any() else 0.0,
                 "residual_at_equilibrium": hist[-1] if hist else None, "equilibrium_iterations": len(hist) - 1,
                 "equilibrium_max_translation_m": float(tr_q.max()) if len(tr_q) else 0.0,
-                "K": K, "M": M, "dofs": [(self.ids[b], _LETTERS[c]) for b, c in self.dofs],
+                "K": K, "M": M, "q_star": q_star, "dofs": [(self.ids[b], _LETTERS[c]) for b, c in self.dofs],
                 "contacts": len(self.reference)}

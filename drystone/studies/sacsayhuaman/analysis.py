@@ -310,7 +310,26 @@ def modal_analysis(out: Path, n_modes: int = 12) -> dict:
                       "effective_mass_y": float(res_y["effective_mass_ratio"][k]),
                       "effective_mass_x": float(gamma_x[k] ** 2 / total), "control_points_y": cp_y,
                       "blocks_y": blocks_y})
-    return {"modes": modes, "ndof": asm.ndof, "contacts": res_y["contacts"], "asymmetry": res_y["asymmetry"],
+    # the same model with the run's contact damping distributed over each patch (as the
+    # dynamic law): complex modes and the transfer function base acceleration -> y of A
+    spec = json.loads((Path(out) / "spec.json").read_text())
+    xi = [spec["materials"][b["material"]]["damping"] for b in spec["blocks"]]
+    q_star = res_y["q_star"]
+    K, M = 0.5 * (res_y["K"] + res_y["K"].T), res_y["M"]
+    C = asm.damping(xi, at=q_star)
+    fd, zd, _ = asm.damped_modes(K, C, M)
+    freqs = np.linspace(0.2, 20.0, 397)
+    b_a, p_a = cps["A"]
+    X = asm.frequency_response(K, C, M, freqs)
+    h_a = np.array([abs(asm.point_displacement(x.real, b_a, p_a)[1] + 1j * asm.point_displacement(x.imag, b_a, p_a)[1])
+                    for x in X])
+    damped = {"damping_input": sorted(set(float(v) for v in xi)), "frequency_hz": fd[:n_modes].tolist(),
+              "damping_ratio": zd[:n_modes].tolist(), "transfer_A": {"freq_hz": freqs.tolist(), "abs_H": h_a.tolist()},
+              "peak_A_hz": float(freqs[int(np.argmax(h_a))])}
+    rc = asm.reference_contacts
+    damped["median_overlap_depth_m"] = float(np.median(rc["volume"] / rc["area"]))
+    return {"modes": modes, "damped": damped, "ndof": asm.ndof, "contacts": res_y["contacts"],
+            "asymmetry": res_y["asymmetry"],
             "residual": res_y["residual"], "residual_at_equilibrium": res_y["residual_at_equilibrium"],
             "equilibrium_iterations": res_y["equilibrium_iterations"],
             "equilibrium_max_translation_m": res_y["equilibrium_max_translation_m"], "sample_time_s": asm.sample_time_s,
