@@ -92,3 +92,54 @@ def tunnelling(volume, area, size_a, size_b, names) -> str | None:
     return (f"contact {names[k]} penetrates {depth[k]:.4g} m, more than {TUNNEL_FRACTION:g} x the smaller block's "
             f"smallest dimension ({limit[k] / TUNNEL_FRACTION:.4g} m): the penalty contact cannot hold the load "
             f"and the blocks pass through each other (a force too large for K_n, or a time step too large)")
+
+
+def energy_bound_ratio(t, mass, vel, g_eff, kinetic, elastic, gravity, jumps=()) -> float:
+    """Largest (E - E_0) / bound over a finished run's recorded samples (the check of
+    ``EnergyWatch`` replayed; a run is stopped when it exceeds 1). Arrays as in
+    histories.npz (t s, mass kg, vel (n, b, 3) m/s, g_eff (n, 3) m/s^2, kinetic and elastic
+    J); ``jumps``: (time s, relative velocity (3,) m/s) of the run's velocity jumps."""
+    t, mass = np.asarray(t, float), np.asarray(mass, float)
+    p = np.abs(np.einsum("b,kbi,ki->kb", mass, np.asarray(vel, float), np.asarray(g_eff, float))).sum(1)
+    work = np.concatenate([[0.0], np.cumsum(0.5 * (p[1:] + p[:-1]) * np.diff(t))])
+    injected = np.zeros_like(t)
+    for tj, dv in jumps:
+        injected += (t >= tj - 1e-12) * 0.5 * mass.sum() * float(np.sum(np.asarray(dv) ** 2))
+    e = np.asarray(kinetic, float) + np.nan_to_num(np.asarray(elastic, float))
+    bound = WORK_FACTOR * work + injected + E_TOL_M * mass.sum() * gravity
+    return float(((e - e[0]) / bound)[1:].max()) if len(t) > 1 else 0.0
+
+
+def replay(root) -> list[tuple[float, str]]:
+    """``energy_bound_ratio`` of every finished run under ``root`` (folders with
+    histories.npz, spec.json and run_info.json), ascending: how close each came to being
+    stopped. ``python -m drystone.stability [ROOT]`` prints them (default results/)."""
+    import glob
+    import json
+    from pathlib import Path
+
+    rows = []
+    for f in sorted(glob.glob(str(Path(root) / "**" / "histories.npz"), recursive=True)):
+        d = Path(f).parent
+        try:
+            with np.load(f) as h:
+                info = json.loads((d / "run_info.json").read_text())
+                spec = json.loads((d / "spec.json").read_text())
+                jumps = [(j["time_s"], j["relative_velocity_m_s"]) for j in info.get("velocity_jumps") or []]
+                r = energy_bound_ratio(h["t"], h["mass"], h["vel"], h["g_eff"], h["kinetic"], h["elastic"],
+                                       spec["gravity"], jumps)
+        except (OSError, KeyError, ValueError):
+            continue
+        rows.append((r, str(d)))
+    return sorted(rows)
+
+
+if __name__ == "__main__":
+    import sys
+
+    from drystone import paths
+
+    rows = replay(sys.argv[1] if len(sys.argv) > 1 else paths.RESULTS)
+    for r, d in rows:
+        print(f"{r:6.3f}  {d}")
+    print(f"{len(rows)} runs; a run is stopped when its ratio exceeds 1")

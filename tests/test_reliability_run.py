@@ -212,3 +212,15 @@ def test_keys_piped_into_head_has_no_traceback():
     r = subprocess.run(f"{sys.executable} -m drystone keys | head -1", shell=True, cwd=paths.ROOT,
                        capture_output=True, text=True)
     assert r.stdout.strip() and "Traceback" not in r.stderr and "BrokenPipe" not in r.stderr
+
+
+def test_energy_bound_ratio_of_a_free_fall_is_one_half():
+    """Replayed on recorded samples: free fall turns the work of gravity W into kinetic
+    energy, E - E_0 = W against a bound 2 W + E_tol: the ratio tends to 1/2."""
+    g, m = 9.81, np.array([3.0])
+    t = np.linspace(0.0, 2.0, 201)
+    vel = np.zeros((len(t), 1, 3))
+    vel[:, 0, 2] = -g * t
+    ke = 0.5 * m[0] * (g * t) ** 2
+    r = stability.energy_bound_ratio(t, m, vel, np.tile([0.0, 0.0, -g], (len(t), 1)), ke, np.zeros_like(t), g)
+    assert 0.49 < r < 0.5
