@@ -154,6 +154,10 @@ STAGES: dict[str, dict[str, Key]] = {
                              positive=True),
     },
 }
+#: every stage may carry a name: overrides then address it as stages.NAME.KEY
+for _keys in STAGES.values():
+    _keys["name"] = Key(None, "-", "optional label of the stage (unique, not a number): overrides may address it as "
+                        "stages.NAME.KEY as well as stages.INDEX.KEY", str)
 
 
 def _kinds(spec: Key) -> tuple:
@@ -216,7 +220,12 @@ def _index(node: list, part: str, dotted: str, bad) -> int:
     n = len(node)
     span = f"{dotted}.0 .. {dotted}.{n - 1}" if n else "none"
     if not (part.isascii() and part.isdigit()):
-        raise bad(f"{dotted} are addressed by index from 0 ({span}; {dotted}.0 is the first), not {part!r}")
+        named = [k for k, x in enumerate(node) if isinstance(x, dict) and x.get("name") == part]
+        if named:
+            return named[0]
+        names = [x["name"] for x in node if isinstance(x, dict) and isinstance(x.get("name"), str)]
+        raise bad(f"{dotted} are addressed by index from 0 ({span}; {dotted}.0 is the first)"
+                  + (f" or by name ({', '.join(names)})" if names else "") + f", not {part!r}")
     if int(part) >= n:
         raise bad(f"there are {n} {dotted} ({span}; {dotted}.0 is the first): no {dotted}.{part}")
     return int(part)
@@ -366,6 +375,11 @@ def validate(raw: dict, where: str, base_dir: Path, stem: str = "case") -> dict:
                                                         or filled["until_kinetic_below_per_weight"] is not None):
             raise CaseError(f"{w}: 'until_kinetic_below(_per_weight)' ends the run early: only the last stage may "
                             "have it")
+        if filled["name"] is not None:
+            if not filled["name"].strip() or filled["name"].isdigit() or "." in filled["name"]:
+                raise CaseError(f"{w}: 'name' {filled['name']!r} must be a non-empty label, not a number, without '.'")
+            if any(st["name"] == filled["name"] for st in case["stages"]):
+                raise CaseError(f"{w}: 'name' {filled['name']!r} is already the name of another stage")
         case["stages"].append(filled)
     names = [c["name"] for c in case["output"]["contacts"]]
     for key in ("penetration", "slip"):
