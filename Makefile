@@ -10,7 +10,7 @@ STAMP   := $(VENV)/.setup-stamp
 RUN     := $(PY) -m drystone
 
 .PHONY: setup system-deps test demo run gravity4 settlement4 bench clean help records spectrum ogawa3d ogawa \
-        sweep tilt tilt-rate tilt-sensitivity tilt-report sacsayhuaman sacsayhuaman-report vtk ogawa-pga readme free-decay
+        reference sweep tilt tilt-rate tilt-sensitivity tilt-report sacsayhuaman sacsayhuaman-report vtk ogawa-pga readme free-decay
 
 help:
 	@echo "make setup        install Debian's YADE, make .venv, install PyPI dependencies"
@@ -19,6 +19,7 @@ help:
 	@echo "make run CASE=cases/x.toml [SET='key=value ...']   run any case file"
 	@echo "make gravity4 | settlement4   the paper's four-block verification cases"
 	@echo "make bench        speed figures (not a test)"
+	@echo "make reference    regenerate tests/data/reference/ (stored histories of test_regression.py) after an intended change"
 	@echo "make free-decay   damping ratio per mode of one block, both contact geometries (~1 min)"
 	@echo "make ogawa        Ogawa et al.: Tables 1-3 check and figure, 1D friction studies and report (~15 min)"
 	@echo "make ogawa3d      the same five blocks in 3D (YADE) for the named friction sets (~4 min per set) + make ogawa-pga"
@@ -85,6 +86,9 @@ demo: setup
 	$(RUN) run cases/settlement4.toml -j $(JOBS)
 	$(RUN) compare results/gravity4 results/settlement4
 	$(PY) -m drystone.studies.sacsayhuaman demo --workers $(JOBS)
+
+reference: setup
+	$(PY) tests/make_reference.py
 
 bench: setup
 	$(RUN) bench

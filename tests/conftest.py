@@ -46,3 +46,22 @@ def run_case(case: dict, outdir: Path, name: str = "case", **kw) -> tuple[dict, 
     s = runner.run_dict(case, outdir / f"{name}.toml", out_dir=out, quiet=True)
     spec = json.loads((out / "spec.json").read_text())
     return s, summ.load_histories(out), spec
+
+
+def assert_figure(path, size_in: tuple[float, float], dpi: float) -> None:
+    """``path`` is a PNG of ``size_in`` inches (width, height) at ``dpi`` with drawn content:
+    the middle half of the image has ink (pixels darker than 0.9) and many colours, which an
+    empty axes or a blank figure has not (thresholds: tests/tolerances.py)."""
+    import matplotlib.image
+    import numpy as np
+
+    from tolerances import FIGURE_MIN_COLOURS, FIGURE_MIN_INK
+
+    img = matplotlib.image.imread(path)[..., :3]
+    h, w = img.shape[:2]
+    assert (w, h) == (round(size_in[0] * dpi), round(size_in[1] * dpi)), f"{path}: {w} x {h} pixels"
+    middle = img[h // 4: 3 * h // 4, w // 4: 3 * w // 4]
+    ink = (middle.min(axis=2) < 0.9).mean()
+    colours = len(np.unique((middle.reshape(-1, 3) * 255).round().astype(int), axis=0))
+    assert ink >= FIGURE_MIN_INK and colours >= FIGURE_MIN_COLOURS, \
+        f"{path}: {ink:.2%} of the middle inked, {colours} colours: nothing drawn?"

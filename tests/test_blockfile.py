@@ -6,6 +6,7 @@ import sys
 import numpy as np
 import pytest
 
+import tolerances as tol
 from drystone.geometry import blockfile as bf
 from drystone.geometry import four_blocks
 from drystone.geometry import polyhedron as ph
@@ -24,8 +25,8 @@ def one_block(**over):
 
 def test_box_volume_and_centroid_exact():
     v, c = ph.volume_centroid(bf.box_vertices((1, 2, 3), (0.2, 0.3, 0.4)))
-    assert v == pytest.approx(0.024, rel=1e-12)
-    assert np.allclose(c, (1, 2, 3), atol=1e-12)
+    assert v == pytest.approx(0.024, rel=tol.EXACT_REL)
+    assert np.allclose(c, (1, 2, 3), atol=tol.EXACT_ABS)
 
 
 def test_good_file_round_trip(tmp_path):
@@ -39,7 +40,7 @@ def test_four_blocks_weights_match_paper():
     """Paper §3.1: 0.220 x 0.105 x 0.050 m at 2200 kg/m^3 weigh 24.93 N each."""
     bs = bf.parse(four_blocks.make())
     for b in (1, 2):
-        assert bs.mass(b) * 9.81 == pytest.approx(24.93, abs=0.005)
+        assert bs.mass(b) * 9.81 == pytest.approx(24.93, abs=tol.PRINTED_2_DECIMALS)
     assert bs.materials["stone"].mu == pytest.approx(np.tan(np.radians(38)))
 
 
@@ -70,14 +71,18 @@ def test_bad_input_names_block_and_problem(tmp_path, mutate, message):
 
 
 def test_touching_blocks_are_accepted():
-    """Blocks sharing a face exactly (overlap 0) are valid."""
-    bf.parse(one_block())
+    """Blocks sharing a face exactly (overlap 0) are valid: both are kept, their overlap
+    thickness is zero and the overlap check passes."""
+    bs = bf.parse(one_block())
+    assert sorted(bs.ids()) == [0, 7]
+    assert ph.overlap_thickness(bs.block(0).vertices, bs.block(7).vertices) == 0.0
+    bf.check_no_overlaps(bs, "t")  # raises GeometryError on an overlap
 
 
 def test_overlap_thickness_is_the_penetration():
     a = bf.box_vertices((0, 0, 0), (1, 1, 1))
     b = bf.box_vertices((0, 0, 1 - 1e-3), (0.5, 0.5, 1))
-    assert ph.overlap_thickness(a, b) == pytest.approx(1e-3, rel=1e-6)
+    assert ph.overlap_thickness(a, b) == pytest.approx(1e-3, rel=tol.LP_THICKNESS_REL)
     assert ph.overlap_thickness(a, bf.box_vertices((0, 0, 2), (1, 1, 1))) == 0.0
 
 

@@ -2,6 +2,7 @@
 import numpy as np
 import pytest
 
+import tolerances as tol
 from drystone import contact as law
 
 N = np.array([[0.0, 0.0, 1.0]])
@@ -10,9 +11,9 @@ N = np.array([[0.0, 0.0, 1.0]])
 def test_contact_area_uniform_and_wedge_exact():
     """A uniform slab (e = d/2) gives V/d; a wedge (e = d/3) gives 2V/d: both exact."""
     A, d = 0.12, 2e-5
-    assert law.contact_area([A * d], [d], [d / 2])[0] == pytest.approx(A, rel=1e-12)
+    assert law.contact_area([A * d], [d], [d / 2])[0] == pytest.approx(A, rel=tol.EXACT_REL)
     # wedge over a 0.3 x 0.4 footprint, depth 0 -> d: V = A d / 2
-    assert law.contact_area([A * d / 2], [d], [d / 3])[0] == pytest.approx(A, rel=1e-12)
+    assert law.contact_area([A * d / 2], [d], [d / 3])[0] == pytest.approx(A, rel=tol.EXACT_REL)
 
 
 def test_contact_area_linear_depth():
@@ -20,7 +21,7 @@ def test_contact_area_linear_depth():
     A, d1, d2 = 0.5, 1e-5, 4e-5
     V = A * (d1 + d2) / 2
     e = (d1 * d1 + d1 * d2 + d2 * d2) / (3 * (d1 + d2))
-    assert law.contact_area([V], [d2], [e])[0] == pytest.approx(A, rel=1e-9)
+    assert law.contact_area([V], [d2], [e])[0] == pytest.approx(A, rel=tol.NUMERICAL_REL)
 
 
 def test_projection_direction_prefers_face_normal():
@@ -56,7 +57,7 @@ def test_damped_stick_never_exceeds_coulomb():
     J = np.diag([1e-3, 1e-3, 0.0])[None]
     fd, _ = law.cap_damping(np.array([[-3.0, 0.0, 0.0]]), np.zeros((1, 3)), N, np.array([1.0]),
                             np.array([[-0.49, 0, 0]]), np.array([0.5]), np.zeros((1, 3)), np.array([0.1]), J)
-    assert np.linalg.norm(fd + [[-0.49, 0, 0]]) <= 0.5 + 1e-12
+    assert np.linalg.norm(fd + [[-0.49, 0, 0]]) <= 0.5 + tol.SLACK_TIGHT
 
 
 def test_normal_damping_never_pulls():
@@ -72,7 +73,7 @@ def test_shear_rotates_with_the_contact():
     n = np.array([[np.sin(0.1), 0.0, np.cos(0.1)]])
     r = law.rotate_into_plane(fs, n)
     assert np.linalg.norm(r) == pytest.approx(3.0)
-    assert abs(r[0] @ n[0]) < 1e-12
+    assert abs(r[0] @ n[0]) < tol.EXACT_ABS
 
 
 def test_critical_step_closed_form():
@@ -103,7 +104,7 @@ def test_mobility_at_a_contact_point():
     W = law.mobility(ra, rb, np.zeros(2), np.full(2, 1.0 / m), np.zeros((2, 3, 3)), inv_i_b)
     me = 1.0 / np.einsum("ki,kij,kj->k", u, W[:, :3, :3], u)
     # offset along x, force along z: rotation about y (inertia 0.2)
-    assert me == pytest.approx([m, 1.0 / (1.0 / m + r * r / 0.2)], rel=1e-12)
+    assert me == pytest.approx([m, 1.0 / (1.0 / m + r * r / 0.2)], rel=tol.EXACT_REL)
     moment = np.array([0.0, 1.0, 0.0])
     assert np.allclose(W[0, 3:, 3:] @ moment, moment / inertia)
     assert np.allclose(W[0, :3, 3:] @ moment, -np.cross(rb[0], moment / inertia))

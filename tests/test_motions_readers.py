@@ -1,14 +1,15 @@
 """Readers on small fixture files written by the tests (well-formed and malformed).
 
 Values are written with at least 6 significant digits, so readbacks are compared with a
-relative tolerance of 1e-9 on exactly representable inputs (the conversion factors are
-exact decimal multiples: gal = 0.01 m/s^2, g = 9.80665 m/s^2).
+relative tolerance of 1e-12 (tolerances.READER_REL: the conversion factors are exact
+decimal multiples, gal = 0.01 m/s^2, g = 9.80665 m/s^2).
 """
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+import tolerances as tol
 from drystone.motions import readers
 from drystone.motions.readers import RecordFormatError
 from drystone.motions.record import G
@@ -65,7 +66,7 @@ def write(tmp_path, name, text):
 def test_peer_west2_units_and_header(tmp_path):
     r = readers.read(write(tmp_path, "x.AT2", AT2_WEST2))
     assert r.n == 7 and r.dt == pytest.approx(0.01)
-    assert r.pga == pytest.approx(0.5 * G, rel=1e-12)
+    assert r.pga == pytest.approx(0.5 * G, rel=tol.READER_REL)
     assert r.event == "Kobe, Japan, 1/16/1995" and r.station == "Nishi-Akashi" and r.component == "0"
     assert r.units_in_file.upper() == "G" and r.source.endswith("x.AT2")
 
@@ -73,7 +74,7 @@ def test_peer_west2_units_and_header(tmp_path):
 def test_peer_west1_header(tmp_path):
     r = readers.read(write(tmp_path, "y.at2", AT2_WEST1))
     assert r.n == 5 and r.dt == pytest.approx(0.01) and r.station == "NISHI-AKASHI" and r.component == "000"
-    np.testing.assert_allclose(r.acc, np.array([0.1, 0.2, -0.3, 0.2, 0.1]) * G, rtol=1e-12)
+    np.testing.assert_allclose(r.acc, np.array([0.1, 0.2, -0.3, 0.2, 0.1]) * G, rtol=tol.READER_REL)
 
 
 def test_peer_count_mismatch_is_an_error_naming_file_and_line(tmp_path):
@@ -99,9 +100,9 @@ def test_jma_csv_components_and_gal(tmp_path):
     assert readers.detect_format(p) == "jma"
     ns = readers.read(p)  # default NS, the component Ogawa et al. used
     assert ns.component == "NS" and ns.station == "630" and ns.dt == pytest.approx(0.01)
-    assert ns.pga == pytest.approx(8.18, rel=1e-12) and ns.units_in_file == "gal"
+    assert ns.pga == pytest.approx(8.18, rel=tol.READER_REL) and ns.units_in_file == "gal"
     ew = readers.read(p, component="E-W")
-    np.testing.assert_allclose(ew.acc, [0.001, -0.2, 0.02, 0.05], rtol=1e-12)
+    np.testing.assert_allclose(ew.acc, [0.001, -0.2, 0.02, 0.05], rtol=tol.READER_REL)
     assert len(readers.read_all(p)) == 3
     with pytest.raises(RecordFormatError, match="no component 'X'"):
         readers.read(p, component="X")
@@ -121,17 +122,17 @@ def test_cismid_labels_in_any_order(tmp_path):
     p = write(tmp_path, "tmb.txt", CISMID)
     assert readers.detect_format(p) == "cismid"
     ns = readers.read(p)
-    np.testing.assert_allclose(ns.acc, [0.1, -0.2, 0.3, -0.4], rtol=1e-12)
+    np.testing.assert_allclose(ns.acc, [0.1, -0.2, 0.3, -0.4], rtol=tol.READER_REL)
     assert ns.component == "NS" and ns.station == "Tambomachay" and ns.dt == pytest.approx(0.01)
     assert "27/09/2014" in ns.event
     ud = readers.read(p, component="UD")
-    np.testing.assert_allclose(ud.acc, [-0.03, 0.04, -0.05, 0.06], rtol=1e-12)
+    np.testing.assert_allclose(ud.acc, [-0.03, 0.04, -0.05, 0.06], rtol=tol.READER_REL)
 
 
 def test_cismid_without_labels_takes_ns_ew_ud_and_says_so(tmp_path):
     text = CISMID.replace("      E-W        N-S        U-D\n", "")
     r = readers.read(write(tmp_path, "nolab.txt", text), format="cismid")
-    np.testing.assert_allclose(r.acc, [0.01, 0.02, 0.03, 0.04], rtol=1e-12)
+    np.testing.assert_allclose(r.acc, [0.01, 0.02, 0.03, 0.04], rtol=tol.READER_REL)
     assert any("columns taken as NS, EW, UD" in h for h in r.history)
 
 
@@ -151,14 +152,14 @@ def test_plain_one_column_needs_dt_and_units(tmp_path):
     with pytest.raises(RecordFormatError, match="units"):
         readers.read(p, dt=0.01)
     r = readers.read(p, dt=0.01, units="g")
-    np.testing.assert_allclose(r.acc, np.array([0.1, -0.2, 0.3]) * G, rtol=1e-12)
+    np.testing.assert_allclose(r.acc, np.array([0.1, -0.2, 0.3]) * G, rtol=tol.READER_REL)
 
 
 def test_plain_two_columns_and_header_comments(tmp_path):
     p = write(tmp_path, "b.dat", "# units = gal\n# station = X\n0.50 1\n0.52 2\n0.54 -3\n0.56 4\n")
     r = readers.read(p)
     assert r.dt == pytest.approx(0.02) and r.start_time == pytest.approx(0.5) and r.station == "X"
-    np.testing.assert_allclose(r.acc, [0.01, 0.02, -0.03, 0.04], rtol=1e-12)
+    np.testing.assert_allclose(r.acc, [0.01, 0.02, -0.03, 0.04], rtol=tol.READER_REL)
     with pytest.raises(RecordFormatError, match="declares units 'gal' but units='g'"):
         readers.read(p, units="g")
 
@@ -185,7 +186,7 @@ def test_obspy_sac_declares_acceleration_and_mseed_needs_units(tmp_path):
     sac.write(str(sp))
     r = readers.read(sp)
     assert r.units_in_file == "nm/s^2" and r.dt == pytest.approx(0.005) and r.station == "WNQ"
-    np.testing.assert_allclose(r.acc, [0.0, 1.0, -2.0, 0.5], rtol=1e-7)  # float32 samples
+    np.testing.assert_allclose(r.acc, [0.0, 1.0, -2.0, 0.5], rtol=tol.FLOAT32_REL)  # float32 samples
 
     tr = obspy.Trace(data=np.array([1, -2, 3], dtype=np.int32), header={"delta": 0.01, "station": "TMB",
                                                                       "channel": "HNE"})
@@ -194,7 +195,7 @@ def test_obspy_sac_declares_acceleration_and_mseed_needs_units(tmp_path):
     with pytest.raises(RecordFormatError, match=r"t\.mseed: .*pass units="):
         readers.read(mp)
     r = readers.read(mp, units="gal")
-    np.testing.assert_allclose(r.acc, [0.01, -0.02, 0.03], rtol=1e-12)
+    np.testing.assert_allclose(r.acc, [0.01, -0.02, 0.03], rtol=tol.READER_REL)
     assert r.component == "HNE"
 
 

@@ -2,6 +2,7 @@
 import numpy as np
 import pytest
 
+import tolerances as tol
 from drystone.geometry import blockfile as bf
 from drystone.geometry import ogawa_blocks as ob
 
@@ -23,9 +24,9 @@ def test_readings(orientation, size_big, size_end):
     assert sorted(bs.ids("free")) == [1, 2, 3, 4, 5]
     dims = _dims(d)
     for b in (1, 2, 4):
-        assert dims[b] == pytest.approx(size_big, abs=1e-12)
+        assert dims[b] == pytest.approx(size_big, abs=tol.EXACT_ABS)
     for b in ob.END_BLOCKS:
-        assert dims[b] == pytest.approx(size_end, abs=1e-12)
+        assert dims[b] == pytest.approx(size_end, abs=tol.EXACT_ABS)
     g = d["generator"]
     assert g["orientation"] == orientation and any("ASSUMED" in a for a in g["assumed"])
     assert ob.ASSUMED[orientation] in g["assumed"]
@@ -36,8 +37,8 @@ def test_same_volumes_and_layout_in_both_readings():
     along x; only the end blocks' slenderness changes (height / length 2 against 1)."""
     up, flat = _dims(ob.make()), _dims(ob.make(orientation="flat"))
     for b in range(1, 6):
-        assert np.prod(up[b]) == pytest.approx(np.prod(flat[b]), rel=1e-12)
-        assert up[b][0] == pytest.approx(flat[b][0], abs=1e-12)
+        assert np.prod(up[b]) == pytest.approx(np.prod(flat[b]), rel=tol.EXACT_REL)
+        assert up[b][0] == pytest.approx(flat[b][0], abs=tol.EXACT_ABS)
     assert up[3][2] / up[3][0] == pytest.approx(2.0) and flat[3][2] / flat[3][0] == pytest.approx(1.0)
 
 

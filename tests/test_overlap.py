@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from scipy.spatial import HalfspaceIntersection
 
+import tolerances as tol
 from drystone import overlap as ov
 from drystone.geometry import polyhedron as ph
 
@@ -18,9 +19,9 @@ def test_boxes_volume_centroid_gradient():
     a = box([0, 0, 0], [0.4, 0.2, 0.1])
     b = box([0.1, 0.05, 0.1 - 2e-5], [0.3, 0.15, 0.3])
     v, c, g = ov.overlap(a, b)
-    assert v == pytest.approx(0.2 * 0.1 * 2e-5, rel=1e-9)
-    assert c == pytest.approx([0.2, 0.1, 0.1 - 1e-5], abs=1e-12)
-    assert g == pytest.approx([0, 0, -0.2 * 0.1], rel=1e-9, abs=1e-15)
+    assert v == pytest.approx(0.2 * 0.1 * 2e-5, rel=tol.NUMERICAL_REL)
+    assert c == pytest.approx([0.2, 0.1, 0.1 - 1e-5], abs=tol.EXACT_ABS)
+    assert g == pytest.approx([0, 0, -0.2 * 0.1], rel=tol.NUMERICAL_REL, abs=tol.ZERO_ABS)
 
 
 def test_side_by_side_coplanar_faces_counted_once():
@@ -29,14 +30,14 @@ def test_side_by_side_coplanar_faces_counted_once():
     a = box([0, 0, 0], [1, 0.8, 0.5])
     b = box([1 - 1e-5, 0, 0], [2, 0.8, 0.5])
     v, c, g = ov.overlap(a, b)
-    assert v == pytest.approx(1e-5 * 0.8 * 0.5, rel=1e-6)
-    assert g == pytest.approx([-0.4, 0, 0], rel=1e-6, abs=1e-12)
+    assert v == pytest.approx(1e-5 * 0.8 * 0.5, rel=tol.THIN_OVERLAP_REL)
+    assert g == pytest.approx([-0.4, 0, 0], rel=tol.THIN_OVERLAP_REL, abs=tol.EXACT_ABS)
 
 
 def test_separated_and_touching_give_nothing():
     a = box([0, 0, 0], [1, 1, 1])
     assert ov.overlap(a, box([1.001, 0, 0], [2, 1, 1]))[0] == 0.0
-    assert ov.overlap(a, box([1.0, 0, 0], [2, 1, 1]))[0] == pytest.approx(0.0, abs=1e-15)
+    assert ov.overlap(a, box([1.0, 0, 0], [2, 1, 1]))[0] == pytest.approx(0.0, abs=tol.ZERO_ABS)
 
 
 def test_wedge_area_is_the_footprint():
@@ -50,8 +51,8 @@ def test_wedge_area_is_the_footprint():
     blk[:, 2] -= blk[:, 2].min() + d
     v, c, g = ov.overlap(base, blk)
     foot = d / np.tan(theta)  # length of the footprint along x
-    assert v == pytest.approx(0.5 * foot * d * 0.2, rel=1e-3)
-    assert np.linalg.norm(g) == pytest.approx(foot * 0.2, rel=1e-3)
+    assert v == pytest.approx(0.5 * foot * d * 0.2, rel=tol.WEDGE_REL)
+    assert np.linalg.norm(g) == pytest.approx(foot * 0.2, rel=tol.WEDGE_REL)
 
 
 def random_block(rng, centre, size):
@@ -81,11 +82,11 @@ def test_random_polyhedra_against_qhull_and_finite_differences(seed):
     vb = random_block(rng, rng.normal(size=3) * 0.3, 0.5)
     v, c, g = ov.overlap(va, vb)
     ref_v, ref_c = qhull_overlap(va, vb)
-    assert v == pytest.approx(ref_v, rel=1e-9)
-    assert c == pytest.approx(ref_c, abs=1e-9)
+    assert v == pytest.approx(ref_v, rel=tol.NUMERICAL_REL)
+    assert c == pytest.approx(ref_c, abs=tol.NUMERICAL_ABS)
     h = 1e-6
     fd = [(ov.overlap(va, vb + h * e)[0] - ov.overlap(va, vb - h * e)[0]) / (2 * h) for e in np.eye(3)]
-    assert g == pytest.approx(fd, rel=1e-5, abs=1e-9)
+    assert g == pytest.approx(fd, rel=tol.GRADIENT_FD_REL, abs=tol.GRADIENT_FD_ABS)
 
 
 def test_all_contacts_finds_pairs_with_a_moving_body():
@@ -101,6 +102,6 @@ def test_all_contacts_finds_pairs_with_a_moving_body():
     id1, id2, vol, cen, nrm, area = ov.all_contacts(s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk,
                                                     pos2, rot, moving, ov.TOL)
     assert list(zip(id1, id2)) == [(0, 1), (1, 2)]
-    assert vol == pytest.approx([1e-5, 2e-5], rel=1e-6)
-    assert nrm == pytest.approx(np.array([[0, 0, 1.0], [0, 0, 1.0]]), abs=1e-9)
-    assert area == pytest.approx([1.0, 1.0], rel=1e-6)
+    assert vol == pytest.approx([1e-5, 2e-5], rel=tol.THIN_OVERLAP_REL)
+    assert nrm == pytest.approx(np.array([[0, 0, 1.0], [0, 0, 1.0]]), abs=tol.NUMERICAL_ABS)
+    assert area == pytest.approx([1.0, 1.0], rel=tol.THIN_OVERLAP_REL)

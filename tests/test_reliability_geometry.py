@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import tolerances as tol
 from drystone.geometry import blockfile as bf
 from drystone.geometry import generators
 from drystone.geometry import outlines as ol
@@ -82,10 +83,15 @@ def test_vertices_that_are_not_corners_are_refused(tmp_path, extra, message):
 
 def test_real_corners_close_to_flat_are_kept():
     """A roof 0.1 mm high over a 1 m box is a corner (9 vertices), so is a corner pulled out
-    by 1 um."""
-    bf.parse(blocks_file(BOX + [[0.0, 0.0, 1.0 + 1e-4]]))
-    bf.parse(blocks_file([[x * (1 + 1e-6), y * (1 + 1e-6), z] if (x, y) == (0.5, 0.5) else [x, y, z]
-                          for x, y, z in BOX]))
+    by 1 um: both blocks are accepted with every vertex as given, and their volumes count
+    the roof (a pyramid, 1 m^2 x 1e-4 m / 3) and the pulled edge (two slivers of 1 m^2 x
+    0.5 um / 2)."""
+    roof = BOX + [[0.0, 0.0, 1.0 + 1e-4]]
+    b = bf.parse(blocks_file(roof)).block(1)
+    assert np.array_equal(b.vertices, roof) and b.volume == pytest.approx(1.0 + 1e-4 / 3, rel=tol.EXACT_REL)
+    pulled = [[x * (1 + 1e-6), y * (1 + 1e-6), z] if (x, y) == (0.5, 0.5) else [x, y, z] for x, y, z in BOX]
+    b = bf.parse(blocks_file(pulled)).block(1)
+    assert np.array_equal(b.vertices, pulled) and b.volume == pytest.approx(1.0 + 5e-7, rel=tol.EXACT_REL)
 
 
 def _case_geometries():

@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import tolerances as tol
 from drystone.motions import spectra as sp
 
 
@@ -27,13 +28,13 @@ def test_amplitude_scaling_reads_the_sine_amplitude():
     f0 = 40 / (n * dt)
     x = A * np.cos(2 * np.pi * f0 * np.arange(n) * dt)
     f, a = sp.fourier_amplitude(x, dt, window=None, detrend=False, scaling="amplitude")
-    assert a[40] == pytest.approx(A, rel=1e-12)
+    assert a[40] == pytest.approx(A, rel=tol.EXACT_REL)
     f, fas = sp.fourier_amplitude(x, dt, window=None, detrend=False)
-    assert fas[40] == pytest.approx(A * n * dt / 2, rel=1e-12)
+    assert fas[40] == pytest.approx(A * n * dt / 2, rel=tol.EXACT_REL)
     # Hann: the coherent-gain correction keeps the level of a stationary signal (2 %: the
     # window's main lobe samples the peak between bins at most 15 %, here on-bin)
     f, ah = sp.fourier_amplitude(x, dt, window="hann", detrend=False, scaling="amplitude")
-    assert ah[40] == pytest.approx(A, rel=0.02)
+    assert ah[40] == pytest.approx(A, rel=tol.HANN_GAIN_REL)
 
 
 def test_parseval_for_the_fas():
@@ -43,7 +44,7 @@ def test_parseval_for_the_fas():
     f, a = sp.fourier_amplitude(x, dt, window=None, detrend=False)
     df = f[1] - f[0]
     two_sided = a[0] ** 2 + 2 * (a[1:-1] ** 2).sum() + a[-1] ** 2
-    assert two_sided * df == pytest.approx((x ** 2).sum() * dt, rel=1e-10)
+    assert two_sided * df == pytest.approx((x ** 2).sum() * dt, rel=tol.PARSEVAL_REL)
 
 
 def test_peak_rule_height_and_prominence():
@@ -54,14 +55,14 @@ def test_peak_rule_height_and_prominence():
     g = lambda c, w, h: h * np.exp(-0.5 * ((f - c) / w) ** 2)  # noqa: E731
     amp = g(2.0, 0.3, 1.0) + g(6.0, 0.4, 0.6) + g(12.0, 0.5, 0.3)
     peaks = sp.predominant_frequencies(f, amp)
-    assert len(peaks) == 2 and abs(peaks[0] - 2.0) < 0.01 and abs(peaks[1] - 6.0) < 0.01
+    assert len(peaks) == 2 and abs(peaks[0] - 2.0) < tol.PEAK_POSITION_HZ and abs(peaks[1] - 6.0) < tol.PEAK_POSITION_HZ
     shoulder = amp + g(2.3, 0.015, 0.1)  # local peak 0.71 at 2.295 Hz, prominence 0.03
     assert len(sp.predominant_frequencies(f, shoulder, prominence=0.1)) == 2
     loose = sp.predominant_frequencies(f, shoulder, prominence=0.01)
-    assert len(loose) == 3 and abs(loose[1] - 2.3) < 0.02
-    assert sp.predominant_frequencies(f, amp, height=0.2)[2] == pytest.approx(12.0, abs=0.01)
+    assert len(loose) == 3 and abs(loose[1] - 2.3) < tol.SHOULDER_POSITION_HZ
+    assert sp.predominant_frequencies(f, amp, height=0.2)[2] == pytest.approx(12.0, abs=tol.PEAK_POSITION_HZ)
     only = sp.predominant_frequencies(f, amp, fmin=4.0, fmax=10.0)
-    assert len(only) == 1 and only[0] == pytest.approx(6.0, abs=0.01)
+    assert len(only) == 1 and only[0] == pytest.approx(6.0, abs=tol.PEAK_POSITION_HZ)
 
 
 def test_band_is_the_half_amplitude_band():
@@ -72,14 +73,14 @@ def test_band_is_the_half_amplitude_band():
     amp = np.exp(-0.5 * ((f - c) / s) ** 2)
     lo, hi = sp.predominant_band(f, amp)
     h = s * np.sqrt(2 * np.log(2))
-    assert lo == pytest.approx(c - h, abs=1e-3) and hi == pytest.approx(c + h, abs=1e-3)
+    assert lo == pytest.approx(c - h, abs=tol.HALF_BAND_HZ) and hi == pytest.approx(c + h, abs=tol.HALF_BAND_HZ)
 
 
 def test_smoothing_keeps_a_flat_spectrum_and_log_grid():
     f = np.linspace(0, 50, 5001)
     g = sp.log_grid(0.1, 25, 100)
     assert g[0] == pytest.approx(0.1) and g[-1] == pytest.approx(25) and len(g) == 241
-    np.testing.assert_allclose(sp.smooth(f, np.full_like(f, 3.0), 40, g), 3.0, rtol=1e-12)
+    np.testing.assert_allclose(sp.smooth(f, np.full_like(f, 3.0), 40, g), 3.0, rtol=tol.EXACT_REL)
 
 
 def test_response_spectrum_limits_and_resonance():
@@ -89,8 +90,8 @@ def test_response_spectrum_limits_and_resonance():
     t = np.arange(0, 40, dt)
     a = np.sin(2 * np.pi * 1.0 * t)
     psa = sp.response_spectrum(a, dt, [0.01, 1.0], damping=0.05)
-    assert psa[0] == pytest.approx(1.0, rel=0.01)
-    assert psa[1] == pytest.approx(1 / (2 * 0.05), rel=0.02)
+    assert psa[0] == pytest.approx(1.0, rel=tol.PSA_RIGID_REL)
+    assert psa[1] == pytest.approx(1 / (2 * 0.05), rel=tol.PSA_RESONANCE_REL)
 
 
 def test_response_spectrum_matches_the_fema_package_values():
@@ -107,4 +108,4 @@ def test_response_spectrum_matches_the_fema_package_values():
         per, ref = s["period"][m][::9], s["values_block_0"][m][::9, 5]
         r = fema.load(rid, comp)
         mine = sp.response_spectrum(r.acc / 9.80665, r.dt, per)
-        np.testing.assert_allclose(mine, ref, rtol=0.005)
+        np.testing.assert_allclose(mine, ref, rtol=tol.FEMA_SPECTRUM_REL)

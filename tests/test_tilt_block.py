@@ -8,10 +8,11 @@ onset of motion (5 mm per degree of tilt, drystone/collapse.py) is dated within 
 """
 import pytest
 
+import tolerances as tol
 from conftest import requires_yade, run_case
 from drystone import analytic
 
-pytestmark = [requires_yade, pytest.mark.yade]
+pytestmark = [requires_yade, pytest.mark.yade, pytest.mark.slow]  # each test > 30 s
 
 
 def tilt_case(size, mu, start_deg, kn=2e8):
@@ -28,20 +29,21 @@ def tilt_case(size, mu, start_deg, kn=2e8):
 
 def test_block_slides_at_atan_mu(outdir):
     s, h, _ = run_case(tilt_case([0.2, 0.2, 0.2], 0.4, 20.0), outdir)
-    assert s["collapse_angle_deg"] == pytest.approx(analytic.sliding_tilt_deg(0.4), abs=0.3)
+    assert s["collapse_angle_deg"] == pytest.approx(analytic.sliding_tilt_deg(0.4), abs=tol.TILT_ANGLE_DEG)
     assert s["collapse"]["onset_block"] == 1
 
 
 def test_block_topples_at_the_winkler_angle(outdir):
     expected = analytic.toppling_tilt_deg(0.2, 0.4, 0.2, 2300, 2e8)
     s, h, _ = run_case(tilt_case([0.2, 0.2, 0.4], 0.7, expected - 2.0), outdir)
-    assert s["collapse_angle_deg"] == pytest.approx(expected, abs=0.3)
+    assert s["collapse_angle_deg"] == pytest.approx(expected, abs=tol.TILT_ANGLE_DEG)
     assert s["blocks"]["1"]["residual_rotation_angle_rad"] > 0.3  # it fell over, not slid
     # the paper's criterion: the vertical reaction drops by 5 % of the weight once the block
     # falls, i.e. after the onset of its run-away and within the time it takes to fall (under
     # 2 s for a 0.4 m block, 1 deg of tilt at 0.5 deg/s); a standing block keeps it at W
     rd = s["reaction_drop_angle_deg"]
-    assert rd is not None and s["collapse_angle_deg"] - 0.1 <= rd <= s["collapse_angle_deg"] + 1.0
+    assert rd is not None
+    assert s["collapse_angle_deg"] - tol.REACTION_DROP_BEFORE_DEG <= rd <= s["collapse_angle_deg"] + tol.REACTION_DROP_AFTER_DEG
     assert s["collapse"]["reaction_drop"]["fraction"] < 0.95
 
 
@@ -63,6 +65,6 @@ def test_toppling_block_at_both_quasi_static_rates(outdir):
         case["stages"][2]["rate_deg_s"] = rate
         s, _, _ = run_case(case, outdir, name=f"rate_{rate}_{xi}")
         angles[rate, xi] = s["collapse_angle_deg"]
-    assert angles[0.2, 0.8] == pytest.approx(expected, abs=0.3)
-    assert angles[1.0, 0.08] == pytest.approx(expected, abs=0.3)
+    assert angles[0.2, 0.8] == pytest.approx(expected, abs=tol.TILT_ANGLE_DEG)
+    assert angles[1.0, 0.08] == pytest.approx(expected, abs=tol.TILT_ANGLE_DEG)
     assert angles[1.0, 0.8] >= max(angles[0.2, 0.8], angles[1.0, 0.08])

@@ -6,6 +6,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
+import tolerances as tol
 from drystone.geometry import blockfile as bf
 from drystone.postprocess import vtk
 
@@ -50,7 +51,7 @@ def test_moved_cube_is_written_where_it_is(tmp_path):
     expected = (v - [0, 0, 0.5]) @ rz.T + [0, 0, 0.5] + dx
     # every written corner is a corner of the moved, turned cube, and all 8 corners appear
     dist = np.linalg.norm(cube[:, None, :] - expected[None], axis=2)
-    assert dist.min(axis=1).max() < 1e-9 and dist.min(axis=0).max() < 1e-9
+    assert dist.min(axis=1).max() < tol.VTK_COORDINATE_M and dist.min(axis=0).max() < tol.VTK_COORDINATE_M
     assert cells["displacement_m"][cells["block_id"] == 1] == pytest.approx(np.linalg.norm(dx))
     assert np.all(cells["moving"][cells["block_id"] == 0] == 0) and np.all(cells["displacement_m"][:6] == 0)
 

@@ -2,6 +2,8 @@
 import numpy as np
 import pytest
 
+import tolerances as tol
+from conftest import assert_figure
 from drystone.geometry import blockfile as bf
 from drystone.geometry import irregular_wall as iw
 
@@ -18,9 +20,9 @@ def test_tilt_wall_valid_tiles_and_weighs_1371(seed):
     bs = bf.parse(d)
     vol = sum(b.volume for b in bs.blocks if b.role != "platform")
     t = d["generator"]["thickness"]
-    assert vol == pytest.approx(1.5 * 0.375 * t, rel=1e-9)
-    assert vol * 2300 * 9.81 == pytest.approx(1371, rel=1e-6)
-    assert t == pytest.approx(0.1080, abs=5e-5)
+    assert vol == pytest.approx(1.5 * 0.375 * t, rel=tol.NUMERICAL_REL)
+    assert vol * 2300 * 9.81 == pytest.approx(1371, rel=tol.WALL_WEIGHT_REL)
+    assert t == pytest.approx(0.1080, abs=tol.WALL_THICKNESS_M)
     first = [b for b in bs.blocks if b.role == "fixed"]
     assert first and all(np.min(b.vertices[:, 2]) == pytest.approx(0.0) for b in first)
 
@@ -45,10 +47,10 @@ def test_joints_not_vertical_and_staggered():
     courses = [per_course[k] for k in sorted(per_course)]
     gap = 0.25 * 0.15
     for below, above in zip(courses[:-1], courses[1:]):
-        tops = [q[3, 0] for q in below if 1e-9 < q[3, 0] < 1.5 - 1e-9]
-        bottoms = [q[0, 0] for q in above if 1e-9 < q[0, 0] < 1.5 - 1e-9]
+        tops = [q[3, 0] for q in below if tol.SLACK < q[3, 0] < 1.5 - tol.SLACK]
+        bottoms = [q[0, 0] for q in above if tol.SLACK < q[0, 0] < 1.5 - tol.SLACK]
         for x in bottoms:
-            assert min(abs(x - t) for t in tops) >= gap - 1e-12
+            assert min(abs(x - t) for t in tops) >= gap - tol.SLACK_TIGHT
 
 
 def test_zero_irregularity_is_level_and_vertical():
@@ -85,9 +87,9 @@ def test_sacsayhuaman_numbering_roles_control_points(tmp_path):
     assert {k: c["block"] for k, c in cps.items()} == {"A": 35, "B": 38, "C": 39, "D": 40}
     assert all(c["position"][2] == pytest.approx(4.0) for c in cps.values())
     vol = sum(b.volume for b in bs.blocks if b.role != "platform")
-    assert vol == pytest.approx(8.64 * 4.0 * 0.8, rel=1e-9)
+    assert vol == pytest.approx(8.64 * 4.0 * 0.8, rel=tol.NUMERICAL_REL)
     bf.write(d, tmp_path / "s.json")
-    assert snapshots.elevation(tmp_path / "s.json", tmp_path / "s.png").stat().st_size > 10_000
+    assert_figure(snapshots.elevation(tmp_path / "s.json", tmp_path / "s.png"), (10, 5), dpi=110)
 
 
 def _depths(d):
@@ -109,19 +111,19 @@ def test_varying_depth_keeps_face_weight_and_bounds(flush):
         va, vb = np.asarray(a["vertices"]), np.asarray(b["vertices"])
         assert np.array_equal(va[:, [0, 2]], vb[:, [0, 2]])
     vol = sum(b.volume for b in bs.blocks if b.role != "platform")
-    assert vol == pytest.approx(1.5 * 0.375 * t, rel=1e-9)
+    assert vol == pytest.approx(1.5 * 0.375 * t, rel=tol.NUMERICAL_REL)
     d = _depths(var)
-    assert d.max() / d.min() <= (1 + spread) / (1 - spread) + 1e-12
-    assert 0.9 * t < np.mean(d) < 1.1 * t
+    assert d.max() / d.min() <= (1 + spread) / (1 - spread) + tol.SLACK_TIGHT
+    assert (1 - tol.DEPTH_MEAN_REL) * t < np.mean(d) < (1 + tol.DEPTH_MEAN_REL) * t
     assert d.std() > 0.1 * t  # uniform on +-1/3: sd = t / (3 sqrt 3) = 0.19 t
     ys = np.array([[np.min(np.asarray(b["vertices"])[:, 1]), np.max(np.asarray(b["vertices"])[:, 1])]
                    for b in stones(var)])
     if flush is None:
-        assert np.allclose(ys.sum(axis=1), 0.0, atol=1e-12)  # centred on the mid-plane
+        assert np.allclose(ys.sum(axis=1), 0.0, atol=tol.EXACT_ABS)  # centred on the mid-plane
     elif flush == "+y":
-        assert np.allclose(ys[:, 1], t / 2, atol=1e-12)
+        assert np.allclose(ys[:, 1], t / 2, atol=tol.EXACT_ABS)
     else:
-        assert np.allclose(ys[:, 0], -t / 2, atol=1e-12)
+        assert np.allclose(ys[:, 0], -t / 2, atol=tol.EXACT_ABS)
     plat = np.asarray(var["blocks"][0]["vertices"])
     assert plat[:, 1].min() < ys.min() and plat[:, 1].max() > ys.max()  # the platform carries every stone
 
@@ -131,7 +133,7 @@ def test_zero_depth_spread_is_the_extruded_wall():
     the Santa-Cruz tilt wall varies the depth by default)."""
     assert iw.make(seed=1, depth_spread=0.0) == iw.make(seed=1)
     ext = iw.tilt_wall(seed=1, depth_spread=0.0)
-    assert np.allclose(_depths(ext), ext["generator"]["thickness"], rtol=1e-12)
+    assert np.allclose(_depths(ext), ext["generator"]["thickness"], rtol=tol.EXACT_REL)
     assert iw.tilt_wall(seed=1)["generator"]["depth_spread"] == pytest.approx(1 / 3)
 
 

@@ -4,9 +4,12 @@ Blocks: 0.4 x 0.4 x 0.04 m slabs (flat, so that the push, applied at the centroi
 them by less than 1e-5 rad and the measured slip is the joint's), 2300 kg/m^3, on a rigid
 platform with K_n = 2e8, K_t = 1e8 N/m^3.
 """
+import json
+
 import numpy as np
 import pytest
 
+import tolerances as tol
 from conftest import requires_yade, run_case
 from drystone.postprocess import summary as summ
 
@@ -49,6 +52,7 @@ def disp(h, block):
     return h["pos"][:, j] - h["pos0"][j]
 
 
+@pytest.mark.slow
 def test_push_below_friction_sticks_elastically(outdir):
     """0.4 W with mu = 0.7: the block deflects by F / (K_t A) (elastic joint) and stops:
     drift between 0.5 s and 2 s after the push < 1e-7 m; the unloaded neighbour moves
@@ -59,10 +63,10 @@ def test_push_below_friction_sticks_elastically(outdir):
     t = h["t"]
     x = disp(h, 1)[:, 0]
     i1, i2 = np.searchsorted(t, 1.0), np.searchsorted(t, 2.5)
-    assert abs(x[i2] - x[i1]) < 1e-7
+    assert abs(x[i2] - x[i1]) < tol.STICK_DRIFT_M
     # elastic deflection F / (K_t A); 3 % covers the slab's tilt under the push (1.5 %)
-    assert x[-1] == pytest.approx(F / (1e8 * 0.16), rel=0.03)
-    assert np.abs(disp(h, 2)[:, :2]).max() < 1e-9  # horizontal: it only settles vertically
+    assert x[-1] == pytest.approx(F / (1e8 * 0.16), rel=tol.ELASTIC_DEFLECTION_REL)
+    assert np.abs(disp(h, 2)[:, :2]).max() < tol.NEIGHBOUR_M  # horizontal: it only settles vertically
 
 
 def test_push_above_friction_slides_with_coulomb_acceleration(outdir):
@@ -73,7 +77,7 @@ def test_push_above_friction_slides_with_coulomb_acceleration(outdir):
     x = disp(h, 1)[:, 0]
     win = (t > 0.6) & (t < 1.5)
     a = 2 * np.polyfit(t[win], x[win], 2)[0]
-    assert a == pytest.approx(0.1 * G, rel=0.02)
+    assert a == pytest.approx(0.1 * G, rel=tol.COULOMB_ACCELERATION_REL)
 
 
 def test_stacked_blocks_penetrations(outdir):
@@ -84,8 +88,8 @@ def test_stacked_blocks_penetrations(outdir):
              contacts=[{"name": "top", "blocks": [1, 2]}, {"name": "bottom", "blocks": [0, 1]}])
     s, h, spec = run_case(c, outdir)
     d0 = W / (2e8 * 0.16)
-    assert summ.penetration(spec, h, "top")["penetration_1_2_m"] == pytest.approx(d0, rel=0.01)
-    assert summ.penetration(spec, h, "bottom")["penetration_0_1_m"] == pytest.approx(2 * d0, rel=0.01)
+    assert summ.penetration(spec, h, "top")["penetration_1_2_m"] == pytest.approx(d0, rel=tol.STACK_PENETRATION_REL)
+    assert summ.penetration(spec, h, "bottom")["penetration_0_1_m"] == pytest.approx(2 * d0, rel=tol.STACK_PENETRATION_REL)
 
 
 def test_drop_comes_to_rest_and_energy_never_grows(outdir):
@@ -101,21 +105,29 @@ def test_drop_comes_to_rest_and_energy_never_grows(outdir):
     s, h, _ = run_case(c, outdir)
     e = h["kinetic"] + h["potential"] + h["elastic"]
     scale = W * 0.001
-    assert np.max(np.diff(e)) < 1e-3 * scale
+    assert np.max(np.diff(e)) < tol.ENERGY_GROWTH * scale
     assert e[-1] < e[0]
-    assert h["kinetic"][-1] < 1e-6 * scale
+    assert h["kinetic"][-1] < tol.AT_REST_ENERGY * scale
     z = disp(h, 1)[-1, 2]
-    assert z == pytest.approx(-0.001 - W / (2e8 * 0.16), abs=1e-7)
+    assert z == pytest.approx(-0.001 - W / (2e8 * 0.16), abs=tol.REST_POSITION_M)
+
+
+LEAKY_YADE = "2023.02a"  # the YADE whose stock law shares one shear force between contacts
 
 
 def test_stock_law_leaks_shear(outdir, detection):
     """Characterises YADE 2023.02a's stock law: its single running shear force, shared by
     all contacts, makes the unloaded neighbour creep when only block 1 is pushed below
-    its friction limit (our law: < 1e-9 m, test above)."""
+    its friction limit (our law: < 1e-9 m, test above). A bug of that version: on any
+    other (the run's run_info.json names the YADE that ran) the test is skipped, so a
+    fixed YADE does not fail the suite."""
     if detection == "native":
         pytest.skip("the stock law has only YADE's contact geometry")
     F = 0.4 * W
     s, h, _ = run_case(case(TWO, SETTLE + [{"type": "rest", "duration": 1.0}],
                             [{"block": 1, "force": [F, 0.0, 0.0], "start": 0.5}], law="stock_volumetric",
                             damping=0.0), outdir)
-    assert np.abs(disp(h, 2)[:, 0]).max() > 1e-6
+    version = str(json.loads((outdir / "case" / "run_info.json").read_text())["yade_version"]).strip()
+    if version != LEAKY_YADE:
+        pytest.skip(f"documents a bug of YADE {LEAKY_YADE}'s stock law; this is YADE {version}")
+    assert np.abs(disp(h, 2)[:, 0]).max() > tol.STOCK_LEAK_M

