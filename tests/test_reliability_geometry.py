@@ -309,6 +309,7 @@ def test_sweep_finds_the_same_pairs_and_errors_as_all_pairs():
             blocks.append({"id": 100 - k, "role": str(rng.choice(["free", "fixed", "platform"], p=[0.6, 0.3, 0.1])),
                            "material": "stone", "vertices": (v + rng.uniform(0, 4, 3)).tolist()})
         blocks[0]["role"] = "free"
+        blocks[-1]["role"] = "fixed"  # a geometry needs something that holds its free blocks
         bs = bf.parse(blocks_file(None, blocks=blocks, joints=[], control_points=[]), "r", check_overlaps=False)
         errors = []
         for check in (_old_check, bf.check_no_overlaps):

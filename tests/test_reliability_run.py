@@ -224,3 +224,14 @@ def test_energy_bound_ratio_of_a_free_fall_is_one_half():
     ke = 0.5 * m[0] * (g * t) ** 2
     r = stability.energy_bound_ratio(t, m, vel, np.tile([0.0, 0.0, -g], (len(t), 1)), ke, np.zeros_like(t), g)
     assert 0.49 < r < 0.5
+
+
+def test_a_geometry_without_platform_is_refused(tmp_path):
+    from drystone.geometry import blockfile as bf
+
+    data = {"format": bf.FORMAT, "version": bf.VERSION, "materials": {"stone": {"density": 2300.0, "kn": 2e8,
+                                                                               "kt": 1e8, "mu": 0.6, "damping": 0.1}},
+            "blocks": [{"id": 1, "role": "free", "material": "stone",
+                        "vertices": bf.box_vertices((0, 0, 0.1), (0.2, 0.2, 0.2))}]}
+    with pytest.raises(bf.GeometryError, match="no block has role 'platform' or 'fixed'"):
+        bf.parse(data, "walls.json")

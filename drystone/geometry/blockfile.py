@@ -347,6 +347,9 @@ def parse(data: dict, where: str = "<blocks>", check_overlaps: bool = True) -> B
 
     if not any(b.role == "free" for b in blocks):
         raise GeometryError(f"{where}: no block has role 'free': nothing would move")
+    if all(b.role == "free" for b in blocks):
+        raise GeometryError(f"{where}: no block has role 'platform' or 'fixed': nothing holds the free blocks (they "
+                            "would fall for ever); add the platform they stand on")
 
     joints = data.get("joints", [])
     if not isinstance(joints, list):
