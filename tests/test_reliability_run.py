@@ -152,9 +152,16 @@ def test_summary_is_the_last_file_written(outdir):
     assert last.name == "summary.json"
 
 
+def _terminal_sigint():
+    """A child as a terminal starts it: SIGINT at its default (a shell without job control
+    starts background commands with SIGINT ignored, and Python then never raises
+    KeyboardInterrupt)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _start(args, cwd) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "drystone", *args], cwd=cwd, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True, preexec_fn=_terminal_sigint)
 
 
 def _wait_for(pred, timeout=120.0):
@@ -194,7 +201,7 @@ def test_ctrl_c_on_a_sweep_stops_the_pool_and_records_what_finished(outdir):
             "except KeyboardInterrupt:\n sys.exit(99)\n"
             "sys.exit(130 if r['interrupted'] else 0)")
     p = subprocess.Popen([sys.executable, "-c", code, str(outdir / "s.toml"), str(env_results)], cwd=paths.ROOT,
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=_terminal_sigint)
     long_stage = runner.staging_folder(env_results / "s" / "long")
     assert _wait_for(lambda: (long_stage / "log.txt").is_file() and "stage 1/1" in (long_stage / "log.txt").read_text()
                      and _yade_processes(str(long_stage)), 240), "the long run did not start"

@@ -50,9 +50,9 @@ SLACK_TIGHT = 1e-12
 #: least inked fraction of the middle half: 5 x the empty axes, a fifth of the thinnest
 #: figure
 FIGURE_MIN_INK = 0.001
-#: least number of distinct colours in the middle half: 3 x the empty axes, a tenth of the
-#: poorest figure
-FIGURE_MIN_COLOURS = 20
+#: least number of distinct colours in the middle half: more than a blank figure's one (a
+#: bar chart of two series has only 9, an empty axes 7: the ink threshold tells those apart)
+FIGURE_MIN_COLOURS = 3
 
 # ---------------------------------------------------------------------------------------
 # Printed and published numbers
