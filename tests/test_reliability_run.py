@@ -164,6 +164,18 @@ def _start(args, cwd) -> subprocess.Popen:
                             stderr=subprocess.PIPE, text=True, preexec_fn=_terminal_sigint)
 
 
+def _kill(p: subprocess.Popen, marker: str) -> None:
+    """Kill ``p`` and any YADE process whose command line contains ``marker``."""
+    if p.poll() is None:
+        p.kill()
+        p.wait()
+    for pid in _yade_processes(marker):
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+
+
 def _wait_for(pred, timeout=120.0):
     t0 = time.time()
     while time.time() - t0 < timeout:
@@ -181,11 +193,14 @@ def test_ctrl_c_on_a_run_kills_yade_and_keeps_the_folder(outdir):
     stage = runner.staging_folder(out)
     assert _wait_for(lambda: _yade_processes(str(stage)) and (stage / "log.txt").is_file()
                      and "stage 1/1" in (stage / "log.txt").read_text()), "YADE did not start"
-    p.send_signal(signal.SIGINT)
-    _, err = p.communicate(timeout=60)
-    assert p.returncode == 130, err
-    assert _wait_for(lambda: not _yade_processes(str(stage)), 10), "YADE was orphaned"
-    assert not (out / "summary.json").exists()
+    try:
+        p.send_signal(signal.SIGINT)
+        _, err = p.communicate(timeout=60)
+        assert p.returncode == 130, err
+        assert _wait_for(lambda: not _yade_processes(str(stage)), 10), "YADE was orphaned"
+        assert not (out / "summary.json").exists()
+    finally:  # a failed test must not leave a 600 s run behind
+        _kill(p, str(stage))
 
 
 @requires_yade
@@ -205,10 +220,13 @@ def test_ctrl_c_on_a_sweep_stops_the_pool_and_records_what_finished(outdir):
     long_stage = runner.staging_folder(env_results / "s" / "long")
     assert _wait_for(lambda: (long_stage / "log.txt").is_file() and "stage 1/1" in (long_stage / "log.txt").read_text()
                      and _yade_processes(str(long_stage)), 240), "the long run did not start"
-    p.send_signal(signal.SIGINT)
-    out, err = p.communicate(timeout=120)
-    assert p.returncode == 130, out + err
-    assert _wait_for(lambda: not _yade_processes(str(env_results)), 10), "YADE was orphaned"
+    try:
+        p.send_signal(signal.SIGINT)
+        out, err = p.communicate(timeout=120)
+        assert p.returncode == 130, out + err
+        assert _wait_for(lambda: not _yade_processes(str(env_results)), 10), "YADE was orphaned"
+    finally:
+        _kill(p, str(env_results))
     runs = {r["name"]: r["status"] for r in json.loads((env_results / "s" / "sweep.json").read_text())["runs"]}
     assert runs == {"short": "done", "long": "interrupted", "queued": "pending"}
     assert not (env_results / "s" / "queued").exists()
