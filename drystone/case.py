@@ -2,7 +2,8 @@
 
 ``load(path, overrides)`` reads a case, applies ``--set key=value`` overrides, refuses
 unknown keys, fills defaults and checks values, raising CaseError naming the file and
-key. ``python -m drystone keys`` prints the table below (README points to it).
+key. ``python -m drystone keys`` prints the table below and the stage types' keys
+(drystone/stages.py; README points to it).
 """
 from __future__ import annotations
 
@@ -18,7 +19,6 @@ from drystone.geometry.blockfile import CONTACT_PROPERTIES, MATERIAL_PROPERTIES
 from drystone.units import GRAVITY
 
 REQUIRED = object()
-MAX_TILT_DEG = 90.0  # deg: a tilt target (to_deg, max_deg) above vertical is refused
 
 
 class CaseError(ValueError):
@@ -97,67 +97,7 @@ SECTIONS: dict[str, dict[str, Key]] = {
         "tilt_block": Key(None, "-", "block whose tilt (deg) is recorded for the slip report", int),
     },
 }
-
-STAGES: dict[str, dict[str, Key]] = {
-    "gravity": {
-        "duration": Key(REQUIRED, "s", "stage length", float, positive=True),
-        "ramp": Key(None, "s", "gravity grows linearly over this time, then holds (default: half the "
-                    "duration)", float, nonneg=True),
-    },
-    "settlement": {
-        "duration": Key(REQUIRED, "s", "stage length; the settlement is linear over it", float, positive=True),
-        "block": Key(REQUIRED, "-", "id of the fixed block that settles", int),
-        "displacement": Key(REQUIRED, "m", "downward settlement", float, positive=True),
-    },
-    "tilt": {
-        "rate_deg_s": Key(REQUIRED, "deg/s", "platform rotation rate", float, positive=True),
-        "to_deg": Key(None, "deg", "stop the stage at this platform angle", float, positive=True),
-        "until_collapse": Key(False, "-", "run until collapse (or max_deg)", bool),
-        "max_deg": Key(45.0, "deg", "upper bound of an until_collapse stage", float, positive=True),
-        "towards": Key("+y", "-", "horizontal direction the platform tilts towards: +x, -x, +y, -y", str,
-                       ("+x", "-x", "+y", "-y")),
-        "reaction_drop": Key(0.05, "-", "collapse when the vertical reaction of the moving blocks drops "
-                             "by this fraction of their weight", float, positive=True),
-        "after_collapse": Key(1.0, "s", "keep running this long after collapse", float, nonneg=True),
-    },
-    "excitation": {
-        "duration": Key(None, "s", "stage length (default: the motion's length)", float, positive=True),
-        "motion": Key(REQUIRED, "-", "sine, white_noise or record", str, ("sine", "white_noise", "record")),
-        "direction": Key("y", "-", "base acceleration direction: x, y or z", str, ("x", "y", "z")),
-        "frequency_hz": Key(None, "Hz", "sine frequency", float, positive=True),
-        "amplitude": Key(0.5, "m/s^2", "sine acceleration amplitude (the paper's Eq. 9 uses 0.5)", float,
-                         positive=True),
-        "pga_g": Key(None, "g", "scale the motion to this peak ground acceleration", float, positive=True),
-        "record": Key(None, "-", "catalogue name, or file of an acceleration record (relative to the case file)", str),
-        "seed": Key(0, "-", "white-noise seed", int),
-        "start": Key("rest", "-", "how a sine starts (motion = 'sine' only): 'rest' = the acceleration "
-                     "a(t) = -A sin(wt) from a base at rest (the base velocity grows from 0); 'displacement' = the "
-                     "paper's Eq. 9, base displacement d(t) = A/w^2 sin(wt), whose velocity A/w cos(wt) jumps from 0 "
-                     "to A/w at the start: every free block gets the relative velocity -A/w along 'direction' when "
-                     "the stage begins (derivation: drystone/runner.py initial_relative_velocity)", str,
-                     ("rest", "displacement")),
-    },
-    "rest": {
-        "duration": Key(REQUIRED, "s", "free motion under the current loads; with until_kinetic_below(_per_weight), "
-                        "the longest it may run", float, positive=True),
-        "until_kinetic_below": Key(None, "J", "end the stage (and the run: last stage only) once the kinetic energy "
-                                   "of the free blocks (those fallen below the platform left out) has stayed below "
-                                   "this for settle_window s; run_info/summary say whether it was reached", float,
-                                   positive=True),
-        "until_kinetic_below_per_weight": Key(None, "m", "the same threshold as a fraction of the weight W of the "
-                                              "free blocks: kinetic energy < W x this length (the energy that would "
-                                              "lift them all by it; 1e-7 m ~ an rms speed sqrt(2 g x 1e-7) = 1.4 "
-                                              "mm/s)", float, positive=True),
-        "settle_window": Key(0.5, "s", "how long the kinetic energy must stay below the threshold: a rocking or "
-                             "vibrating body passes through zero kinetic energy at its turning points, so take at "
-                             "least half the period of the slowest oscillation expected", float,
-                             positive=True),
-    },
-}
-#: every stage may carry a name: overrides then address it as stages.NAME.KEY
-for _keys in STAGES.values():
-    _keys["name"] = Key(None, "-", "optional label of the stage (unique, not a number): overrides may address it as "
-                        "stages.NAME.KEY as well as stages.INDEX.KEY", str)
+# the keys of each stage type ([[stages]] type = ...) are declared with it: drystone/stages.py
 
 
 def _kinds(spec: Key) -> tuple:
@@ -357,24 +297,19 @@ def validate(raw: dict, where: str, base_dir: Path, stem: str = "case") -> dict:
     stages = raw.get("stages", [])
     if not isinstance(stages, list) or not stages:
         raise CaseError(f"{where}: at least one [[stages]] is required")
+    types = _stage_types()
     case["stages"] = []
     for k, s in enumerate(stages):
         w = f"{where} [[stages]] #{k + 1}"
         if not isinstance(s, dict) or "type" not in s:
-            raise CaseError(f"{w}: missing 'type' (one of {sorted(STAGES)})")
-        kind = s["type"]
-        if kind not in STAGES:
-            raise CaseError(f"{w}: unknown stage type {kind!r}; allowed: {sorted(STAGES)}")
+            raise CaseError(f"{w}: missing 'type' (one of {sorted(types)})")
+        stype = s["type"]
+        if stype not in types:
+            raise CaseError(f"{w}: unknown stage type {stype!r}; allowed: {sorted(types)}")
         body = {key: v for key, v in s.items() if key != "type"}
-        filled = _fill(w, body, STAGES[kind])
-        filled["type"] = kind
-        _check_stage(w, filled)
-        if kind == "excitation" and filled["motion"] == "record":
-            filled["record"] = _record(w, filled["record"], base_dir)
-        if kind == "rest" and k != len(stages) - 1 and (filled["until_kinetic_below"] is not None
-                                                        or filled["until_kinetic_below_per_weight"] is not None):
-            raise CaseError(f"{w}: 'until_kinetic_below(_per_weight)' ends the run early: only the last stage may "
-                            "have it")
+        filled = _fill(w, body, types[stype].keys)
+        filled["type"] = stype
+        types[stype].validate(filled, w, last=k == len(stages) - 1, base_dir=base_dir)
         if filled["name"] is not None:
             if not filled["name"].strip() or filled["name"].isdigit() or "." in filled["name"]:
                 raise CaseError(f"{w}: 'name' {filled['name']!r} must be a non-empty label, not a number, without '.'")
@@ -387,6 +322,14 @@ def validate(raw: dict, where: str, base_dir: Path, stem: str = "case") -> dict:
         if ref is not None and ref not in names:
             raise CaseError(f"{where}: [analysis] '{key}' names contact {ref!r}, not among [output] contacts {names}")
     return case
+
+
+def _stage_types() -> dict:
+    """The stage types (drystone/stages.py: their keys and checks), imported here at call
+    time because drystone.stages builds on this module's Key and CaseError."""
+    from drystone.stages import REGISTRY
+
+    return REGISTRY
 
 
 def _is_int(x) -> bool:
@@ -406,54 +349,6 @@ def _check_name(where: str, name: str):
                         "a relative folder name (not empty or absolute, no '\\', no empty, '.' or '..' parts)")
 
 
-def _record(where: str, record: str, base_dir: Path) -> str:
-    """A catalogue name as given; a file path resolved against the case file's folder
-    (as 'geometry'), returned absolute."""
-    from drystone.motions import catalogue
-
-    if record in catalogue.names():
-        return record
-    rp = Path(record) if Path(record).is_absolute() else base_dir / record
-    if not rp.is_file():
-        raise CaseError(f"{where}: 'record' = {record!r} is neither a catalogue name ({', '.join(catalogue.names())}) "
-                        f"nor a file ({rp} not found; a path is relative to the case file's folder)")
-    return str(rp.resolve())
-
-
-def _check_stage(where: str, s: dict):
-    kind = s["type"]
-    if kind == "gravity" and s["ramp"] is None:
-        s["ramp"] = 0.5 * s["duration"]
-    if kind == "gravity" and s["ramp"] > s["duration"]:
-        raise CaseError(f"{where}: 'ramp' ({s['ramp']} s) exceeds 'duration' ({s['duration']} s)")
-    if kind == "tilt":
-        if (s["to_deg"] is None) == (not s["until_collapse"]):
-            raise CaseError(f"{where}: give either 'to_deg' or 'until_collapse = true'")
-        for key in ("to_deg", "max_deg"):
-            if s[key] is not None and s[key] > MAX_TILT_DEG:
-                raise CaseError(f"{where}: '{key}' = {s[key]:g} deg exceeds {MAX_TILT_DEG:g} deg (a platform "
-                                "tilted beyond vertical is upside down)")
-    if kind == "excitation":
-        m = s["motion"]
-        if m == "sine" and s["frequency_hz"] is None:
-            raise CaseError(f"{where}: a sine needs 'frequency_hz'")
-        if m == "record" and s["record"] is None:
-            raise CaseError(f"{where}: motion 'record' needs 'record' (catalogue name or file)")
-        if m != "record" and s["duration"] is None:
-            raise CaseError(f"{where}: motion {m!r} needs 'duration'")
-        if m != "sine" and s["start"] != "rest":
-            raise CaseError(f"{where}: 'start' = {s['start']!r} is defined for motion 'sine' only (Eq. 9's "
-                            f"displacement); a {m!r} motion starts from rest")
-    if kind == "rest":
-        if s["until_kinetic_below"] is not None and s["until_kinetic_below_per_weight"] is not None:
-            raise CaseError(f"{where}: give 'until_kinetic_below' (J) or 'until_kinetic_below_per_weight' (m), "
-                            "not both")
-        quiet = s["until_kinetic_below"] is not None or s["until_kinetic_below_per_weight"] is not None
-        if quiet and s["settle_window"] > s["duration"]:
-            raise CaseError(f"{where}: 'settle_window' ({s['settle_window']} s) exceeds 'duration' "
-                            f"({s['duration']} s)")
-
-
 def describe() -> str:
     """Markdown table of every case key (for README)."""
     lines = ["| section | key | default | unit | meaning |", "|---|---|---|---|---|"]
@@ -469,9 +364,9 @@ def describe() -> str:
         row("[materials.NAME]", name, k)
     for name, k in FORCE.items():
         row("[[forces]]", name, k)
-    for kind, keys in STAGES.items():
-        for name, k in keys.items():
-            row(f"[[stages]] type = \"{kind}\"", name, k)
+    for stype, t in _stage_types().items():
+        for name, k in t.keys.items():
+            row(f"[[stages]] type = \"{stype}\"", name, k)
     return "\n".join(lines)
 
 

@@ -282,12 +282,14 @@ def critical_time_step(mass, stiffness, damping_ratio=0.0) -> float:
 # triangular solves.
 
 @njit(cache=True)
-def _jacobi_sqrt(B, out):
+def _jacobi_sqrt(B, out, A, V):
     """out = B^1/2 for a symmetric positive semi-definite 6 x 6 B (negative round-off
-    eigenvalues clipped); returns the largest eigenvalue."""
+    eigenvalues clipped); returns the largest eigenvalue. A, V: 6 x 6 work arrays."""
     n = 6
-    A = B.copy()
-    V = np.eye(n)
+    for i in range(n):
+        for j in range(n):
+            A[i, j] = B[i, j]
+            V[i, j] = 1.0 if i == j else 0.0
     for _ in range(50):
         off = 0.0
         scale = 0.0
@@ -325,13 +327,13 @@ def _jacobi_sqrt(B, out):
     for i in range(n):
         if A[i, i] > lmax:
             lmax = A[i, i]
+    for k in range(n):
+        A[k, k] = np.sqrt(A[k, k]) if A[k, k] > 0.0 else 0.0
     for i in range(n):
         for j in range(n):
             acc = 0.0
             for k in range(n):
-                lam = A[k, k]
-                if lam > 0.0:
-                    acc += V[i, k] * np.sqrt(lam) * V[j, k]
+                acc += V[i, k] * A[k, k] * V[j, k]
             out[i, j] = acc
     return lmax
 
@@ -347,30 +349,25 @@ def _cross3(a, b):
 
 
 @njit(cache=True)
-def _skew3(r):
-    """[r]x of one 3-vector (``skew`` for one row)."""
-    S = np.zeros((3, 3))
-    S[0, 1] = -r[2]
-    S[0, 2] = r[1]
-    S[1, 0] = r[2]
-    S[1, 2] = -r[0]
-    S[2, 0] = -r[1]
-    S[2, 1] = r[0]
-    return S
-
-
-@njit(cache=True)
 def _add_body(W, r, im, ii):
-    """W += G^T diag(im, ii) G for one body (see ``mobility``)."""
-    S = _skew3(r)
-    IS = ii @ S
-    SIS = S @ IS
-    SI = S @ ii
+    """W += G^T diag(im, ii) G for one body (see ``mobility``), written out in 3 x 3
+    blocks with S = [r]x: [[im 1 - S ii S, -S ii], [ii S, ii]]."""
+    r0, r1, r2 = r[0], r[1], r[2]
+    IS = np.empty((3, 3))  # ii S
+    for a in range(3):
+        IS[a, 0] = ii[a, 1] * r2 - ii[a, 2] * r1
+        IS[a, 1] = ii[a, 2] * r0 - ii[a, 0] * r2
+        IS[a, 2] = ii[a, 0] * r1 - ii[a, 1] * r0
+    for b in range(3):
+        W[0, b] -= r1 * IS[2, b] - r2 * IS[1, b]  # (S ii S)[., b]
+        W[1, b] -= r2 * IS[0, b] - r0 * IS[2, b]
+        W[2, b] -= r0 * IS[1, b] - r1 * IS[0, b]
+        W[0, 3 + b] -= r1 * ii[2, b] - r2 * ii[1, b]  # (S ii)[., b]
+        W[1, 3 + b] -= r2 * ii[0, b] - r0 * ii[2, b]
+        W[2, 3 + b] -= r0 * ii[1, b] - r1 * ii[0, b]
     for a in range(3):
         W[a, a] += im
         for b in range(3):
-            W[a, b] -= SIS[a, b]
-            W[a, 3 + b] -= SI[a, b]
             W[3 + a, b] += IS[a, b]
             W[3 + a, 3 + b] += ii[a, b]
 
@@ -389,8 +386,14 @@ def damping_wrenches(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, 
     W = np.empty((6, 6))
     K = np.empty((6, 6))
     L = np.empty((6, 6))
+    KL = np.empty((6, 6))
     B = np.empty((6, 6))
     R = np.empty((6, 6))
+    A6 = np.empty((6, 6))
+    V6 = np.empty((6, 6))
+    Rr = np.empty((3, 3))
+    S = np.zeros((3, 3))
+    SJ = np.empty((3, 3))
     y = np.empty(6)
     z = np.empty(6)
     for c in range(m):
@@ -399,16 +402,25 @@ def damping_wrenches(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, 
         W[:, :] = 0.0
         _add_body(W, ra[c], ima[c], iia[c])
         _add_body(W, rb[c], imb[c], iib[c])
-        # K at the patch centroid
-        K[:, :] = 0.0
+        # K at the patch centroid: K_n A n n^T + K_t A (1 - n n^T); K_n [n]x J [n]x^T
         nc = n[c]
+        n0, n1, n2 = nc[0], nc[1], nc[2]
         kta = kt[c] * parea[c] if sticking[c] else 0.0
-        S = _skew3(nc)
-        Rr = S @ pj[c] @ S.T
+        kna = kn[c] * parea[c]
+        J = pj[c]
+        # [n]x J [n]x^T
+        S[0, 1], S[0, 2], S[1, 0], S[1, 2], S[2, 0], S[2, 1] = -n2, n1, n2, -n0, -n1, n0
+        for a in range(3):
+            for q in range(3):
+                SJ[a, q] = S[a, 0] * J[0, q] + S[a, 1] * J[1, q] + S[a, 2] * J[2, q]
+        for a in range(3):
+            for b in range(3):
+                Rr[a, b] = SJ[a, 0] * S[b, 0] + SJ[a, 1] * S[b, 1] + SJ[a, 2] * S[b, 2]
+        K[:, :] = 0.0
         for a in range(3):
             for b in range(3):
                 nn = nc[a] * nc[b]
-                K[a, b] = kn[c] * parea[c] * nn + kta * ((1.0 if a == b else 0.0) - nn)
+                K[a, b] = kna * nn + kta * ((1.0 if a == b else 0.0) - nn)
                 K[3 + a, 3 + b] = kn[c] * Rr[a, b]
         # Cholesky W = L L^T
         L[:, :] = 0.0
@@ -429,13 +441,24 @@ def damping_wrenches(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, 
                 break
         if not ok:
             continue
-        B[:, :] = L.T @ K @ L
+        # B = L^T K L (K block diagonal; L lower triangular)
+        for i in range(6):
+            for j in range(6):
+                acc = 0.0
+                lo = 0 if i < 3 else 3
+                for k in range(lo, lo + 3):
+                    acc += K[i, k] * L[k, j]
+                KL[i, j] = acc
+        for i in range(6):
+            for j in range(i, 6):
+                acc = 0.0
+                for k in range(i, 6):
+                    acc += L[k, i] * KL[k, j]
+                B[i, j] = acc
         for i in range(6):
             for j in range(i + 1, 6):
-                v = 0.5 * (B[i, j] + B[j, i])
-                B[i, j] = v
-                B[j, i] = v
-        lmax = _jacobi_sqrt(B, R)
+                B[j, i] = B[i, j]
+        lmax = _jacobi_sqrt(B, R, A6, V6)
         om[c] = np.sqrt(lmax)
         # y = L^-1 u (forward), z = R y, w = L^-T z (backward); wrench = -2 xi w
         for i in range(6):
@@ -453,68 +476,91 @@ def damping_wrenches(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, 
             for k in range(i + 1, 6):
                 s -= L[k, i] * y[k]
             y[i] = s / L[i, i]
-        f = np.empty(3)
-        mm = np.empty(3)
-        for a in range(3):
-            f[a] = -2.0 * xi[c] * y[a]
-            mm[a] = -2.0 * xi[c] * y[3 + a]
+        f0 = -2.0 * xi[c] * y[0]
+        f1 = -2.0 * xi[c] * y[1]
+        f2 = -2.0 * xi[c] * y[2]
+        m0 = -2.0 * xi[c] * y[3]
+        m1 = -2.0 * xi[c] * y[4]
+        m2 = -2.0 * xi[c] * y[5]
         # caps (cap_damping): no pull, Coulomb, resultant inside the patch ellipse
-        fdn = f[0] * nc[0] + f[1] * nc[1] + f[2] * nc[2]
+        fdn = f0 * n0 + f1 * n1 + f2 * n2
         fdn_c = max(fdn, -fn_el[c])
         fmax = mu[c] * fn_el[c]
-        tot = np.empty(3)
-        for a in range(3):
-            tot[a] = fs[c, a] + f[a] - fdn * nc[a]
-        tm = np.sqrt(tot[0] ** 2 + tot[1] ** 2 + tot[2] ** 2)
+        t0 = fs[c, 0] + f0 - fdn * n0
+        t1_ = fs[c, 1] + f1 - fdn * n1
+        t2_ = fs[c, 2] + f2 - fdn * n2
+        tm = np.sqrt(t0 * t0 + t1_ * t1_ + t2_ * t2_)
         sc = fmax / tm if tm > fmax else 1.0
-        for a in range(3):
-            fd[c, a] = fdn_c * nc[a] + tot[a] * sc - fs[c, a]
+        fd[c, 0] = fdn_c * n0 + t0 * sc - fs[c, 0]
+        fd[c, 1] = fdn_c * n1 + t1_ * sc - fs[c, 1]
+        fd[c, 2] = fdn_c * n2 + t2_ * sc - fs[c, 2]
         N = fn_el[c] + fdn_c
         lv = lever[c]
-        mel = _cross3(lv, nc)
-        mdn = mm[0] * nc[0] + mm[1] * nc[1] + mm[2] * nc[2]
-        mel_n = mel[0] * nc[0] + mel[1] * nc[1] + mel[2] * nc[2]
-        for a in range(3):
-            mel[a] = fn_el[c] * (mel[a] - mel_n * nc[a])
-        mdi = np.empty(3)
-        for a in range(3):
-            mdi[a] = mm[a] - mdn * nc[a]
-        e0 = _cross3(nc, mel)
-        e1 = _cross3(nc, mdi)
+        # m_el = fn (lever x n) in the plane
+        e0x = lv[1] * n2 - lv[2] * n1
+        e0y = lv[2] * n0 - lv[0] * n2
+        e0z = lv[0] * n1 - lv[1] * n0
+        mel_n = e0x * n0 + e0y * n1 + e0z * n2
+        melx = fn_el[c] * (e0x - mel_n * n0)
+        mely = fn_el[c] * (e0y - mel_n * n1)
+        melz = fn_el[c] * (e0z - mel_n * n2)
+        mdn = m0 * n0 + m1 * n1 + m2 * n2
+        mdx = m0 - mdn * n0
+        mdy = m1 - mdn * n1
+        mdz = m2 - mdn * n2
+        # e0 = n x m_el, e1 = n x m_d (in plane)
+        a0x = n1 * melz - n2 * mely
+        a0y = n2 * melx - n0 * melz
+        a0z = n0 * mely - n1 * melx
+        a1x = n1 * mdz - n2 * mdy
+        a1y = n2 * mdx - n0 * mdz
+        a1z = n0 * mdy - n1 * mdx
         # pseudo-inverse of the patch second moment in the plane (2 x 2 in a basis t1, t2)
-        t1 = np.empty(3)
-        if abs(nc[0]) < 0.9:
-            t1[0], t1[1], t1[2] = 0.0, -nc[2], nc[1]
+        if abs(n0) < 0.9:
+            u0, u1, u2 = 0.0, -n2, n1
         else:
-            t1[0], t1[1], t1[2] = nc[2], 0.0, -nc[0]
-        t1 /= np.sqrt(t1[0] ** 2 + t1[1] ** 2 + t1[2] ** 2)
-        t2 = _cross3(nc, t1)
-        Jc = pj[c]
-        j11 = t1 @ Jc @ t1
-        j12 = t1 @ Jc @ t2
-        j22 = t2 @ Jc @ t2
+            u0, u1, u2 = n2, 0.0, -n0
+        un = np.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
+        u0 /= un
+        u1 /= un
+        u2 /= un
+        w0 = n1 * u2 - n2 * u1
+        w1 = n2 * u0 - n0 * u2
+        w2 = n0 * u1 - n1 * u0
+        Ju0 = J[0, 0] * u0 + J[0, 1] * u1 + J[0, 2] * u2
+        Ju1 = J[1, 0] * u0 + J[1, 1] * u1 + J[1, 2] * u2
+        Ju2 = J[2, 0] * u0 + J[2, 1] * u1 + J[2, 2] * u2
+        Jw0 = J[0, 0] * w0 + J[0, 1] * w1 + J[0, 2] * w2
+        Jw1 = J[1, 0] * w0 + J[1, 1] * w1 + J[1, 2] * w2
+        Jw2 = J[2, 0] * w0 + J[2, 1] * w1 + J[2, 2] * w2
+        j11 = u0 * Ju0 + u1 * Ju1 + u2 * Ju2
+        j12 = u0 * Jw0 + u1 * Jw1 + u2 * Jw2
+        j22 = w0 * Jw0 + w1 * Jw1 + w2 * Jw2
         tr = j11 + j22
         dif = np.sqrt(0.25 * (j11 - j22) ** 2 + j12 * j12)
         l1 = 0.5 * tr + dif
         l2 = 0.5 * tr - dif
-        # eigenvectors of the 2 x 2
         if abs(j12) > 1e-300:
-            v1 = np.array([l1 - j22, j12])
+            v10, v11 = l1 - j22, j12
         elif j11 >= j22:
-            v1 = np.array([1.0, 0.0])
+            v10, v11 = 1.0, 0.0
         else:
-            v1 = np.array([0.0, 1.0])
-        v1 /= np.sqrt(v1[0] ** 2 + v1[1] ** 2)
-        v2 = np.array([-v1[1], v1[0]])
+            v10, v11 = 0.0, 1.0
+        vn = np.sqrt(v10 * v10 + v11 * v11)
+        v10 /= vn
+        v11 /= vn
+        v20, v21 = -v11, v10
         tol = 1e-9 * l1
         i1 = 1.0 / l1 if l1 > tol else 0.0
         i2 = 1.0 / l2 if l2 > tol else 0.0
-        a0 = np.array([e0 @ t1, e0 @ t2])
-        a1 = np.array([e1 @ t1, e1 @ t2])
-        p0 = a0 @ v1
-        q0 = a0 @ v2
-        p1 = a1 @ v1
-        q1 = a1 @ v2
+        b00 = a0x * u0 + a0y * u1 + a0z * u2
+        b01 = a0x * w0 + a0y * w1 + a0z * w2
+        b10 = a1x * u0 + a1y * u1 + a1z * u2
+        b11 = a1x * w0 + a1y * w1 + a1z * w2
+        p0 = b00 * v10 + b01 * v11
+        q0 = b00 * v20 + b01 * v21
+        p1 = b10 * v10 + b11 * v11
+        q1 = b10 * v20 + b11 * v21
         A2 = parea[c] * (i1 * p1 * p1 + i2 * q1 * q1)
         A1 = 2.0 * parea[c] * (i1 * p0 * p1 + i2 * q0 * q1)
         A0 = parea[c] * (i1 * p0 * p0 + i2 * q0 * q0) - 3.0 * N * N
@@ -523,6 +569,7 @@ def damping_wrenches(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, 
             disc = max(A1 * A1 - 4.0 * A2 * A0, 0.0)
             s = (-A1 + np.sqrt(disc)) / (2.0 * A2) if A2 > 0.0 else 0.0
             s = min(max(s, 0.0), 1.0)
-        for a in range(3):
-            md[c, a] = s * mdi[a] + mdn * nc[a]
+        md[c, 0] = s * mdx + mdn * n0
+        md[c, 1] = s * mdy + mdn * n1
+        md[c, 2] = s * mdz + mdn * n2
     return fd, md, om

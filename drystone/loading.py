@@ -14,11 +14,12 @@ platform, which therefore never moves in the simulation):
 * a sine excitation with ``start = "displacement"`` (the Sacsayhuaman paper's Eq. 9 as a
   base displacement) also carries the base's velocity jump at its start: every free block
   gets the relative velocity ``initial_relative_velocity`` = -(A / w) e when the stage
-  begins (``velocity_jump``; derivation in ``drystone.runner.initial_relative_velocity``);
+  begins (``velocity_jump``; derivation in ``drystone.stages.initial_relative_velocity``);
 * a settlement moves one non-moving block down at constant speed;
 * a last rest stage may end early once the kinetic energy has settled (``settle``).
 
-``LoadProgramme.at(t)`` returns the body-force field and the imposed velocities.
+What each stage type imposes is declared with it (drystone/stages.py); ``LoadProgramme``
+composes the stages' contributions at t: the body-force field and the imposed velocities.
 """
 from __future__ import annotations
 
@@ -27,6 +28,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from drystone.spec import upgrade_stage
+from drystone.stages import REGISTRY, StageType
 from drystone.units import GRAVITY
 
 Z = np.array([0.0, 0.0, 1.0])
@@ -34,13 +37,24 @@ Z = np.array([0.0, 0.0, 1.0])
 
 @dataclass
 class Stage:
-    """One resolved stage: ``kind`` in gravity, settlement, tilt, excitation, rest;
-    absolute start and end times (s)."""
+    """One resolved stage: ``type`` a key of drystone.stages.REGISTRY (gravity, settlement,
+    tilt, excitation, rest); absolute start and end times (s); ``params`` (copied: a
+    programme may add to them, e.g. an excitation's samples)."""
 
-    kind: str
+    type: str
     start: float
     end: float
     params: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        if self.type not in REGISTRY:
+            raise ValueError(f"unknown stage type {self.type!r}; known: {sorted(REGISTRY)}")
+        self.params = dict(self.params)
+
+    @property
+    def behaviour(self) -> StageType:
+        """What the stage's type imposes (drystone/stages.py)."""
+        return REGISTRY[self.type]
 
 
 class LoadProgramme:
@@ -57,9 +71,25 @@ class LoadProgramme:
         self.end = stages[-1].end if stages else 0.0
         self._towards = np.array([0.0, 1.0, 0.0])
         for s in stages:
-            if s.kind == "tilt":
-                self._towards = np.asarray(s.params["towards"], float)
+            d = s.behaviour.towards(s)
+            if d is not None:  # the first tilt stage's direction
+                self._towards = d
                 break
+
+    @classmethod
+    def from_spec(cls, spec, folder=None) -> LoadProgramme:
+        """The programme of a spec (a drystone.spec.Spec, or a spec.json dict of any
+        version); with ``folder`` (the run's), the files the stages need (excitation
+        samples) are loaded from it."""
+        stages = []
+        for st in spec["stages"]:
+            st = upgrade_stage(st)
+            stages.append(Stage(st["type"], st["start"], st["end"], st["params"]))
+        prog = cls(stages, spec["gravity"])
+        if folder is not None:
+            for s in prog.stages:
+                s.behaviour.load_samples(s, folder)
+        return prog
 
     def stage_index(self, t: float) -> int:
         for k, s in enumerate(self.stages):
@@ -68,36 +98,26 @@ class LoadProgramme:
         return len(self.stages) - 1
 
     def gravity_scale(self, t: float) -> float:
-        """Fraction of gravity applied at t (0..1)."""
+        """Fraction of gravity applied at t (0..1): the first gravity stage's ramp."""
         for s in self.stages:
-            if s.kind == "gravity":
-                ramp = s.params.get("ramp", 0.0)
-                if ramp <= 0:
-                    return 1.0 if t >= s.start else 0.0
-                return float(np.clip((t - s.start) / ramp, 0.0, 1.0))
+            scale = s.behaviour.gravity_scale(s, t)
+            if scale is not None:
+                return scale
         return 1.0  # no gravity stage: gravity on from the start
 
     def tilt_deg(self, t: float) -> float:
         """Platform tilt at t (deg), accumulated over tilt stages."""
         theta = 0.0
         for s in self.stages:
-            if s.kind != "tilt" or t <= s.start:
-                continue
-            theta += s.params["rate_deg_s"] * (min(t, s.end) - s.start)
+            theta += s.behaviour.tilt_increment(s, t)
         return theta
 
     def base_acceleration(self, t: float) -> np.ndarray:
         """Base acceleration vector (m/s^2) at t, linear interpolation of the samples."""
         for s in self.stages:
-            if s.kind == "excitation" and s.start <= t < s.end:
-                acc = s.params["acc"]
-                x = (t - s.start) / s.params["dt"]
-                i = int(x)
-                if i + 1 >= len(acc):
-                    a = acc[-1] if i < len(acc) else 0.0
-                else:
-                    a = acc[i] + (x - i) * (acc[i + 1] - acc[i])
-                return float(a) * np.asarray(s.params["direction"], float)
+            a = s.behaviour.base_acceleration(s, t)
+            if a is not None:
+                return a
         return np.zeros(3)
 
     def body_acceleration(self, t: float) -> np.ndarray:
@@ -110,35 +130,25 @@ class LoadProgramme:
         """Relative velocity (m/s, platform frame) added to every free block when stage k
         begins: -v_base(0) for a sine excitation started as a displacement, else zero."""
         s = self.stages[k]
-        if s.kind != "excitation":
-            return np.zeros(3)
-        return np.asarray(s.params.get("initial_relative_velocity", (0.0, 0.0, 0.0)), float)
+        return s.behaviour.velocity_jump(s)
 
     def settle(self, k: int, weight: float) -> dict | None:
         """Early end of rest stage k: {"threshold_J", "window_s"} when it has an
         ``until_kinetic_below`` (J) or ``until_kinetic_below_per_weight`` (m, times
         ``weight``, the free blocks' weight in N), else None."""
-        p = self.stages[k].params
-        if self.stages[k].kind != "rest":
-            return None
-        if p.get("until_kinetic_below") is not None:
-            thr = float(p["until_kinetic_below"])
-        elif p.get("until_kinetic_below_per_weight") is not None:
-            thr = float(p["until_kinetic_below_per_weight"]) * float(weight)
-        else:
-            return None
-        return {"threshold_J": thr, "window_s": float(p.get("settle_window", 0.0))}
+        s = self.stages[k]
+        return s.behaviour.settle(s, weight)
 
     def imposed_velocities(self, t: float) -> dict[int, np.ndarray]:
         """Velocities (m/s) imposed on non-moving blocks at t, by block id."""
         out = {}
         for s in self.stages:
-            if s.kind == "settlement":
-                v = np.zeros(3)
-                if s.start <= t < s.end:
-                    v = -Z * s.params["displacement"] / (s.end - s.start)
-                out[s.params["block"]] = v
+            out.update(s.behaviour.imposed_velocities(s, t))
         return out
+
+    def moving_blocks(self) -> list[int]:
+        """Ids of the non-moving blocks whose velocity a stage imposes (settlements)."""
+        return [b for s in self.stages for b in s.behaviour.moving_blocks(s)]
 
     def true_vertical(self, t: float) -> np.ndarray:
         """Unit vector of the true (world) vertical, up, seen in the platform frame."""

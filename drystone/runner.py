@@ -21,7 +21,8 @@ from drystone.postprocess import summary as summ
 from drystone.tomlio import to_toml
 
 
-def run(case_path, overrides=None, out_dir=None, threads=1, quiet=False, check_overlaps=True) -> dict:
+def run(case_path, overrides=None, out_dir=None, threads=1, quiet=False, check_overlaps=True,
+        engine="compiled") -> dict:
     """Validate, simulate and summarise one case; returns the summary dict.
 
     Nothing in the results folder changes until the new run is complete: the case, its
@@ -30,7 +31,8 @@ def run(case_path, overrides=None, out_dir=None, threads=1, quiet=False, check_o
     previous results as they were (and its log in the staging folder). summary.json is
     the last file written. The folder is locked for the run (``FolderLock``).
     ``check_overlaps=False`` skips the geometry's pairwise overlap test (sweeps have run
-    it once for all their runs)."""
+    it once for all their runs). ``engine``: ``compiled`` (default) or ``python``, the
+    step engine of the project's law (``drystone.simulate.ENGINES``)."""
     case_path = Path(case_path)
     case = casemod.load(case_path, overrides or [])
     where = str(case_path)
@@ -41,13 +43,14 @@ def run(case_path, overrides=None, out_dir=None, threads=1, quiet=False, check_o
         stage.mkdir(parents=True)
         t0 = time.time()
         spec = resolve(case, where, stage, check_overlaps=check_overlaps)
-        spec["out_dir"] = str(out)  # where the run will live (YADE writes beside its spec.json)
-        spec["provenance"] = provenance.collect(case_path, case, overrides or [])
+        # a Spec is frozen: a new one with where the run will live (YADE writes beside its
+        # spec.json) and how it was made
+        spec = spec.replace(out_dir=str(out), provenance=provenance.collect(case_path, case, overrides or []))
         if not quiet:
             print(f"[{spec['name']}] dt = {spec['dt']:.3g} s (critical {spec['dt_critical']:.3g} s), "
                   f"{len(spec['blocks'])} blocks, {spec['stages'][-1]['end']:.2f} s simulated, law {spec['law']}, "
                   f"{spec['stages'][-1]['end'] / spec['dt']:.0f} steps", flush=True)
-        simulate(spec, stage, threads, quiet, where)
+        simulate(spec, stage, threads, quiet, where, engine)
         summary = summ.build(spec, stage)
         summary["wall_time_total_s"] = time.time() - t0
         figures = plots.standard(stage, summary)

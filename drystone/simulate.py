@@ -12,16 +12,21 @@ import sys
 from pathlib import Path
 
 from drystone import paths
+from drystone.spec import spec_dict
 
 
 class RunError(RuntimeError):
     """A run that could not be prepared or did not complete."""
 
 
-def _yade_command(spec_path: Path, threads: int) -> list[str]:
+#: step engines (drystone/yade_scripts/run_case.py): compiled (default) or python
+ENGINES = ("compiled", "python")
+
+
+def _yade_command(spec_path: Path, threads: int, engine: str = "compiled") -> list[str]:
     yade = shutil.which("yade") or "/usr/bin/yade"
     script = paths.PACKAGE / "yade_scripts" / "run_case.py"
-    return [sys.executable, yade, "-n", "-x", "-j", str(threads), str(script), str(spec_path)]
+    return [sys.executable, yade, "-n", "-x", "-j", str(threads), str(script), str(spec_path), engine]
 
 
 NOISE = ("Welcome to Yade", "TCP python prompt", "XMLRPC info provider", "Running script", "Using python version")
@@ -73,13 +78,13 @@ def commit(stage: Path, out: Path) -> None:
     shutil.rmtree(old, ignore_errors=True)
 
 
-def _simulate(spec_path: Path, threads: int, quiet: bool) -> int:
+def _simulate(spec_path: Path, threads: int, quiet: bool, engine: str = "compiled") -> int:
     """Run YADE on ``spec_path`` (its log to log.txt beside it); returns YADE's exit code.
     YADE runs in its own session, so a Ctrl-C reaches only this process, which then
     kills YADE (no orphan) and re-raises."""
     env = dict(os.environ, PYTHONUNBUFFERED="1")  # YADE runs this interpreter: drystone is installed
     with open(spec_path.parent / "log.txt", "w") as log:
-        proc = subprocess.Popen(_yade_command(spec_path, threads), stdout=subprocess.PIPE,
+        proc = subprocess.Popen(_yade_command(spec_path, threads, engine), stdout=subprocess.PIPE,
                                 stderr=subprocess.STDOUT, text=True, env=env, cwd=paths.ROOT,
                                 start_new_session=True)
         try:
@@ -95,15 +100,20 @@ def _simulate(spec_path: Path, threads: int, quiet: bool) -> int:
             raise
 
 
-def simulate(spec: dict, stage: Path, threads: int = 1, quiet: bool = False, where: str = "") -> None:
-    """Write ``spec`` to ``stage``/spec.json and run YADE on it; raises RunError (naming
-    ``where``, the stability check that stopped it or the log's tail) unless histories.npz
-    and run_info.json were written. ``spec['out_dir']`` is where the run will live."""
+def simulate(spec, stage: Path, threads: int = 1, quiet: bool = False, where: str = "",
+             engine: str = "compiled") -> None:
+    """Write ``spec`` (a drystone.spec.Spec or a spec dict) to ``stage``/spec.json and run
+    YADE on it; raises RunError (naming ``where``, the stability check that stopped it or
+    the log's tail) unless histories.npz and run_info.json were written. ``spec['out_dir']`` is where the run will live.
+    ``engine``: the step engine of the project's law (``ENGINES``; not physics: both give
+    the same run, the compiled one faster)."""
+    if engine not in ENGINES:
+        raise RunError(f"{where}: unknown engine {engine!r}; allowed: {', '.join(ENGINES)}")
     stage = Path(stage)
     spec_path = stage / "spec.json"
-    spec_path.write_text(json.dumps(spec, indent=1))
+    spec_path.write_text(json.dumps(spec_dict(spec), indent=1))
     out = spec["out_dir"]
-    rc = _simulate(spec_path, threads, quiet)
+    rc = _simulate(spec_path, threads, quiet, engine)
     if (stage / "failure.txt").is_file():  # stopped by a stability check (drystone/stability.py)
         raise RunError(f"{where}: the simulation was stopped: {(stage / 'failure.txt').read_text().strip()}; "
                        f"{out} is unchanged; log {stage / 'log.txt'}")

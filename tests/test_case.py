@@ -90,3 +90,15 @@ def test_readme_documents_every_key():
     from drystone import paths
     text = (paths.ROOT / "README.md").read_text()
     assert casemod.readme_with_keys(text) == text
+
+
+def test_stage_keys_live_with_the_stage_types(tmp_path):
+    """One home for a stage's keys and checks: drystone/stages.py's REGISTRY (issue 13)."""
+    import re
+
+    from drystone.stages import REGISTRY
+
+    assert not hasattr(casemod, "STAGES")
+    text = GOOD.replace('type = "gravity"', 'type = "spin"')
+    with pytest.raises(casemod.CaseError, match=re.escape(f"unknown stage type 'spin'; allowed: {sorted(REGISTRY)}")):
+        casemod.load(write(tmp_path, text))

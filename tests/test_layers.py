@@ -16,7 +16,8 @@ from drystone import paths
 LEAVES = {"drystone", "drystone.paths", "drystone.units"}
 CORE = {"drystone.case", "drystone.resolve", "drystone.contact", "drystone.overlap", "drystone.loading",
         "drystone.collapse", "drystone.timestep", "drystone.stability", "drystone.modal", "drystone.rotations",
-        "drystone.provenance", "drystone.simulate", "drystone.tomlio", "drystone.analytic"}
+        "drystone.provenance", "drystone.simulate", "drystone.tomlio", "drystone.analytic", "drystone.spec",
+        "drystone.stages", "drystone.contact_step"}
 TOP = {"drystone.runner", "drystone.sweep", "drystone.cli", "drystone.bench", "drystone.free_decay",
        "drystone.__main__"}
 

@@ -137,3 +137,14 @@ def test_settle_threshold_absolute_or_per_weight(tmp_path):
         assert p.settle(1, weight) is None
     plain = runner.resolve(_case(tmp_path, {"frequency_hz": 1.0}, {"duration": 3.0}), "test.toml", tmp_path)
     assert plain["stages"][2]["params"] == {}  # a plain rest keeps its old fingerprint
+
+
+def test_the_programme_of_a_version_1_spec_is_the_same():
+    """spec.json of finished runs says "kind" (version 1): ``from_spec`` reads it as "type"."""
+    stages = [{"kind": s.type, "start": s.start, "end": s.end, "params": s.params} for s in prog().stages]
+    p, q = prog(), LoadProgramme.from_spec({"stages": stages, "gravity": G})
+    assert [s.type for s in q.stages] == [s.type for s in p.stages]
+    for t in (0.5, 5.0, 13.0, 17.25, 30.0):
+        assert np.array_equal(q.body_acceleration(t), p.body_acceleration(t))
+        assert q.imposed_velocities(t).keys() == p.imposed_velocities(t).keys() == {3}
+    assert q.moving_blocks() == [3]

@@ -75,7 +75,7 @@ def test_five_blocks_short_kobe_end_to_end(outdir):
     assert spec["excitations"][0]["source"]
     # the base acceleration as the run applies it: each stage's samples, linearly interpolated
     exc = [(st["start"], st["end"], st["params"]["dt"], np.load(outdir / "case" / st["params"]["acc_file"]))
-           for st in spec["stages"] if st["kind"] == "excitation"]
+           for st in spec["stages"] if st["type"] == "excitation"]
 
     def a_base(t):
         for start, end, dt, acc in exc:

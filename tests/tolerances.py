@@ -421,3 +421,10 @@ TF_2DOF_DAMPING_REL = 0.10
 #: the largest measured, still far below any physical effect of the runs (gravity4's
 #: positions to 3e-9 m against a 5.5e-5 m penetration; one sample step of the time axis).
 REGRESSION_REL = 1e-5
+
+#: the compiled step (numba contact step + leapfrog) and the numpy law with YADE's
+#: NewtonIntegrator do the same arithmetic in a different order: ~1e-16 relative per
+#: step, amplified by the contacts (stiffness 2e8 N/m^3 over ~1e-4 m overlaps: a 1e-16 m
+#: change of a depth changes the force by a relative 1e-12) over a few thousand steps;
+#: histories measured to differ by < 1e-10 m over 2 s of gravity4; 1e-9 m
+ENGINE_AGREEMENT_M = 1e-9

@@ -24,6 +24,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import signal
 
+from drystone.spec import stage_type
+
 #: the paper's FFT: 1000 Hz sampling (§4.2, line 440), 4096 points (inferred from the grid)
 PAPER_RATE_HZ = 1000.0
 PAPER_NFFT = 4096
@@ -185,7 +187,7 @@ def modal_peaks(tf: dict, coherence_min: float = 0.9, fmin_hz: float = 0.0, fmax
 
 def excitation_stage(spec: dict) -> dict:
     """The (single) excitation stage of a run's spec.json."""
-    ex = [st for st in spec["stages"] if st["kind"] == "excitation"]
+    ex = [st for st in spec["stages"] if stage_type(st) == "excitation"]
     if len(ex) != 1:
         raise ValueError(f"{spec['name']}: identification needs exactly one excitation stage, found {len(ex)}")
     return ex[0]
@@ -247,7 +249,7 @@ def wall_assembly(out, time_s: float | None = None):
     out = Path(out)
     spec = json.loads((out / "spec.json").read_text())
     if time_s is None:
-        grav = [st for st in spec["stages"] if st["kind"] == "gravity"]
+        grav = [st for st in spec["stages"] if stage_type(st) == "gravity"]
         if not grav:
             raise ValueError(f"{out}: no gravity stage: give the time of the static configuration")
         time_s = grav[-1]["end"]

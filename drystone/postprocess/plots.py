@@ -17,6 +17,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from drystone.postprocess import summary as summ  # noqa: E402
+from drystone.spec import stage_type  # noqa: E402
 
 
 def contact_forces(spec: dict, h: dict, name: str, path: Path, slip: dict | None = None) -> Path:
@@ -71,8 +72,8 @@ def reaction(spec: dict, h: dict, path: Path, collapse: dict | None) -> Path:
     blocks against time and tilt (the paper's Figure 13)."""
     from drystone.loading import LoadProgramme, Stage
 
-    prog = LoadProgramme([Stage(s["kind"], s["start"], s["end"], s["params"]) for s in spec["stages"]
-                          if s["kind"] != "excitation"], spec["gravity"])
+    prog = LoadProgramme([Stage(stage_type(s), s["start"], s["end"], s["params"]) for s in spec["stages"]
+                          if stage_type(s) != "excitation"], spec["gravity"])
     up = np.array([prog.true_vertical(t) for t in h["t"]])
     rv = -np.einsum("ij,ij->i", h["reaction"], up)
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
@@ -124,6 +125,6 @@ def standard(out: Path, summary: dict | None = None) -> list[Path]:
         made.append(penetration_history(spec, h, an["penetration"], out / f"penetration_{an['penetration']}.png"))
     if h["cp"].size:
         made.append(control_points(h, out / "control_points.png"))
-    if any(st["kind"] == "tilt" for st in spec["stages"]):
+    if any(stage_type(st) == "tilt" for st in spec["stages"]):
         made.append(reaction(spec, h, out / "reaction.png", s.get("collapse")))
     return made

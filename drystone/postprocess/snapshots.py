@@ -21,6 +21,7 @@ from drystone import rotations  # noqa: E402
 from drystone.geometry import polyhedron as ph  # noqa: E402
 from drystone.loading import LoadProgramme, Stage  # noqa: E402
 from drystone.postprocess import summary as summ  # noqa: E402
+from drystone.spec import stage_type  # noqa: E402
 
 
 def block_faces(vertices: np.ndarray) -> list[np.ndarray]:
@@ -34,8 +35,8 @@ def positions_at(out: Path, times: list[float], world: bool = True) -> list[tupl
     spec = json.loads((out / "spec.json").read_text())
     geo = {b["id"]: np.asarray(b["vertices"], float) for b in json.loads((out / "geometry.json").read_text())["blocks"]}
     h = summ.load_histories(out)
-    prog = LoadProgramme([Stage(s["kind"], s["start"], s["end"], s["params"]) for s in spec["stages"]
-                          if s["kind"] != "excitation"], spec["gravity"])
+    prog = LoadProgramme([Stage(stage_type(s), s["start"], s["end"], s["params"]) for s in spec["stages"]
+                          if stage_type(s) != "excitation"], spec["gravity"])
     ids = [int(i) for i in h["block_ids"]]
     r0 = rotations.to_matrix(h["quat0"])
     frames = []

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from drystone import collapse, rotations
+from drystone.spec import spec_dict, stage_type
 
 
 #: summary.json's format name and version
@@ -69,7 +70,8 @@ def stage_residuals(spec: dict, h: dict) -> list[dict]:
     for k, st in enumerate(spec["stages"]):
         i = int(np.searchsorted(h["t"], st["end"] + 1e-9) - 1)
         i = max(0, min(i, len(h["t"]) - 1))
-        out.append({"stage": k + 1, "kind": st["kind"], "end_s": st["end"], "sample_time_s": float(h["t"][i]),
+        # summary.json (version 1) names a stage's type "kind"
+        out.append({"stage": k + 1, "kind": stage_type(st), "end_s": st["end"], "sample_time_s": float(h["t"][i]),
                     "displacement_m": {b: disp[i, j].tolist() for j, b in enumerate(ids)}})
     return out
 
@@ -175,8 +177,10 @@ def slip(spec: dict, h: dict, name: str, tilt_block: int | None) -> dict:
     return out
 
 
-def build(spec: dict, out: Path) -> dict:
-    """The summary of a finished run in folder ``out``."""
+def build(spec, out: Path) -> dict:
+    """The summary of a finished run in folder ``out``; ``spec``: a drystone.spec.Spec or a
+    spec.json dict of any version."""
+    spec = spec_dict(spec)
     out = Path(out)
     h = load_histories(out)
     info = json.loads((out / "run_info.json").read_text())
@@ -205,7 +209,7 @@ def build(spec: dict, out: Path) -> dict:
     # no such stage); velocity jumps of sines started as Eq. 9's displacement
     s["run"].update(settle=info.get("settle"), velocity_jumps=info.get("velocity_jumps", []))
     s["run"]["contact_stability"] = contact_stability(spec, info)
-    if any(st["kind"] == "tilt" for st in spec["stages"]):
+    if any(st["type"] == "tilt" for st in spec["stages"]):
         s["collapse"] = tilt_collapse(spec, h, info.get("collapse"))
         s["collapse_angle_deg"] = s["collapse"]["angle_deg"] if s["collapse"] else None
         s["reaction_drop_angle_deg"] = s["collapse"]["reaction_drop_angle_deg"] if s["collapse"] else None
@@ -237,10 +241,9 @@ def contact_stability(spec: dict, info: dict) -> dict | None:
 def vertical_reaction(spec: dict, h: dict) -> np.ndarray:
     """Vertical reaction (N) of the moving blocks on the platform and the fixed blocks at
     every sample: the recorded reaction force projected on the true (world) vertical, up."""
-    from drystone.loading import LoadProgramme, Stage
+    from drystone.loading import LoadProgramme
 
-    prog = LoadProgramme([Stage(st["kind"], st["start"], st["end"], st["params"]) for st in spec["stages"]],
-                         spec["gravity"])
+    prog = LoadProgramme.from_spec(spec)
     up = np.array([prog.true_vertical(t) for t in h["t"]]).reshape(-1, 3)
     return -np.einsum("ij,ij->i", np.asarray(h["reaction"], float).reshape(-1, 3), up)
 
@@ -250,7 +253,7 @@ def tilt_reaction_drop(spec: dict, h: dict) -> dict:
     over the samples of its tilt stages, with the drop fraction of its until_collapse stage
     (5 % by default) and the weight of the moving blocks (histories' masses x gravity)."""
     t = np.asarray(h["t"], float)
-    tilts = [st for st in spec["stages"] if st["kind"] == "tilt"]
+    tilts = [st for st in spec["stages"] if stage_type(st) == "tilt"]
     active = np.zeros(len(t), bool)
     for st in tilts:
         active |= (t > st["start"]) & (t <= st["end"] + 1e-9)

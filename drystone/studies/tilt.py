@@ -33,6 +33,7 @@ import numpy as np
 
 from drystone import paths
 from drystone.postprocess import compare
+from drystone.spec import stage_type
 
 OUT = paths.RESULTS / "tilt"
 RATE_TOLERANCE_DEG = 0.2  # issue 5 §2: a faster rate may not move the collapse angle more than this
@@ -53,7 +54,7 @@ def runs(root: Path) -> list[dict]:
         s = json.loads(p.read_text())
         col = s.get("collapse") or {}
         mat = next(iter(s["inputs"]["materials"].values()))
-        tilts = [st for st in s["inputs"]["stages"] if st["kind"] == "tilt"]
+        tilts = [st for st in s["inputs"]["stages"] if stage_type(st) == "tilt"]
         rows.append({
             "name": name, "finished": True, "folder": str(root / name),
             "collapse_angle_deg": s.get("collapse_angle_deg"),
@@ -311,7 +312,7 @@ def reaction_figure(rows: list[dict], path: Path) -> Path | None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from drystone.loading import LoadProgramme, Stage
+    from drystone.loading import LoadProgramme
     from drystone.postprocess import summary as summ
 
     done = [r for r in rows if r["finished"]]
@@ -322,8 +323,7 @@ def reaction_figure(rows: list[dict], path: Path) -> Path | None:
         out = Path(r["folder"])
         spec = json.loads((out / "spec.json").read_text())
         h = summ.load_histories(out)
-        prog = LoadProgramme([Stage(s["kind"], s["start"], s["end"], s["params"]) for s in spec["stages"]],
-                             spec["gravity"])
+        prog = LoadProgramme.from_spec(spec)
         up = np.array([prog.true_vertical(t) for t in h["t"]])
         rv = -np.einsum("ij,ij->i", h["reaction"], up)
         label = (f"{r['name']}: onset {_fmt(r['collapse_angle_deg'])} deg (:), "
@@ -442,7 +442,7 @@ def _drop_fraction(done: list[dict]) -> float:
         except (OSError, KeyError, ValueError):
             continue
         for st in spec["stages"]:
-            if st["kind"] == "tilt" and st["params"].get("until_collapse"):
+            if stage_type(st) == "tilt" and st["params"].get("until_collapse"):
                 return float(st["params"].get("reaction_drop", 0.05))
     return 0.05
 

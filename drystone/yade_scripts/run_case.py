@@ -1,10 +1,16 @@
-"""Run one resolved case inside YADE:  yade -n -x drystone/yade_scripts/run_case.py SPEC.json
+"""Run one resolved case inside YADE:  yade -n -x drystone/yade_scripts/run_case.py SPEC.json [ENGINE]
 
 SPEC.json is written by ``python -m drystone run CASE.toml`` (drystone/runner.py), which
 validates the case and the geometry first; this script only simulates and writes
 ``histories.npz`` and ``run_info.json`` into the output folder (under temporary names,
 renamed when complete). Units SI; the simulation runs in the platform frame
 (drystone/loading.py).
+
+ENGINE (the project's law on its native contact geometry only; ``ENGINES``):
+``compiled`` (default) runs the whole contact step and the leapfrog integration of the
+bodies in numba over arrays (``drystone.contact_step``), YADE keeping the time and the
+scene; ``python`` is the numpy law with YADE's NewtonIntegrator, each body's state read
+and its forces added one by one (the reference, and what the package did before).
 """
 from __future__ import annotations
 
@@ -20,8 +26,9 @@ import yade
 from yade import log
 
 # drystone is installed in the interpreter YADE runs (make setup: pip install -e .)
-from drystone.loading import LoadProgramme, Stage  # noqa: E402
+from drystone.loading import LoadProgramme  # noqa: E402
 from drystone import contact as law  # noqa: E402
+from drystone import contact_step as cs  # noqa: E402
 from drystone import rotations, stability  # noqa: E402
 from drystone.geometry import polyhedron as ph  # noqa: E402
 from drystone.yade_scripts import contact_engine as ce  # noqa: E402
@@ -34,6 +41,8 @@ log.setLevel("Polyhedra_support.cpp", log.ERROR)
 
 #: histories.npz's format name and version (arrays ``format`` and ``version``)
 HISTORIES_FORMAT, HISTORIES_VERSION = "drystone-histories", 1
+#: step engines for the project's law on native geometry (module docstring)
+ENGINES = ("compiled", "python")
 
 
 def _state_row(s) -> tuple:
@@ -45,11 +54,16 @@ def _state_row(s) -> tuple:
 
 
 class Driver:
-    def __init__(self, spec: dict, out: Path | None = None):
+    def __init__(self, spec: dict, out: Path | None = None, engine: str = "compiled"):
+        if engine not in ENGINES:
+            raise SystemExit(f"unknown engine {engine!r}; allowed: {', '.join(ENGINES)}")
         self.spec = spec
         self.O = yade.Omega()
         self.out = Path(out if out is not None else spec["out_dir"])  # the folder of spec.json
-        self.tables = sc.build(spec)
+        # the compiled step integrates the motion itself; it needs the native geometry
+        self.compiled = engine == "compiled" and spec["law"] == "penalty_coulomb" and spec["detection"] == "native"
+        self.engine_name = "compiled" if self.compiled else ("python" if spec["law"] == "penalty_coulomb" else "yade")
+        self.tables = sc.build(spec, integrate=not self.compiled)
         self.newton = self.tables["newton"]
         self.yid, self.bid = self.tables["yid"], self.tables["bid"]
         self.dyn = np.array(self.tables["dynamic"], int)
@@ -69,12 +83,16 @@ class Driver:
         self.vloc = local_v
         self.law_name = spec["law"]
         inertia = np.array([tuple(O.bodies[i].state.inertia) for i in range(nb)])
-        self.engine = ce.PenaltyCoulomb(self._pair_props, self.mass, local_v, spec["detection"], inertia)
-        self.prog = LoadProgramme([Stage(**s) for s in spec["stages"]], spec["gravity"])
-        for s in self.prog.stages:
-            if s.kind == "excitation":
-                s.params["acc"] = np.load(self.out / s.params["acc_file"])
-        self.moving_static = [self.yid[s.params["block"]] for s in self.prog.stages if s.kind == "settlement"]
+        self.inertia = inertia
+        if self.compiled:
+            self.engine = self._compiled_engine(local_v, inertia)
+        else:
+            self.engine = ce.PenaltyCoulomb(self._pair_props, self.mass, local_v, spec["detection"], inertia)
+        # any spec version; excitation samples loaded from the run folder
+        self.prog = LoadProgramme.from_spec(spec, self.out)
+        self.moving_static = [self.yid[b] for b in self.prog.moving_blocks()]
+        if self.compiled:
+            self._normalise_orientations()
         self.stage = -1
         self.forces = [(self.yid[f["block"]], yade.Vector3(*f["force"]), f["start"],
                         f["end"] if f["end"] is not None else np.inf) for f in spec["forces"]]
@@ -103,6 +121,7 @@ class Driver:
         self.t_print = self.t_wall0
         self.done = False
         self.python_time = 0.0  # s spent in this per-step Python engine
+        self.kernel_time = 0.0  # of which in the compiled contact step and integration
         # blow-up checks at every recorded sample (drystone/stability.py)
         self.energy = stability.EnergyWatch(self.w_free)
         self.failure = None
@@ -115,6 +134,62 @@ class Driver:
         mats = self.spec["materials"]
         joint = self.spec["joint_overrides"].get(f"{min(a['id'], b['id'])}-{max(a['id'], b['id'])}")
         return law.pair_properties(mats[a["material"]], mats[b["material"]], joint)
+
+    def _compiled_engine(self, local_v, inertia):
+        """The compiled step and the arrays its integration needs (``drystone.contact_step``)."""
+        nb = len(self.mass)
+        names = sorted(self.spec["materials"])
+        mats = self.spec["materials"]
+        keys = ("kn", "kt", "mu", "damping")
+        table = np.array([[[law.pair_properties(mats[a], mats[b])[k] for k in keys] for b in names] for a in names])
+        material = [names.index(self.blocks[self.bid[i]]["material"]) for i in range(nb)]
+        joints = {}
+        for key in self.spec["joint_overrides"]:
+            a, b = (int(x) for x in key.split("-"))
+            p = self._pair_props(self.yid[a], self.yid[b])
+            joints[(self.yid[a], self.yid[b])] = [p[k] for k in keys]
+        free = [cs.free_directions(self.states[i].blockedDOFs or "", bool(np.isfinite(self.mass[i]))) for i in range(nb)]
+        self.lin_free = np.array([f[0] for f in free])
+        self.rot_free = np.array([f[1] for f in free])
+        # YADE's exactAsphericalRot: aspherical bodies free to rotate about every axis
+        self.aspherical = np.array([bool(np.isfinite(self.mass[i])) and self.O.bodies[i].aspherical
+                                    and self.rot_free[i].all() for i in range(nb)])
+        self.angmom = np.zeros((nb, 3))
+        self.mass_int = np.where(np.isfinite(self.mass), self.mass, 1.0)  # never divided for non-moving bodies
+        self.inertia_int = np.where(np.isfinite(self.mass)[:, None], inertia, 1.0)
+        return ce.Compiled(self.mass, inertia, local_v, material, table, joints)
+
+    def _normalise_orientations(self):
+        """YADE's first step (PyRunner does not run at step 0, NewtonIntegrator does)
+        normalises the orientation of every body the Driver reads; the compiled engine does
+        the same, with Eigen's arithmetic, so that both engines start from the same state
+        (contacts across exactly touching faces are sensitive to its round-off)."""
+        for i in self.dyn.tolist() + list(self.moving_static):
+            q = self.states[i].ori
+            q.normalize()
+            self.states[i].ori = q
+            self.quat[i] = (q[0], q[1], q[2], q[3])
+        self.rot = rotations.to_matrix(self.quat)
+
+    def _set_velocity(self, i, v):
+        """Set body i's velocity (m/s) where the motion lives (arrays or YADE)."""
+        if self.compiled:
+            self.vel[i] = v
+        else:
+            self.states[i].vel = yade.Vector3(*v)
+
+    def _velocity(self, i) -> np.ndarray:
+        return self.vel[i].copy() if self.compiled else np.array(tuple(self.states[i].vel))
+
+    def _sync_yade(self):
+        """Write the arrays' state into YADE's bodies (compiled engine: at the end)."""
+        for i in np.flatnonzero(np.isfinite(self.mass) | np.any(self.vel != 0, axis=1)).tolist():
+            st = self.states[i]
+            st.pos = yade.Vector3(*self.pos[i])
+            st.vel = yade.Vector3(*self.vel[i])
+            st.angVel = yade.Vector3(*self.angvel[i])
+            x, y, z, w = self.quat[i]
+            st.ori = yade.Quaternion(w, x, y, z)
 
     def _read_states(self, ids):
         """Positions, velocities, angular velocities, orientations of bodies ``ids``."""
@@ -132,22 +207,38 @@ class Driver:
         t_py = time.perf_counter()
         O = self.O
         t = O.time
-        self.newton.gravity = yade.Vector3(*self.prog.body_acceleration(t))
+        g = self.prog.body_acceleration(t)
         k = self.prog.stage_index(t)
         if k != self.stage:
             self._enter_stage(k)
-        ids = np.concatenate([self.dyn, np.array(self.moving_static, int)]) if self.moving_static else self.dyn
-        if self.law_name == "penalty_coulomb":
-            self._read_states(ids)
-            self.engine.step(O, (self.pos, self.vel, self.angvel, self.rot))
+        if self.compiled:
+            t_k = time.perf_counter()
+            F, T = self.engine.step(O, (self.pos, self.vel, self.angvel, self.rot), apply_forces=False)
+            self.kernel_time += time.perf_counter() - t_k
             self._check_depth()
-        for y, f, start, end in self.forces:
-            if start <= t < end:
-                O.forces.addF(y, f)
-        if O.iter % self.rec_every == 0:
-            if self.law_name != "penalty_coulomb":
+            for y, f, start, end in self.forces:
+                if start <= t < end:
+                    F[y] += tuple(f)
+            if O.iter % self.rec_every == 0:
+                self._record(t)
+            t_k = time.perf_counter()
+            cs.integrate(O.dt, g, F, T, self.mass_int, self.inertia_int, self.lin_free, self.rot_free,
+                         self.aspherical, self.pos, self.vel, self.angvel, self.angmom, self.quat, self.rot)
+            self.kernel_time += time.perf_counter() - t_k
+        else:
+            self.newton.gravity = yade.Vector3(*g)
+            ids = np.concatenate([self.dyn, np.array(self.moving_static, int)]) if self.moving_static else self.dyn
+            if self.law_name == "penalty_coulomb":
                 self._read_states(ids)
-            self._record(t)
+                self.engine.step(O, (self.pos, self.vel, self.angvel, self.rot))
+                self._check_depth()
+            for y, f, start, end in self.forces:
+                if start <= t < end:
+                    O.forces.addF(y, f)
+            if O.iter % self.rec_every == 0:
+                if self.law_name != "penalty_coulomb":
+                    self._read_states(ids)
+                self._record(t)
         now = time.time()
         if now - self.t_print > 5.0:
             self.t_print = now
@@ -155,7 +246,7 @@ class Driver:
             eta = (now - self.t_wall0) * (1 - frac) / max(frac, 1e-9)
             st = self.prog.stages[k]
             print(f"[{self.spec['name']}] t = {t:7.3f} / {self.prog.end:.3f} s ({100 * frac:5.1f} %)  "
-                  f"stage {k + 1}/{len(self.prog.stages)} {st.kind}  tilt {self.prog.tilt_deg(t):6.2f} deg  "
+                  f"stage {k + 1}/{len(self.prog.stages)} {st.type}  tilt {self.prog.tilt_deg(t):6.2f} deg  "
                   f"contacts {len(self._contacts().fn)}  ETA {eta:6.0f} s", flush=True)
         if self.stop_at is not None and t >= self.stop_at:
             self.done = True
@@ -165,10 +256,10 @@ class Driver:
     def _enter_stage(self, k):
         self.stage = k
         st = self.prog.stages[k]
-        print(f"[{self.spec['name']}] stage {k + 1}/{len(self.prog.stages)}: {st.kind} "
+        print(f"[{self.spec['name']}] stage {k + 1}/{len(self.prog.stages)}: {st.type} "
               f"{st.start:.3f}-{st.end:.3f} s", flush=True)
         for block, v in self.prog.imposed_velocities(self.O.time).items():
-            self.O.bodies[self.yid[block]].state.vel = yade.Vector3(*v)
+            self._set_velocity(self.yid[block], v)
         dv = self.prog.velocity_jump(k)
         if np.any(dv):
             # Eq. 9 as a displacement: the base's velocity jump, as a relative velocity of every
@@ -176,8 +267,8 @@ class Driver:
             for i in self.dyn:
                 state = self.states[int(i)]
                 free = np.array([c not in (state.blockedDOFs or "") for c in "xyz"], float)
-                v0 = np.array(tuple(state.vel))
-                state.vel = state.vel + yade.Vector3(*(dv * free))
+                v0 = self._velocity(int(i))
+                self._set_velocity(int(i), v0 + dv * free)
                 self.energy.inject(0.5 * self.mass[i] * (np.sum((v0 + dv * free) ** 2) - np.sum(v0 ** 2)))
             self.jumps.append({"stage": k + 1, "time_s": float(self.O.time), "relative_velocity_m_s": dv.tolist()})
             print(f"[{self.spec['name']}] stage {k + 1}: base velocity jump, free blocks get {dv.tolist()} m/s "
@@ -216,10 +307,8 @@ class Driver:
         # energies at the half step t - dt/2, where leapfrog velocities live (J)
         m = self.mass[d]
         ke_b = 0.5 * m * np.sum(self.vel[d] ** 2, axis=1)  # per free block
-        for j, i in enumerate(d):
-            inertia = np.array(tuple(O.bodies[int(i)].state.inertia))
-            w_loc = self.rot[i].T @ self.angvel[i]
-            ke_b[j] += 0.5 * float(np.sum(inertia * w_loc ** 2))
+        w_loc = np.einsum("bji,bj->bi", self.rot[d], self.angvel[d])  # R^T w per block
+        ke_b += 0.5 * np.sum(self.inertia[d] * w_loc ** 2, axis=1)
         ke = float(ke_b.sum())
         h["kinetic"].append(ke)
         self._check_settled(t, ke_b)
@@ -316,7 +405,7 @@ class Driver:
         led to the detection) is found afterwards from the histories:
         drystone/collapse.py, called by drystone/postprocess/summary.py."""
         st = self.prog.stages[self.prog.stage_index(t)]
-        if self.collapse is not None or st.kind != "tilt" or not st.params.get("until_collapse"):
+        if self.collapse is not None or st.type != "tilt" or not st.params.get("until_collapse"):
             return
         up = self.prog.true_vertical(t)
         rv = -float(R @ up)
@@ -342,7 +431,11 @@ class Driver:
         wall0 = time.time()
         O.run(self.steps_total, True)
         wall = time.time() - wall0
+        if self.compiled:
+            self._sync_yade()
         if self.failure is None:
+            if not self.compiled:  # the state after the last integration (the arrays are current)
+                self._read_states(np.concatenate([self.dyn, np.array(self.moving_static, int)]))
             self._record(O.time)
         if self.failure is not None:  # no histories: nothing that looks like a result
             (self.out / "failure.txt").write_text(self.failure + "\n")
@@ -372,8 +465,10 @@ class Driver:
                 "velocity_jumps": self.jumps, "settle": self.settle,
                 "max_contact_omega_dt": float(self.engine.max_omega_dt),
                 "yade_version": yade.config.version if hasattr(yade, "config") else "unknown",
+                "engine": self.engine_name,
                 "us_per_step": 1e6 * wall / max(1, self.O.iter),
-                "python_us_per_step": 1e6 * self.python_time / max(1, self.O.iter)}
+                "python_us_per_step": 1e6 * self.python_time / max(1, self.O.iter),
+                "kernel_us_per_step": 1e6 * self.kernel_time / max(1, self.O.iter)}
         tmp = self.out / "run_info.tmp.json"
         tmp.write_text(json.dumps(info, indent=1))
         os.replace(tmp, self.out / "run_info.json")
@@ -382,10 +477,10 @@ class Driver:
 
 
 def main(argv):
-    if len(argv) != 1:
-        raise SystemExit("usage: yade -n -x drystone/yade_scripts/run_case.py SPEC.json")
+    if len(argv) not in (1, 2):
+        raise SystemExit("usage: yade -n -x drystone/yade_scripts/run_case.py SPEC.json [compiled|python]")
     spec = json.loads(Path(argv[0]).read_text())
-    Driver(spec, Path(argv[0]).resolve().parent).run()
+    Driver(spec, Path(argv[0]).resolve().parent, *argv[1:]).run()
 
 
 if __name__ == "__main__":  # yade -x runs this file as __main__; importing it runs nothing

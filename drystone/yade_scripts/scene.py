@@ -36,8 +36,9 @@ def _material(mat: dict, law: str, stock_shear_area: float):
                              label=mat["name"])
 
 
-def build(spec: dict) -> dict:
-    """Create materials, bodies and engines; return lookup tables.
+def build(spec: dict, integrate: bool = True) -> dict:
+    """Create materials, bodies and engines; return lookup tables. ``integrate=False``
+    leaves NewtonIntegrator out of the engines (the compiled step moves the bodies).
 
     Returns dict with ``yid`` (block id -> YADE id), ``bid`` (YADE id -> block id),
     ``dynamic`` (list of YADE ids that move), ``newton`` (the NewtonIntegrator).
@@ -67,7 +68,7 @@ def build(spec: dict) -> dict:
     step = yade.PyRunner(iterPeriod=1, command="_drystone_step()", label="drystone_step")
     if spec["detection"] == "native":
         # contacts and all their forces come from contact_engine.PenaltyCoulomb (native)
-        O.engines = [yade.ForceResetter(), step, newton]
+        O.engines = [yade.ForceResetter(), step, newton] if integrate else [yade.ForceResetter(), step]
     else:
         O.engines = [
             yade.ForceResetter(),

@@ -43,6 +43,7 @@ import numpy as np
 import drystone
 from drystone import paths, sweep, tomlio
 from drystone.geometry import ogawa_blocks
+from drystone.spec import stage_type
 from drystone.studies.ogawa import mrb1d
 from drystone.units import G_STANDARD
 
@@ -230,7 +231,7 @@ def _run_meta(folder: Path) -> dict:
             "assumed": gen.get("assumed", []),
             "pga_g": float(exc[0]["pga_g"]) if exc else None,
             "record": {k: exc[0].get(k) for k in ("event", "station", "component", "scale_factor")} if exc else None,
-            "runs": sum(1 for st in s3["inputs"]["stages"] if st["kind"] == "excitation")}
+            "runs": sum(1 for st in s3["inputs"]["stages"] if stage_type(st) == "excitation")}
 
 
 def _sweep_folders(root: Path) -> list[Path]:

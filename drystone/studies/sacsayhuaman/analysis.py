@@ -22,6 +22,7 @@ import numpy as np
 
 from drystone.motions import spectra
 from drystone.postprocess import summary as summ
+from drystone.spec import stage_type
 
 #: identification peaks: local maxima of the Konno-Ohmachi-smoothed spectrum (b = 100, a
 #: narrower window than the records' b = 40, to keep close modes apart) with height and
@@ -41,7 +42,7 @@ def _load(out: Path) -> tuple[dict, dict, dict]:
 
 
 def _excitation_window(spec: dict, h: dict) -> np.ndarray:
-    ex = [st for st in spec["stages"] if st["kind"] == "excitation"]
+    ex = [st for st in spec["stages"] if stage_type(st) == "excitation"]
     if not ex:
         raise ValueError(f"{spec['name']}: the run has no excitation stage")
     return (h["t"] >= ex[0]["start"]) & (h["t"] <= ex[-1]["end"])
@@ -77,7 +78,7 @@ def response(out: Path) -> dict[str, float]:
     """Maximum |out-of-plane relative displacement| (m) of each control point during the
     excitation (and the rest after it)."""
     spec, _, h = _load(out)
-    ex = [st for st in spec["stages"] if st["kind"] == "excitation"]
+    ex = [st for st in spec["stages"] if stage_type(st) == "excitation"]
     win = h["t"] >= ex[0]["start"]
     rel = h["cp"][win] - h["cp0"][None]
     return {str(n): float(np.abs(rel[:, j, 1]).max()) for j, n in enumerate(h["cp_names"])}
@@ -100,7 +101,7 @@ def residuals(out: Path) -> dict:
     ``collapsed_summary`` (summary.json's 3D rule, for comparison); ``settled``, ``settle``
     (run_info's record) and ``end_time_s``."""
     spec, s, h = _load(out)
-    grav = [st for st in spec["stages"] if st["kind"] == "gravity"]
+    grav = [st for st in spec["stages"] if stage_type(st) == "gravity"]
     i0 = min(int(np.searchsorted(h["t"], grav[-1]["end"] - 1e-9)), len(h["t"]) - 1) if grav else 0
     u = h["pos"][-1] - h["pos"][i0]
     ids = [int(b) for b in h["block_ids"]]

@@ -23,6 +23,7 @@ import numpy as np
 
 from drystone import paths, sweep, tomlio
 from drystone.postprocess import compare
+from drystone.spec import stage_type
 from drystone.studies.sacsayhuaman import analysis as an
 from drystone.studies.sacsayhuaman import figures as fig
 
@@ -308,7 +309,7 @@ def sine_response() -> dict:
     for name in ("sacsayhuaman_sine", "sacsayhuaman_sine_peaks"):
         for out in _finished_runs(paths.RESULTS / name):
             spec = json.loads((out / "spec.json").read_text())
-            st = next(s for s in spec["stages"] if s["kind"] == "excitation")
+            st = next(s for s in spec["stages"] if stage_type(s) == "excitation")
             ex = next(e for e in spec["excitations"])
             rows.append({"sweep": name, "run": out.name, "frequency_hz": sine_frequency(out), "pga_g": ex["pga_g"],
                          "start": _start(spec), "max_relative_m": an.response(out),

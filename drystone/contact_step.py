@@ -1,0 +1,533 @@
+"""The compiled contact step: geometry, law, damping and the bodies' motion in numba over
+arrays (no YADE import). ``drystone/yade_scripts/contact_engine.py`` runs it inside YADE.
+
+One call of ``CompiledStep.forces`` does what ``contact_engine.PenaltyCoulomb.step`` does
+with numpy (the reference: ``tests/test_compiled_step.py`` checks that both give the same
+forces, shear histories and damping to 1e-9): find the overlaps (``drystone.overlap``),
+match each contact with its shear force of the previous step (contacts are keyed by the
+pair of body indices and come out sorted, so one merge walk matches them), apply the
+penalty–Coulomb law and the patch damping (``drystone.contact``), and sum the forces and
+torques on every body. ``integrate`` then advances the bodies one leapfrog step the way
+YADE's NewtonIntegrator (2023.02a) does, so that the state can stay in arrays between
+steps: translation v += dt (F/m + g), x += v dt on the free directions; rotation with
+Fincham's (1992) angular-momentum scheme for bodies free to rotate about all three axes
+(YADE's ``exactAsphericalRot``), and with the spherical update w += dt M / I (global
+components) for bodies with a blocked rotation, as YADE does.
+
+Units SI; quaternions (x, y, z, w) like YADE's; body arrays indexed by YADE body id.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from drystone import contact as law
+from drystone import overlap as ov
+from drystone import rotations
+from drystone.geometry import polyhedron as ph
+
+
+# -- the numpy reference ---------------------------------------------------------------
+
+def _padded(rows) -> np.ndarray:
+    """Stack lists of 3-vectors of different lengths, padding with the first entry."""
+    n = max(len(r) for r in rows)
+    out = np.zeros((len(rows), n, 3))
+    for i, r in enumerate(rows):
+        r = np.asarray(r, float)
+        out[i, : len(r)] = r
+        out[i, len(r):] = r[0]
+    return out
+
+
+class ContactState:
+    """Arrays describing the contacts of the current step (forces act on body B = id2)."""
+
+    def __init__(self):
+        self.clear()
+
+    def clear(self):
+        self.id1 = np.zeros(0, int)
+        self.id2 = np.zeros(0, int)
+        self.normal = np.zeros((0, 3))
+        self.point = np.zeros((0, 3))
+        self.volume = np.zeros(0)
+        self.area = np.zeros(0)
+        self.fn = np.zeros(0)  # elastic normal force magnitude, N
+        self.f_extra = np.zeros((0, 3))  # this law's force on B (damping + shear), N
+        self.shear = np.zeros((0, 3))  # total tangential force on B, N
+        self.slipping = np.zeros(0, bool)
+
+    def force_on_b(self) -> np.ndarray:
+        """Total contact force on body B (N): elastic normal + this law's part."""
+        return self.fn[:, None] * self.normal + self.f_extra
+
+
+class NumpyStep:
+    """The project's contact law in numpy, stateful over steps (the reference for
+    ``CompiledStep``).
+
+    ``pairs(id1, id2) -> dict(kn, kt, mu, damping)`` gives joint properties by YADE ids;
+    ``mass`` (n_bodies,) kg with inf for non-moving bodies.
+
+    Contact geometry (``detection``): ``native`` computes every overlap itself
+    (``drystone.overlap``: exact volume and centroid, normal and area from the volume's
+    gradient) and applies the normal force K_n V too, so YADE only integrates the motion;
+    ``yade`` reads the overlaps of YADE's ``Ig2_Polyhedra_Polyhedra_PolyhedraGeom`` (CGAL)
+    and YADE's volumetric law applies K_n V along YADE's normal, A_c being estimated from
+    the overlap's extent (``drystone.contact.contact_area``).
+    """
+
+    def __init__(self, pair_props, mass, local_vertices, detection, inertia=None):
+        self.pair_props = pair_props
+        self.mass = np.asarray(mass, float)
+        self.moving = np.isfinite(self.mass)
+        # principal moments (kg m^2) in the body frame; non-moving bodies: no inverse
+        inertia = np.ones((len(self.mass), 3)) if inertia is None else np.asarray(inertia, float)
+        self.inv_inertia_local = np.where(self.moving[:, None], 1.0 / inertia, 0.0)
+        self.inv_mass = np.where(self.moving, 1.0 / self.mass, 0.0)
+        self.native = detection == "native"
+        self.shapes = ov.Shapes(local_vertices)  # overlaps (native) and contact patches (both)
+        if not self.native:  # for the contact-area estimate on YADE's geometry
+            self.vloc = _padded(local_vertices)  # repeated entries leave min/max/argmax unchanged
+            self.nloc = _padded([ph.faces(v).normals for v in local_vertices])
+        self._shear: dict[tuple[int, int], np.ndarray] = {}
+        self._props: dict[tuple[int, int], tuple] = {}
+        self.state = ContactState()
+        self.elastic = (0.0, 0.0)  # elastic energy (J) at the previous and current step
+        #: largest omega dt of any contact mode so far (central differences are stable
+        #: below 2 (sqrt(1 + xi^2) - xi))
+        self.max_omega_dt = 0.0
+
+    def _props_arrays(self, keys):
+        out = []
+        for k in keys:
+            p = self._props.get(k)
+            if p is None:
+                d = self.pair_props(*k)
+                p = (d["kn"], d["kt"], d["mu"], d["damping"])
+                self._props[k] = p
+            out.append(p)
+        a = np.array(out, float).reshape(-1, 4)
+        return a[:, 0], a[:, 1], a[:, 2], a[:, 3]
+
+    def yade_geometry(self, rows, bodies_state):
+        """Overlaps from YADE's interactions (``rows`` (m, 9): id1, id2, volume, normal,
+        point): (ia, ib, volume, normal, point, area, patch area, centroid, second moment)."""
+        rows = np.asarray(rows, float).reshape(-1, 9)
+        # YADE may keep interactions between two non-moving bodies: no force, no geometry needed
+        rows = rows[self.moving[rows[:, 0].astype(int)] | self.moving[rows[:, 1].astype(int)]]
+        pos, vel, angvel, rot = bodies_state
+        ia = rows[:, 0].astype(int)
+        ib = rows[:, 1].astype(int)
+        vol = rows[:, 2]
+        n = rows[:, 3:6]
+        c = rows[:, 6:9]
+        if len(rows) == 0:
+            return ia, ib, vol, n, c, np.zeros(0), np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3, 3))
+        # contact area from the overlap extent along the joint's face normal
+        # face normals in the global frame, then vertex projections x.m = x_local.(R^T m) + pos.m
+        fa = np.matmul(self.nloc[ia], rot[ia].transpose(0, 2, 1))
+        fb = np.matmul(self.nloc[ib], rot[ib].transpose(0, 2, 1))
+        m, face_of_a = law.projection_direction(n, fa, fb)
+        pa = np.matmul(self.vloc[ia], np.matmul(rot[ia].transpose(0, 2, 1), m[:, :, None]))[:, :, 0]
+        pb = np.matmul(self.vloc[ib], np.matmul(rot[ib].transpose(0, 2, 1), m[:, :, None]))[:, :, 0]
+        pa += law.dot(pos[ia], m)[:, None]
+        pb += law.dot(pos[ib], m)[:, None]
+        lo = np.maximum(pa.min(1), pb.min(1))
+        hi = np.minimum(pa.max(1), pb.max(1))
+        cm = law.dot(c, m)
+        # the centroid's distance from the flat face the overlap presses into
+        e = np.where(face_of_a, hi - cm, cm - lo)
+        s = self.shapes
+        pa, pc, pj = ov.patches_of_pairs(s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, pos, rot,
+                                         ia, ib, ov.TOL)
+        return ia, ib, vol, n, c, law.contact_area(vol, hi - lo, e), pa, pc, pj
+
+    def native_geometry(self, bodies_state):
+        """Overlaps computed here (drystone.overlap): (ia, ib, volume, normal, point, area,
+        patch area, patch centroid, patch second moment)."""
+        pos, _, _, rot = bodies_state
+        s = self.shapes
+        ia, ib, vol, c, n, area, pc, pj = ov.contacts_with_patches(s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces,
+                                                                   s.fk, pos, rot, self.moving, ov.TOL)
+        return ia, ib, vol, n, c, area, area, pc, pj
+
+    def forces(self, geometry, bodies_state, dt):
+        """This step's contact forces and torques (nb, 3) on every body (N, N m), from
+        ``geometry`` (``native_geometry`` or ``yade_geometry``) and ``bodies_state``
+        (pos, vel, angvel, R) over all bodies (m, m/s, rad/s, rotation matrices). With
+        YADE's geometry the elastic normal force is applied by YADE's law, not here."""
+        ia, ib, vol, n, c, area, parea, pc, pj = geometry
+        st = self.state
+        nb = len(self.mass)
+        if len(ia) == 0:
+            st.clear()
+            self._shear = {}
+            self.elastic = (self.elastic[1], 0.0)
+            return np.zeros((nb, 3)), np.zeros((nb, 3))
+        pos, vel, angvel, rot = bodies_state
+        keys = list(zip(ia.tolist(), ib.tolist()))
+        kn, kt, mu, xi = self._props_arrays(keys)
+
+        ra = c - pos[ia]
+        rb = c - pos[ib]
+        v_rel = (vel[ib] + law.cross(angvel[ib], rb)) - (vel[ia] + law.cross(angvel[ia], ra))
+        fn = kn * vol
+        fs_prev = np.array([self._shear.get(k, (0.0, 0.0, 0.0)) for k in keys], float).reshape(-1, 3)
+        fs_new, slipping = law.shear_spring(n, v_rel, fs_prev, area, kt, mu, fn, dt)
+        self._shear = dict(zip(keys, fs_new))
+
+        # damping distributed over the patch, at its centroid p
+        pa_, pb_ = pc - pos[ia], pc - pos[ib]
+        twist = np.concatenate([(vel[ib] + law.cross(angvel[ib], pb_)) - (vel[ia] + law.cross(angvel[ia], pa_)),
+                                angvel[ib] - angvel[ia]], axis=1)
+        ia_inv = np.matmul(rot[ia] * self.inv_inertia_local[ia][:, None, :], rot[ia].transpose(0, 2, 1))
+        ib_inv = np.matmul(rot[ib] * self.inv_inertia_local[ib][:, None, :], rot[ib].transpose(0, 2, 1))
+        fd, md, om = law.damping_wrenches(n, parea, pj, kn, kt, xi, ~slipping, pa_, pb_, self.inv_mass[ia],
+                                          self.inv_mass[ib], ia_inv, ib_inv, twist, fn, fs_new, mu, c - pc)
+        self.max_omega_dt = max(self.max_omega_dt, float(om.max()) * dt)
+        f_b = fs_new + fd  # the force this law adds on B besides K_n V (resultant)
+
+        st.id1, st.id2, st.normal, st.point, st.volume = ia, ib, n, c, vol
+        st.area, st.fn, st.f_extra, st.shear, st.slipping = area, fn, f_b, fs_new + fd - law.dot(fd, n)[:, None] * n, slipping
+        ok = area > 0
+        e_el = float(np.sum(0.5 * fn[ok] * vol[ok] / area[ok])
+                     + np.sum(np.sum(fs_new[ok] ** 2, axis=1) / (2.0 * kt[ok] * area[ok])))
+        self.elastic = (self.elastic[1], e_el)
+
+        # the forces applied here: shear spring at c, damping at p (+ its moment), and with
+        # native detection the elastic normal force at c too
+        f_c = fs_new + fn[:, None] * n if self.native else fs_new
+        idx = np.concatenate([ib, ia])
+        F = np.concatenate([f_c + fd, -(f_c + fd)])
+        T = np.concatenate([law.cross(rb, f_c) + law.cross(pb_, fd) + md, -law.cross(ra, f_c) - law.cross(pa_, fd) - md])
+        Fs = np.stack([np.bincount(idx, F[:, k], nb) for k in range(3)], 1)
+        Ts = np.stack([np.bincount(idx, T[:, k], nb) for k in range(3)], 1)
+        return Fs, Ts
+
+
+# -- contact forces -------------------------------------------------------------------
+
+@njit(cache=True)
+def _props(ia, ib, nb, mat, table, jkeys, jvals):
+    """(m, 4) kn, kt, mu, damping of each contact: the material pair's, or the joint's
+    override (jkeys: sorted ia * nb + ib of the overridden pairs, ia < ib)."""
+    m = len(ia)
+    out = np.empty((m, 4))
+    for c in range(m):
+        key = ia[c] * nb + ib[c]
+        j = np.searchsorted(jkeys, key)
+        if j < len(jkeys) and jkeys[j] == key:
+            out[c] = jvals[j]
+        else:
+            out[c] = table[mat[ia[c]], mat[ib[c]]]
+    return out
+
+
+@njit(cache=True)
+def _previous_shear(keys, prev_keys, prev_shear):
+    """Shear force of each contact at the previous step (zero for a new contact); both
+    key arrays sorted ascending."""
+    m = len(keys)
+    out = np.zeros((m, 3))
+    j = 0
+    for c in range(m):
+        while j < len(prev_keys) and prev_keys[j] < keys[c]:
+            j += 1
+        if j < len(prev_keys) and prev_keys[j] == keys[c]:
+            out[c] = prev_shear[j]
+    return out
+
+
+@njit(cache=True)
+def _global_inverse(R, d, out):
+    """out = R diag(d) R^T: a body's inverse inertia in the global frame."""
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = R[i, 0] * d[0] * R[j, 0] + R[i, 1] * d[1] * R[j, 1] + R[i, 2] * d[2] * R[j, 2]
+
+
+@njit(cache=True)
+def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, angvel, moving, inv_mass,
+                    inv_inertia_local, mat, table, jkeys, jvals, prev_keys, prev_shear, dt, tol):
+    nb = len(nv)
+    ia, ib, vol, c, n, area, pc, pj = ov.contacts_with_patches(verts, nv, normals, offsets, nf, faces, fk, pos, rot,
+                                                              moving, tol)
+    m = len(ia)
+    keys = ia * nb + ib
+    P = _props(ia, ib, nb, mat, table, jkeys, jvals)
+    kn = P[:, 0].copy()
+    kt = P[:, 1].copy()
+    mu = P[:, 2].copy()
+    xi = P[:, 3].copy()
+    fs_prev = _previous_shear(keys, prev_keys, prev_shear)
+    fn = kn * vol
+    fs = np.empty((m, 3))
+    slipping = np.zeros(m, np.bool_)
+    ra = np.empty((m, 3))
+    rb = np.empty((m, 3))
+    pa = np.empty((m, 3))
+    pb = np.empty((m, 3))
+    twist = np.empty((m, 6))
+    iia = np.empty((m, 3, 3))
+    iib = np.empty((m, 3, 3))
+    lever = np.empty((m, 3))
+    for k in range(m):
+        a = ia[k]
+        b = ib[k]
+        nk = n[k]
+        for q in range(3):
+            ra[k, q] = c[k, q] - pos[a, q]
+            rb[k, q] = c[k, q] - pos[b, q]
+            pa[k, q] = pc[k, q] - pos[a, q]
+            pb[k, q] = pc[k, q] - pos[b, q]
+            lever[k, q] = c[k, q] - pc[k, q]
+        # shear spring at the overlap centroid (contact.shear_spring)
+        vb = vel[b] + law._cross3(angvel[b], rb[k])
+        va = vel[a] + law._cross3(angvel[a], ra[k])
+        vr = vb - va
+        vn = vr[0] * nk[0] + vr[1] * nk[1] + vr[2] * nk[2]
+        f0 = fs_prev[k]
+        mag = np.sqrt(f0[0] ** 2 + f0[1] ** 2 + f0[2] ** 2)
+        f0n = f0[0] * nk[0] + f0[1] * nk[1] + f0[2] * nk[2]
+        proj = f0 - f0n * nk
+        pm = np.sqrt(proj[0] ** 2 + proj[1] ** 2 + proj[2] ** 2)
+        sc = mag / pm if pm > 0.0 else 0.0
+        kta = kt[k] * area[k]
+        for q in range(3):
+            fs[k, q] = proj[q] * sc - kta * (vr[q] - vn * nk[q]) * dt
+        fm = np.sqrt(fs[k, 0] ** 2 + fs[k, 1] ** 2 + fs[k, 2] ** 2)
+        fmax = mu[k] * fn[k]
+        if fm > fmax:
+            slipping[k] = True
+            s = fmax / fm
+            for q in range(3):
+                fs[k, q] *= s
+        # relative twist at the patch centroid, global inverse inertias
+        wb = vel[b] + law._cross3(angvel[b], pb[k])
+        wa = vel[a] + law._cross3(angvel[a], pa[k])
+        for q in range(3):
+            twist[k, q] = wb[q] - wa[q]
+            twist[k, 3 + q] = angvel[b, q] - angvel[a, q]
+        _global_inverse(rot[a], inv_inertia_local[a], iia[k])
+        _global_inverse(rot[b], inv_inertia_local[b], iib[k])
+    fd, md, om = law.damping_wrenches(n, area, pj, kn, kt, xi, ~slipping, pa, pb, inv_mass[ia], inv_mass[ib], iia,
+                                      iib, twist, fn, fs, mu, lever)
+    F = np.zeros((nb, 3))
+    T = np.zeros((nb, 3))
+    e_el = 0.0
+    om_max = 0.0
+    for k in range(m):
+        a = ia[k]
+        b = ib[k]
+        fc = fs[k] + fn[k] * n[k]
+        f = fc + fd[k]
+        tb = law._cross3(rb[k], fc) + law._cross3(pb[k], fd[k]) + md[k]
+        ta = law._cross3(ra[k], fc) + law._cross3(pa[k], fd[k]) + md[k]
+        for q in range(3):
+            F[b, q] += f[q]
+            F[a, q] -= f[q]
+            T[b, q] += tb[q]
+            T[a, q] -= ta[q]
+        if area[k] > 0.0:
+            e_el += 0.5 * fn[k] * vol[k] / area[k] + (fs[k, 0] ** 2 + fs[k, 1] ** 2 + fs[k, 2] ** 2) / (
+                2.0 * kt[k] * area[k])
+        if om[k] > om_max:
+            om_max = om[k]
+    return ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, F, T, e_el, om_max
+
+
+class CompiledStep:
+    """The project's law (native contact geometry) as one compiled call per step.
+
+    ``mass`` (nb,) kg, inf for non-moving bodies; ``inertia`` (nb, 3) principal moments in
+    the body frame, kg m^2; ``local_vertices`` per body in its body frame, m;
+    ``material`` (nb,) index into ``table`` (nm, nm, 4): kn, kt (N/m^3), mu, damping of
+    each pair of materials; ``joints`` {(ia, ib): (kn, kt, mu, damping)} overrides for
+    pairs of bodies. ``state`` is the last step's contacts as a ``ContactState`` (built
+    when asked for)."""
+
+    def __init__(self, mass, inertia, local_vertices, material, table, joints=None):
+        self.mass = np.asarray(mass, float)
+        self.moving = np.isfinite(self.mass)
+        self.inv_mass = np.where(self.moving, 1.0 / np.where(self.moving, self.mass, 1.0), 0.0)
+        inertia = np.asarray(inertia, float)
+        self.inv_inertia_local = np.where(self.moving[:, None], 1.0 / inertia, 0.0)
+        self.shapes = ov.Shapes(local_vertices)
+        self.material = np.asarray(material, np.int64)
+        self.table = np.asarray(table, float)
+        nb = len(self.mass)
+        joints = joints or {}
+        keys = sorted((min(a, b) * nb + max(a, b), tuple(v)) for (a, b), v in joints.items())
+        self.jkeys = np.array([k for k, _ in keys], np.int64)
+        self.jvals = np.array([v for _, v in keys], float).reshape(-1, 4)
+        self.keys = np.zeros(0, np.int64)
+        self.shear_store = np.zeros((0, 3))
+        self._raw = None
+        self._state = None
+        self.elastic = (0.0, 0.0)
+        self.max_omega_dt = 0.0
+
+    def forces(self, pos, rot, vel, angvel, dt):
+        """Contact forces and torques (nb, 3) on every body (N, N m) for the state given;
+        updates the shear history, ``state``, ``elastic`` and ``max_omega_dt``."""
+        s = self.shapes
+        (ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, F, T, e_el, om_max) = _contact_forces(
+            s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, pos, rot, vel, angvel, self.moving,
+            self.inv_mass, self.inv_inertia_local, self.material, self.table, self.jkeys, self.jvals, self.keys,
+            self.shear_store, dt, ov.TOL)
+        self.keys, self.shear_store = keys, fs
+        self.elastic = (self.elastic[1], e_el)
+        self.max_omega_dt = max(self.max_omega_dt, om_max * dt)
+        self._raw = (ia, ib, vol, c, n, area, fn, fs, fd, slipping)
+        self._state = None
+        return F, T
+
+    @property
+    def state(self) -> ContactState:
+        if self._state is None:
+            st = ContactState()
+            if self._raw is not None and len(self._raw[0]):
+                ia, ib, vol, c, n, area, fn, fs, fd, slipping = self._raw
+                st.id1, st.id2, st.normal, st.point, st.volume, st.area, st.fn = ia, ib, n, c, vol, area, fn
+                st.f_extra = fs + fd
+                st.shear = fs + fd - law.dot(fd, n)[:, None] * n
+                st.slipping = slipping
+            self._state = st
+        return self._state
+
+
+# -- motion ---------------------------------------------------------------------------
+
+@njit(cache=True)
+def _quat_matrix(q, R):
+    """R = rotation matrix of the unit quaternion q (x, y, z, w), the same arithmetic as
+    ``rotations.to_matrix`` (touching faces make contacts sensitive to its round-off)."""
+    x, y, z, w = q[0], q[1], q[2], q[3]
+    R[0, 0] = 1 - 2 * (y * y + z * z)
+    R[0, 1] = 2 * (x * y - z * w)
+    R[0, 2] = 2 * (x * z + y * w)
+    R[1, 0] = 2 * (x * y + z * w)
+    R[1, 1] = 1 - 2 * (x * x + z * z)
+    R[1, 2] = 2 * (y * z - x * w)
+    R[2, 0] = 2 * (x * z - y * w)
+    R[2, 1] = 2 * (y * z + x * w)
+    R[2, 2] = 1 - 2 * (x * x + y * y)
+
+
+@njit(cache=True)
+def _eigen_matrix(q, R):
+    """R = rotation matrix of q (x, y, z, w) as Eigen computes it (YADE's ``A`` in the
+    aspherical integration)."""
+    x, y, z, w = q[0], q[1], q[2], q[3]
+    tx, ty, tz = 2.0 * x, 2.0 * y, 2.0 * z
+    twx, twy, twz = tx * w, ty * w, tz * w
+    txx, txy, txz = tx * x, ty * x, tz * x
+    tyy, tyz, tzz = ty * y, tz * y, tz * z
+    R[0, 0] = 1.0 - (tyy + tzz)
+    R[0, 1] = txy - twz
+    R[0, 2] = txz + twy
+    R[1, 0] = txy + twz
+    R[1, 1] = 1.0 - (txx + tzz)
+    R[1, 2] = tyz - twx
+    R[2, 0] = txz - twy
+    R[2, 1] = tyz + twx
+    R[2, 2] = 1.0 - (txx + tyy)
+
+
+@njit(cache=True)
+def _dot_q(w, q):
+    """dQ/dt for the body-frame angular velocity w at orientation q (x, y, z, w)."""
+    out = np.empty(4)
+    out[3] = (-q[0] * w[0] - q[1] * w[1] - q[2] * w[2]) / 2.0
+    out[0] = (q[3] * w[0] - q[2] * w[1] + q[1] * w[2]) / 2.0
+    out[1] = (q[2] * w[0] + q[3] * w[1] - q[0] * w[2]) / 2.0
+    out[2] = (-q[1] * w[0] + q[0] * w[1] + q[3] * w[2]) / 2.0
+    return out
+
+
+@njit(cache=True)
+def _normalise(q):
+    """q /= |q|, summing the squares in the order of Eigen's vectorised norm (YADE)."""
+    s = np.sqrt((q[0] * q[0] + q[2] * q[2]) + (q[1] * q[1] + q[3] * q[3]))
+    for i in range(4):
+        q[i] /= s
+
+
+@njit(cache=True)
+def integrate(dt, g, F, T, mass, inertia, lin_free, rot_free, aspherical, pos, vel, angvel, angmom, quat, rot):
+    """One leapfrog step of every body, in place (module docstring). ``g`` (3,) body
+    acceleration m/s^2; F, T (nb, 3) N, N m; lin_free, rot_free (nb, 3) 1.0 on free
+    directions (all 0 for non-moving bodies, which still move with their velocity);
+    aspherical (nb,) bool: Fincham's scheme (all rotations free). ``rot`` is refreshed."""
+    nb = len(mass)
+    A = np.empty((3, 3))
+    conj = np.empty(4)
+    for i in range(nb):
+        for a in range(3):
+            if lin_free[i, a] > 0.0:
+                vel[i, a] += dt * (F[i, a] / mass[i] + g[a])
+            pos[i, a] += vel[i, a] * dt
+        q = quat[i]
+        if aspherical[i]:
+            conj[0], conj[1], conj[2], conj[3] = -q[0], -q[1], -q[2], q[3]
+            _eigen_matrix(conj, A)  # global -> body
+            M = T[i]
+            ln = angmom[i] + dt / 2.0 * M
+            wn = (A @ ln) / inertia[i]
+            dq = _dot_q(wn, q)
+            qh = q + dt / 2.0 * dq
+            for a in range(3):
+                angmom[i, a] += dt * M[a]
+            wh = (A @ angmom[i]) / inertia[i]
+            dqh = _dot_q(wh, qh)
+            qn = q + dt * dqh
+            # angVel = qn * wh (Eigen's quaternion-vector product on the unnormalised qn)
+            u = qn[:3]
+            uv = law._cross3(u, wh)
+            uv = uv + uv
+            w_glob = wh + qn[3] * uv + law._cross3(u, uv)
+            for a in range(3):
+                angvel[i, a] = w_glob[a]
+            _normalise(qn)
+            for a in range(4):
+                quat[i, a] = qn[a]
+        else:
+            for a in range(3):
+                if rot_free[i, a] > 0.0:
+                    angvel[i, a] += dt * T[i, a] / inertia[i, a]
+            w2 = angvel[i, 0] ** 2 + angvel[i, 1] ** 2 + angvel[i, 2] ** 2
+            if w2 != 0.0:
+                ang = np.sqrt(w2)
+                h = (ang * dt) * 0.5
+                s = np.sin(h)
+                r = np.array([s * (angvel[i, 0] / ang), s * (angvel[i, 1] / ang), s * (angvel[i, 2] / ang), np.cos(h)])
+                qn = np.empty(4)
+                qn[3] = r[3] * q[3] - r[0] * q[0] - r[1] * q[1] - r[2] * q[2]
+                qn[0] = r[3] * q[0] + r[0] * q[3] + r[1] * q[2] - r[2] * q[1]
+                qn[1] = r[3] * q[1] + r[1] * q[3] + r[2] * q[0] - r[0] * q[2]
+                qn[2] = r[3] * q[2] + r[2] * q[3] + r[0] * q[1] - r[1] * q[0]
+                for a in range(4):
+                    quat[i, a] = qn[a]
+                _normalise(quat[i])
+            elif not lin_free[i].any() and not rot_free[i].any():
+                continue  # a non-moving body that does not turn keeps its orientation as given
+            else:
+                _normalise(quat[i])
+        _quat_matrix(quat[i], rot[i])
+
+
+def free_directions(blocked: str, moving: bool) -> tuple[np.ndarray, np.ndarray]:
+    """(translation, rotation) masks (3,) of 1.0 on the directions a body may use, from
+    YADE's ``blockedDOFs`` letters (x y z translations, X Y Z rotations)."""
+    if not moving:
+        return np.zeros(3), np.zeros(3)
+    blocked = blocked or ""
+    return (np.array([0.0 if c in blocked else 1.0 for c in "xyz"]),
+            np.array([0.0 if c in blocked else 1.0 for c in "XYZ"]))
+
+
+def matrices(quat) -> np.ndarray:
+    """Rotation matrices of (nb, 4) quaternions (``drystone.rotations``)."""
+    return rotations.to_matrix(quat)
