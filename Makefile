@@ -10,7 +10,8 @@ STAMP   := $(VENV)/.setup-stamp
 RUN     := $(PY) -m drystone
 
 .PHONY: setup system-deps test demo run gravity4 settlement4 bench clean help records spectrum ogawa3d ogawa \
-        reference sweep tilt tilt-rate tilt-sensitivity tilt-report sacsayhuaman sacsayhuaman-report vtk ogawa-pga readme free-decay
+        reference sweep tilt tilt-rate tilt-sensitivity tilt-report sacsayhuaman sacsayhuaman-report vtk ogawa-pga readme free-decay \
+        fragility fragility-small fragility-report
 
 help:
 	@echo "make setup        install Debian's YADE, make .venv, install PyPI dependencies"
@@ -18,7 +19,7 @@ help:
 	@echo "make test         the test suite"
 	@echo "make run CASE=cases/x.toml [SET='key=value ...']   run any case file"
 	@echo "make gravity4 | settlement4   the paper's four-block verification cases"
-	@echo "make bench        speed figures (not a test)"
+	@echo "make bench [BENCH='--only scale --sizes 500']   speed figures (not a test; all sections ~15 min on 2 cores)"
 	@echo "make reference    regenerate tests/data/reference/ (stored histories of test_regression.py) after an intended change"
 	@echo "make free-decay   damping ratio per mode of one block, both contact geometries (~1 min)"
 	@echo "make ogawa        Ogawa et al.: Tables 1-3 check and figure, 1D friction studies and report (~15 min)"
@@ -34,6 +35,8 @@ help:
 	@echo "make sacsayhuaman [DASK=...]   40-stone wall: white noise, sine sweeps, resonance PGAs, Table 3 (~1 h on 2 cores)"
 	@echo "make sacsayhuaman-report       rewrite results/sacsayhuaman/ from the runs made so far"
 	@echo "make vtk DIR=results/<run> [EVERY=5]   VTK files of a finished run for ParaView (<run>/vtk/blocks.pvd)"
+	@echo "make fragility [DASK=...]      fragility curves: FEMA P695 far field (22 records) x PGA 0.1-1.0 g, mu and K_n drawn per run (220 runs; cost in results/fragility/report.md)"
+	@echo "make fragility-small           the fragility pipeline on 4 short runs (~2 min on 2 cores; not a result)"
 
 setup: system-deps $(STAMP)
 
@@ -91,7 +94,7 @@ reference: setup
 	$(PY) tests/make_reference.py
 
 bench: setup
-	$(RUN) bench
+	$(RUN) bench $(BENCH)
 
 free-decay: setup
 	$(RUN) free-decay
@@ -133,5 +136,14 @@ vtk: setup
 	@test -n "$(DIR)" || { echo "usage: make vtk DIR=results/<run folder> [EVERY=5]"; exit 2; }
 	$(PY) -m drystone.postprocess.vtk $(DIR) --every $(or $(EVERY),1)
 
+fragility: setup
+	$(PY) -m drystone.studies.fragility all --config full --workers $(JOBS) $(if $(DASK),--dask $(DASK))
+
+fragility-small: setup
+	$(PY) -m drystone.studies.fragility all --config small --workers $(JOBS)
+
+fragility-report: setup
+	$(PY) -m drystone.studies.fragility report --config full
+
 clean:
-	rm -rf results
+	rm -rf results .numba_cache

@@ -3,4 +3,29 @@
 Units are SI throughout (m, kg, s, N, Pa, rad) unless a name says otherwise (``_deg``, ``_mm``, ``_g``).
 Axes: x along the wall (in plane), y through the thickness (out of plane), z vertical, up.
 """
+import hashlib as _hashlib
+import os as _os
+from pathlib import Path as _Path
+
 __version__ = "0.1.0"
+
+#: the modules with numba kernels (``@njit(cache=True)``)
+_KERNEL_SOURCES = ("overlap.py", "contact.py", "contact_step.py")
+
+
+def _numba_cache_dir() -> None:
+    """Point numba's on-disk cache at a folder named by a digest of every kernel module.
+    Numba re-validates a cached function against its own file only: a kernel that inlines
+    one from another module (the compiled step calls the overlap clip) would otherwise keep
+    running the old code after that module changes. Set before numba is imported; an
+    explicit NUMBA_CACHE_DIR is respected."""
+    if "NUMBA_CACHE_DIR" in _os.environ:
+        return
+    here = _Path(__file__).resolve().parent
+    h = _hashlib.sha256()
+    for name in _KERNEL_SOURCES:
+        h.update((here / name).read_bytes())
+    _os.environ["NUMBA_CACHE_DIR"] = str(here.parent / ".numba_cache" / h.hexdigest()[:16])
+
+
+_numba_cache_dir()

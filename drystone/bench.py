@@ -1,15 +1,52 @@
-"""make bench: speed of the 40-block running-bond wall (8.64 x 4 x 0.8 m, 5 courses of 8,
-K_n = 2e8 N/m^3, 2300 kg/m^3, on a fixed platform) under gravity, for YADE's stock law and
-ours (on YADE's contact geometry and on the native one), on 1 and 2 threads. Prints
-milliseconds per step, steps per second, active contacts and the share of the step spent
-in our per-step Python engine. Not a test."""
+"""make bench: speed figures (not a test). Sections (``python -m drystone bench --only ...``):
+
+``running_bond``  the 40-block running-bond wall (8.64 x 4 x 0.8 m, 5 courses of 8,
+                  K_n = 2e8 N/m^3, 2300 kg/m^3, on a fixed platform) under gravity, for
+                  YADE's stock law and ours (on YADE's contact geometry and on the native
+                  one; on the native one with each step ``engine`` the runner offers), on 1
+                  and 2 threads: ms per step, steps per second, active contacts and the share
+                  of the step spent in our per-step Python engine.
+``scale``         running-bond and irregular walls of about 40, 500 and 2000 stones under
+                  gravity for a few hundred steps (our law, native geometry, one thread): ms
+                  per step, contacts, us per contact-step, the growth exponent of the cost
+                  with the number of stones (least-squares slope of log ms/step on log N),
+                  and the contact search (``drystone.overlap.contacts_with_patches``) timed
+                  alone on the settled positions: its broad phase and its exact clip.
+``threads``       the 40-block wall on 1 and 2 threads, alone and with a second identical
+                  run going in a background process (two jobs on the machine, as in a
+                  sweep), and the thread count this suggests.
+``sacsayhuaman``  the Sacsayhuaman section's analyses on one core against the paper's
+                  Abaqus/Explicit times on 8 cores (ratio and speed-up).
+
+ms per step: a run's YADE wall time has a fixed start-up (about a second: the first step
+loads the compiled kernels) besides its steps, so each measured run goes with a short one
+(``WARM`` steps) of the same case: ms/step is the slope (wall_long - wall_short) / (steps
+difference) and the start-up the intercept; the whole run's mean (``ms_per_step_run``),
+what the figures before were, is kept beside it.
+
+Every figure goes to results/bench/bench.json with the machine's facts (cores, load
+average at the start, YADE version); a partial run (``--only``) replaces its sections
+there and keeps the others.
+"""
 from __future__ import annotations
 
+import inspect
 import json
+import math
+import os
+import platform
+import signal
+import subprocess
+import sys
 import tempfile
+import time
 from pathlib import Path
 
+import numpy as np
+
 from drystone import paths, runner
+
+SECTIONS = ("running_bond", "scale", "threads", "sacsayhuaman")
 
 CASE = {
     "case": {"name": "bench_running_bond", "geometry": {"generator": "running_bond"}},
@@ -17,47 +54,426 @@ CASE = {
     "output": {"interval": 0.02},
 }
 
-
 #: (law, detection) pairs measured: the stock law on its only geometry, ours on both
 VARIANTS = (("stock_volumetric", "yade"), ("penalty_coulomb", "yade"), ("penalty_coulomb", "native"))
 
+#: per-step engines of our law on the native geometry (``runner.run_dict(..., engine=)``)
+ENGINES = ("python", "compiled")
 
-def measure(law: str, detection: str, threads: int, workdir: Path) -> dict:
-    out = workdir / f"{law}_{detection}_{threads}"
-    s = runner.run_dict(CASE, workdir / f"{law}_{detection}_{threads}.toml", out_dir=out, threads=threads,
-                        quiet=True, overrides=[f"contact.law={law}", f"contact.detection={detection}"])
+#: steps of the short run that measures a run's fixed start-up
+WARM = 20
+DISTURBED = "  DISTURBED (sources changed since the start, or another job): run again"
+
+
+def engine_supported() -> bool:
+    """Whether ``runner.run_dict`` takes an ``engine`` option (itself, or through **kw
+    passed on to ``runner.run``)."""
+    p = inspect.signature(runner.run_dict).parameters
+    if "engine" in p:
+        return True
+    if any(v.kind == v.VAR_KEYWORD for v in p.values()):
+        return "engine" in inspect.signature(runner.run).parameters
+    return False
+
+
+def machine() -> dict:
+    """Facts of the machine the figures come from."""
+    try:
+        yade = subprocess.run(["dpkg-query", "-W", "-f", "${Version}", "yade"], capture_output=True, text=True,
+                              timeout=10).stdout.strip() or "unknown"
+    except (OSError, subprocess.SubprocessError):
+        yade = "unknown"
+    return {"cores": os.cpu_count(), "load_average_at_start": list(os.getloadavg()), "yade_version": yade,
+            "python": platform.python_version(), "machine": platform.machine(),
+            "time": time.strftime("%Y-%m-%d %H:%M:%S %z")}
+
+
+# -- timing runs ------------------------------------------------------------------------------
+
+def steady_rate(steps_short: int, wall_short: float, steps_long: int, wall_long: float) -> tuple[float, float]:
+    """(ms per step, start-up s) of wall = start-up + steps x ms/step through two runs."""
+    if steps_long <= steps_short:
+        raise ValueError("the long run needs more steps than the short one")
+    per = (wall_long - wall_short) / (steps_long - steps_short)
+    return 1e3 * per, wall_short - per * steps_short
+
+
+def disturbed(ms_per_step: float, startup_s: float, sources_changed: bool = False) -> bool:
+    """Whether a (long, short) pair of runs was disturbed: the package's sources changed
+    since ``prime`` (a kernel compiled during a run, tens of seconds, which a long run
+    spreads over its steps), a start-up outside [-2, 10] s (it is about a second: a compile
+    during the short run, another job starting or ending), or no positive cost per step."""
+    return sources_changed or not (ms_per_step > 0 and -2.0 <= startup_s <= 10.0)
+
+
+def sources_stamp() -> float:
+    """Latest modification time of the package's Python sources (s since the epoch)."""
+    return max(p.stat().st_mtime for p in paths.PACKAGE.rglob("*.py"))
+
+
+#: ``sources_stamp`` when ``prime`` ran (None: not primed)
+_PRIMED: list = [None]
+
+
+def warm_case(case: dict, dt: float, steps: int = WARM) -> dict:
+    """``case`` cut to ``steps`` steps of ``dt`` under gravity (its geometry, one sample)."""
+    d = steps * dt
+    return dict(case, case=dict(case["case"], name=case["case"]["name"] + "_warm"),
+                stages=[{"type": "gravity", "duration": d, "ramp": 0.5 * d}], output={"interval": d})
+
+
+def timed_run(case: dict, workdir: Path, tag: str, threads: int = 1, overrides=(), step_engine: str | None = None,
+              **extra) -> dict:
+    """Run ``case`` and its short twin (``warm_case``), with ``step_engine`` if given (else
+    the runner's default); the row of figures (``extra`` first)."""
+    kw = dict(threads=threads, quiet=True, overrides=list(overrides),
+              **({"engine": step_engine} if step_engine else {}))
+    out = workdir / tag
+    s = runner.run_dict(case, workdir / f"{tag}.toml", out_dir=out, **kw)
     r = s["run"]
+    w = runner.run_dict(warm_case(case, r["dt_s"]), workdir / f"{tag}_warm.toml", out_dir=workdir / f"{tag}_warm",
+                        **kw)["run"]
+    ms, startup = steady_rate(w["steps"], w["wall_time_s"], r["steps"], r["wall_time_s"])
     info = json.loads((out / "run_info.json").read_text())
-    return {"law": law, "detection": detection, "threads": threads, "ms_per_step": r["us_per_step"] / 1e3,
-            "steps_per_s": 1e6 / r["us_per_step"], "contacts": info["max_contacts"],
-            "python_ms_per_step": r["python_us_per_step"] / 1e3, "steps": r["steps"], "dt_s": r["dt_s"]}
+    py = r.get("python_us_per_step")
+    return dict(extra, threads=threads, ms_per_step=ms, steps_per_s=1e3 / ms if ms > 0 else math.nan,
+                startup_s=startup, disturbed=disturbed(ms, startup, _PRIMED[0] not in (None, sources_stamp())),
+                ms_per_step_run=r["us_per_step"] / 1e3,
+                contacts=info["max_contacts"],
+                final_contacts=info.get("final_contacts"), python_ms_per_step=None if py is None else py / 1e3,
+                steps=r["steps"], warm_steps=w["steps"], dt_s=r["dt_s"], wall_s=r["wall_time_s"],
+                engine_used=info.get("engine"), out=str(out))
 
 
-def main() -> list[dict]:
+def prime(workdir: Path) -> None:
+    """A few steps of the 40-block wall with each step engine (and our law on YADE's
+    geometry), so that the compiled kernels are in numba's cache before anything is
+    timed (a first run after a change compiles them: minutes)."""
+    _PRIMED[0] = sources_stamp()
+    dt = time_step(build_wall(CASE["case"]["geometry"]))
+    runs = [("native", e) for e in (ENGINES if engine_supported() else (None,))] + [("yade", None)]
+    for detection, engine in runs:
+        tag = f"prime_{detection}_{engine or 'default'}"
+        runner.run_dict(warm_case(CASE, dt, 5), workdir / f"{tag}.toml", out_dir=workdir / tag, quiet=True,
+                        overrides=["contact.law=penalty_coulomb", f"contact.detection={detection}"],
+                        **({"engine": engine} if engine else {}))
+
+
+# -- a: the 40-block wall ---------------------------------------------------------------------
+
+def measure(law: str, detection: str, threads: int, workdir: Path, engine: str | None = None) -> dict:
+    tag = f"{law}_{detection}_{threads}" + (f"_{engine}" if engine else "")
+    r = timed_run(CASE, workdir, tag, threads, [f"contact.law={law}", f"contact.detection={detection}"], engine,
+                  law=law, detection=detection, engine=engine or "default")
+    del r["out"]
+    return r
+
+
+def _print_row(r: dict) -> None:
+    py = f"python {r['python_ms_per_step']:6.2f} ms/step  " if r["python_ms_per_step"] is not None else ""
+    print(f"  {r['law']:17s} {r['detection']:6s} {r['engine']:8s} {r['threads']} thread(s): {r['ms_per_step']:7.2f} "
+          f"ms/step  {r['steps_per_s']:7.1f} steps/s  {r['contacts']:4d} contacts  {py}"
+          f"(whole run {r['ms_per_step_run']:.2f} ms/step, start-up {r['startup_s']:.1f} s; "
+          f"{r['steps']} steps of {r['dt_s']:.2e} s){DISTURBED if r['disturbed'] else ''}", flush=True)
+
+
+def running_bond_section(workdir: Path) -> list[dict]:
+    """Section a: the 40-block wall, each law and geometry (and engine) on 1 and 2 threads."""
+    print("40-block running-bond wall under gravity (0.4 s):", flush=True)
+    engines = ENGINES if engine_supported() else (None,)
+    if engines == (None,):
+        print("  compiled step not available (runner.run_dict takes no 'engine'): our law on the native "
+              "geometry runs the Python step only", flush=True)
     rows = []
-    with tempfile.TemporaryDirectory(dir=paths.ROOT) as tmp:
-        for law, detection in VARIANTS:
+    for law, detection in VARIANTS:
+        # the compiled step is the native geometry's; on YADE's, our law has the Python one
+        yade_engine = "python" if engines != (None,) and law == "penalty_coulomb" else None
+        for engine in (engines if detection == "native" else (yade_engine,)):
             for threads in (1, 2):
-                rows.append(measure(law, detection, threads, Path(tmp)))
-                r = rows[-1]
-                print(f"{law:17s} {detection:6s} {threads} thread(s): {r['ms_per_step']:7.2f} ms/step  "
-                      f"{r['steps_per_s']:7.1f} steps/s  "
-                      f"{r['contacts']:4d} contacts  python {r['python_ms_per_step']:6.2f} ms/step  "
-                      f"({r['steps']} steps of {r['dt_s']:.2e} s)", flush=True)
-        sacs = sacsayhuaman_times(Path(tmp))
-    print(f"\nSacsayhuaman section, one core, {sacs[0]['detection']} contacts, against the paper's Abaqus/Explicit "
-          "on 8 cores:")
-    for r in sacs:
-        done = (f"; study runs: {min(r['study_runs_wall_s']):.0f}-{max(r['study_runs_wall_s']):.0f} s"
-                if r["study_runs_wall_s"] else "")
-        print(f"  {r['analysis']:17s} {r['simulated_s']:5.1f} s simulated: ~{r['estimated_wall_s']:6.0f} s "
-              f"(Abaqus {r['abaqus_8_cores_s'] / 60:5.0f} min: {r['speedup_vs_abaqus']:5.1f} x faster){done}", flush=True)
-    out = paths.RESULTS / "bench"
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "bench.json").write_text(json.dumps({"running_bond": rows, "sacsayhuaman": sacs}, indent=1))
-    print(f"written {out / 'bench.json'}")
+                rows.append(measure(law, detection, threads, workdir, engine))
+                _print_row(rows[-1])
     return rows
 
+
+# -- b: scale ---------------------------------------------------------------------------------
+
+#: stones of the scale section's walls (about; the irregular walls' counts are drawn)
+SIZES = (40, 500, 2000)
+WALLS = ("running_bond", "irregular")
+#: stones about 0.6 m long, 0.3 m high, 0.6 m deep (ashlar size), 2300 kg/m^3, K_n 2e8 N/m^3
+STONE_LENGTH, COURSE_HEIGHT, THICKNESS = 0.6, 0.3, 0.6
+#: (courses, stones per course) of each size
+LAYOUT = {40: (5, 8), 500: (20, 25), 2000: (40, 50)}
+
+
+def wall_geometry(kind: str, size: int, seed: int = 0) -> dict:
+    """The case-file geometry table of a scale wall: ``kind`` running_bond (exactly
+    courses x per_course stones) or irregular (stone lengths 0.45-0.75 m drawn along the
+    course, leaning head joints and sloping bed joints: about the same count), ``size``
+    one of LAYOUT's keys. Both are LAYOUT's courses of COURSE_HEIGHT, stones about
+    STONE_LENGTH long, THICKNESS deep, first course fixed."""
+    if size not in LAYOUT:
+        raise ValueError(f"wall size {size!r}: one of {sorted(LAYOUT)}")
+    courses, per = LAYOUT[size]
+    length, height = per * STONE_LENGTH, courses * COURSE_HEIGHT
+    if kind == "running_bond":
+        return {"generator": "running_bond", "length": length, "height": height, "thickness": THICKNESS,
+                "courses": courses, "per_course": per}
+    if kind == "irregular":
+        return {"generator": "irregular_wall", "length": length, "height": height, "thickness": THICKNESS,
+                "courses": courses, "stone_length": [0.75 * STONE_LENGTH, 1.25 * STONE_LENGTH], "seed": seed,
+                "name": f"irregular_{size}"}
+    raise ValueError(f"wall kind {kind!r}: one of {list(WALLS)}")
+
+
+def build_wall(geometry: dict) -> dict:
+    """The block-file dict of a case geometry table (``drystone.geometry.generators``)."""
+    from drystone.geometry import generators
+    return generators.generate(dict(geometry))
+
+
+def stone_count(data: dict) -> int:
+    """Stones of a block-file dict: every block but the platform (the fixed first course
+    included)."""
+    return sum(1 for b in data["blocks"] if b["role"] != "platform")
+
+
+def time_step(data: dict, safety: float | None = None) -> float:
+    """The runner's time step for a block-file dict: safety x the critical step
+    (``drystone.timestep``, damping the largest of the materials'), safety the case
+    default."""
+    from drystone import case as casemod
+    from drystone import timestep
+
+    if safety is None:
+        safety = casemod.SECTIONS["time"]["safety"].default
+    mats = data["materials"]
+    damp = max(m["damping"] for m in mats.values())
+    blocks = [{"id": b["id"], "role": b["role"], "material": b["material"], "vertices": b["vertices"]}
+              for b in data["blocks"]]
+    return safety * timestep.critical_step(blocks, {n: dict(m, damping=damp) for n, m in mats.items()})[0]
+
+
+def scale_steps(steps: int, size: int) -> int:
+    """Steps of a scale run: ``steps``, four times as many for walls of 40 stones or fewer
+    (their step is ~50 times cheaper: a run of a few seconds, above the noise)."""
+    return 4 * steps if size <= 40 else steps
+
+
+def scale_case(geometry: dict, dt: float, steps: int) -> dict:
+    """A gravity run of ``steps`` steps of ``dt`` (gravity ramped over the first fifth),
+    recording 5 samples (the recording is not what is measured)."""
+    duration = steps * dt
+    return {"case": {"name": "bench_scale", "geometry": geometry},
+            "stages": [{"type": "gravity", "duration": duration, "ramp": 0.2 * duration}],
+            "output": {"interval": duration / 5}}
+
+
+def growth_exponent(n, cost) -> float:
+    """Least-squares slope of log(cost) on log(n): cost ~ n^slope (nan below two sizes)."""
+    n, cost = np.asarray(n, float), np.asarray(cost, float)
+    if len(n) < 2 or len(np.unique(n)) < 2:
+        return math.nan
+    return float(np.polyfit(np.log(n), np.log(cost), 1)[0])
+
+
+def settled_configuration(run_dir: Path):
+    """(Shapes, pos, rot, moving) of a finished run's last recorded state, as
+    ``contacts_with_patches`` takes them: free blocks where the run left them, the others
+    where they were."""
+    from drystone import overlap as ov
+    from drystone import rotations
+    from drystone.geometry import polyhedron as ph
+
+    spec = json.loads((run_dir / "spec.json").read_text())
+    h = np.load(run_dir / "histories.npz")
+    row = {int(b): k for k, b in enumerate(h["block_ids"])}
+    local, pos, rot, moving = [], [], [], []
+    for b in spec["blocks"]:
+        v = np.asarray(b["vertices"], float)
+        k = row.get(b["id"])
+        if k is None:
+            c = ph.volume_centroid(v)[1]
+            local.append(v - c)
+            pos.append(c)
+            rot.append(np.eye(3))
+        else:
+            local.append(v - h["pos0"][k])
+            pos.append(h["pos"][-1][k])
+            rot.append(rotations.to_matrix(h["quat"][-1][k]) @ rotations.to_matrix(h["quat0"][k]).T)
+        moving.append(k is not None)
+    return ov.Shapes(local), np.array(pos), np.array(rot), np.array(moving)
+
+
+def _best_ms(fn, budget_s: float = 1.0, repeats: int = 3) -> float:
+    """Fastest of ``repeats`` means over ~budget_s / repeats of calls (ms): the least
+    disturbed by other jobs."""
+    fn()  # compiled / loaded from numba's cache
+    best = math.inf
+    for _ in range(repeats):
+        t0, k = time.perf_counter(), 0
+        while True:
+            fn()
+            k += 1
+            dt = time.perf_counter() - t0
+            if dt > budget_s / repeats:
+                break
+        best = min(best, dt / k)
+    return 1e3 * best
+
+
+def contact_search_times(run_dir: Path, budget_s: float = 1.0) -> dict:
+    """ms per call of the contact search on a run's settled positions, outside YADE:
+    total, global geometry, broad phase (sort and sweep), exact clip of the candidates,
+    and the former all-pairs search."""
+    from drystone import overlap as ov
+
+    s, pos, rot, moving = settled_configuration(run_dir)
+    args = (s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, pos, rot, moving, ov.TOL)
+    GV, GN, GD, lo, hi = ov._global_geometry(s.verts, s.nv, s.normals, s.offsets, s.nf, pos, rot)
+    ia, ib = ov.sweep_pairs(lo, hi, moving)
+    out = ov.contacts_with_patches(*args)
+    r = {"bodies": int(len(s.nv)), "candidates": int(len(ia)), "contacts": int(len(out[0])),
+         "search_ms": _best_ms(lambda: ov.contacts_with_patches(*args), budget_s),
+         "geometry_ms": _best_ms(lambda: ov._global_geometry(s.verts, s.nv, s.normals, s.offsets, s.nf, pos, rot),
+                                 budget_s / 4),
+         "broad_phase_ms": _best_ms(lambda: ov.sweep_pairs(lo, hi, moving), budget_s / 4),
+         "clip_ms": _best_ms(lambda: ov._contacts_of_pairs(GV, GN, GD, s.nv, s.nf, s.faces, s.fk, ia, ib, ov.TOL,
+                                                           ov.TOUCHING_IS_NO_CONTACT), budget_s)}
+    r["all_pairs_ms"] = _best_ms(lambda: ov._contacts_all_pairs(*args), budget_s)
+    return r
+
+
+def scale_section(workdir: Path, sizes=SIZES, walls=WALLS, steps: int = 300, engines=None) -> dict:
+    """Section b: each wall under gravity for ``steps`` steps (our law, native geometry,
+    one thread; each of ``engines``, default the runner's), then its contact search alone
+    on the settled positions."""
+    if engines and not engine_supported():
+        print("  compiled step not available (runner.run_dict takes no 'engine'): the runner's only step", flush=True)
+        engines = None
+    engines = list(engines) if engines else [None]
+    print(f"\nscale: walls under gravity, {steps} steps each ({scale_steps(steps, 40)} for 40 stones; penalty_coulomb, "
+          "native geometry, 1 thread):", flush=True)
+    rows = []
+    for kind, engine in [(k, e) for k in walls for e in engines]:
+        for size in sizes:
+            geo = wall_geometry(kind, size)
+            data = build_wall(geo)
+            n, dt = stone_count(data), time_step(data)
+            tag = f"scale_{kind}_{size}" + (f"_{engine}" if engine else "")
+            try:
+                r = timed_run(scale_case(geo, dt, scale_steps(steps, size)), workdir, tag, 1,
+                              ["contact.law=penalty_coulomb", "contact.detection=native"], engine,
+                              wall=kind, engine=engine or "default", size=size, stones=n, geometry=geo)
+            except runner.RunError as exc:  # one wall's failure leaves the others' figures
+                rows.append({"wall": kind, "engine": engine or "default", "size": size, "stones": n,
+                             "geometry": geo, "failed": str(exc)})
+                print(f"  {kind:12s} {engine or 'default':8s} {n:5d} stones: FAILED: {exc}", flush=True)
+                continue
+            r["us_per_contact_step"] = 1e3 * r["ms_per_step"] / max(1, r["final_contacts"] or r["contacts"])
+            r["search"] = contact_search_times(Path(r.pop("out")))
+            r["search_share"] = r["search"]["search_ms"] / r["ms_per_step"]
+            r["broad_phase_share"] = (r["search"]["geometry_ms"] + r["search"]["broad_phase_ms"]) / r["ms_per_step"]
+            rows.append(r)
+            sr = r["search"]
+            print(f"  {kind:12s} {r['engine']:8s} {n:5d} stones: {r['ms_per_step']:8.2f} ms/step  "
+                  f"{r['final_contacts']:5d} contacts  {r['us_per_contact_step']:6.2f} us/contact-step  "
+                  f"(dt {dt:.2e} s; whole run {r['ms_per_step_run']:.2f} ms/step, start-up {r['startup_s']:.1f} s)"
+                  f"{DISTURBED if r['disturbed'] else ''}\n"
+                  f"  {'':21s} contact search alone {sr['search_ms']:.2f} ms ({100 * r['search_share']:.0f} % of the "
+                  f"step): broad phase {sr['geometry_ms'] + sr['broad_phase_ms']:.3f} ms "
+                  f"({100 * r['broad_phase_share']:.1f} %), clip of {sr['candidates']} candidates "
+                  f"{sr['clip_ms']:.2f} ms; the former all-pairs search {sr['all_pairs_ms']:.2f} ms", flush=True)
+    fits = {}
+    for kind, engine in [(k, e or "default") for k in walls for e in engines]:
+        pts = [(r["stones"], r["ms_per_step"]) for r in rows
+               if r["wall"] == kind and r["engine"] == engine and "failed" not in r]
+        if len(pts) >= 2:
+            key = kind if len(engines) == 1 else f"{kind}/{engine}"
+            fits[key] = growth_exponent(*zip(*pts))
+            print(f"  {key}: cost ~ N^{fits[key]:.2f} over N = {', '.join(str(p[0]) for p in pts)}", flush=True)
+    return {"steps": steps, "rows": rows, "growth_exponent": fits}
+
+
+# -- c: threads with a second run going -------------------------------------------------------
+
+def recommend_threads(rows: list[dict], margin: float = 0.1) -> tuple[int, str]:
+    """The default thread count the measurements suggest: 2 only if 2 threads beat 1 by
+    more than ``margin`` both alone and with a second run going (``rows``: dicts with
+    threads, second_run (bool) and ms_per_step); else 1 (and, on a shared machine, as
+    many parallel runs as cores)."""
+    ms = {(r["threads"], r["second_run"]): r["ms_per_step"] for r in rows}
+    alone = ms.get((1, False), math.nan) / ms.get((2, False), math.nan)
+    loaded = ms.get((1, True), math.nan) / ms.get((2, True), math.nan)
+    why = f"2 threads run {alone:.2f}x the speed of 1 alone and {loaded:.2f}x with a second run going"
+    if alone > 1 + margin and loaded > 1 + margin:
+        return 2, why
+    return 1, why + f" (not above {1 + margin:.1f}x in both): one thread per run, one run per core"
+
+
+def _wait_stepping(log: Path, proc: subprocess.Popen, timeout: float = 180.0) -> None:
+    t0 = time.time()
+    while time.time() - t0 < timeout:
+        if proc.poll() is not None:
+            raise RuntimeError(f"the background run ended early (exit {proc.returncode})")
+        if log.is_file() and "stage 1/" in log.read_text(errors="replace"):
+            return
+        time.sleep(0.5)
+    raise RuntimeError("the background run did not start stepping")
+
+
+def _stop(proc: subprocess.Popen) -> None:
+    """Stop the background run started here: SIGTERM (the command line then kills its
+    YADE and exits), SIGKILL if it hangs."""
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGTERM)
+        try:
+            proc.wait(30)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+
+
+def threads_section(workdir: Path) -> dict:
+    """Section c: the 40-block wall (the case defaults: our law, its default geometry and
+    step) on 1 and 2 threads, alone and while a second identical but longer run (one
+    thread) is going in a background process started here and stopped after."""
+    from drystone.tomlio import to_toml
+
+    case = dict(CASE, case={"name": "bench_threads", "geometry": {"generator": "running_bond"}})
+    print("\nthreads: 40-block wall (case defaults), alone and with a second run going:", flush=True)
+    rows = []
+    for second in (False, True):
+        proc = None
+        if second:
+            p = workdir / "background.toml"
+            p.write_text(to_toml(dict(case, stages=[{"type": "gravity", "duration": 60.0, "ramp": 0.2}],
+                                      output={"interval": 0.5})))
+            bg_out = workdir / "background"
+            with open(workdir / "background.log", "w") as log:
+                proc = subprocess.Popen([sys.executable, "-m", "drystone", "run", str(p), "--out", str(bg_out),
+                                         "-j", "1", "-q"], stdout=log, stderr=subprocess.STDOUT, cwd=paths.ROOT)
+        try:
+            if proc is not None:
+                _wait_stepping(bg_out.parent / f".{bg_out.name}.partial" / "log.txt", proc)
+            for threads in (1, 2):
+                tag = f"threads_{threads}_{'second' if second else 'alone'}"
+                rows.append(timed_run(case, workdir, tag, threads, second_run=second))
+                del rows[-1]["out"]
+                if proc is not None and proc.poll() is not None:
+                    raise RuntimeError("the background run ended before the measurement did")
+                print(f"  {threads} thread(s), {'with a second run going' if second else 'alone':24s}: "
+                      f"{rows[-1]['ms_per_step']:7.2f} ms/step (whole run {rows[-1]['ms_per_step_run']:.2f})"
+                      f"{DISTURBED if rows[-1]['disturbed'] else ''}", flush=True)
+        finally:
+            if proc is not None:
+                _stop(proc)
+    n, why = recommend_threads(rows)
+    print(f"  recommendation: default -j {n}: {why}", flush=True)
+    return {"rows": rows, "recommended_threads": n, "why": why}
+
+
+# -- d: Sacsayhuaman analyses vs Abaqus ------------------------------------------------------
 
 #: the Sacsayhuaman paper's Abaqus/Explicit run times on 8 cores (data/papers/sacsayhuaman.toml)
 ANALYSES = (("white noise 30 s", "white_noise_30s", "sacsayhuaman_white_noise", 30.0),
@@ -68,11 +484,12 @@ ANALYSES = (("white noise 30 s", "white_noise_30s", "sacsayhuaman_white_noise", 
 
 
 def sacsayhuaman_times(workdir: Path) -> list[dict]:
-    """Wall time per analysis of the 40-stone section on one core: measured ms/step of a
-    short white-noise run times the analysis's steps (gravity 2 s + the motion; a sine
-    also has 2 s of rest, a record 2 s), beside the paper's Abaqus times on 8 cores, and
-    the times of finished study runs where there are some. The case leaves the contact
-    geometry to its default (``drystone.contact.default_detection``), as the study's cases do."""
+    """Wall time per analysis of the 40-stone section on one core: start-up plus the
+    analysis's steps (gravity 2 s + the motion; a sine also has 2 s of rest, a record 2 s)
+    at the ms/step of a short white-noise run, beside the paper's Abaqus times on 8 cores
+    (ratio ours / Abaqus, its inverse the speed-up, and the ratio of core-seconds), and the
+    times of finished study runs where there are some. The case leaves the contact
+    geometry and step to their defaults, as the study's cases do."""
     from drystone.motions import catalogue
     from drystone.postprocess import compare
 
@@ -80,9 +497,9 @@ def sacsayhuaman_times(workdir: Path) -> list[dict]:
             "stages": [{"type": "gravity", "duration": 0.5, "ramp": 0.25},
                        {"type": "excitation", "motion": "white_noise", "duration": 1.5, "direction": "y"}],
             "output": {"interval": 0.01}}
-    s = runner.run_dict(case, workdir / "sacs.toml", out_dir=workdir / "sacs", threads=1, quiet=True)
-    ms, dt = s["run"]["us_per_step"] / 1e3, s["run"]["dt_s"]
-    detection = json.loads((workdir / "sacs" / "spec.json").read_text())["detection"]
+    t = timed_run(case, workdir, "sacs")
+    ms, dt, startup = t["ms_per_step"], t["dt_s"], max(0.0, t["startup_s"])
+    detection = json.loads((Path(t.pop("out")) / "spec.json").read_text())["detection"]
     abaqus = compare.paper("sacsayhuaman")["run_times_s"]
     rows = []
     for label, key, source, dur in ANALYSES:
@@ -91,11 +508,13 @@ def sacsayhuaman_times(workdir: Path) -> list[dict]:
             if source == "paruro2014":
                 dur = min(dur, 60.0)
         sim = 2.0 + dur + (2.0 if key != "white_noise_30s" else 0.0)
-        est = sim / dt * ms / 1e3
+        est = startup + sim / dt * ms / 1e3
         actual = _actual_wall_times(source)
         rows.append({"analysis": label, "simulated_s": sim, "estimated_wall_s": est, "abaqus_8_cores_s": abaqus[key],
-                     "speedup_vs_abaqus": abaqus[key] / est, "ms_per_step": ms, "dt_s": dt, "detection": detection,
-                     "study_runs_wall_s": actual})
+                     "ratio_to_abaqus": est / abaqus[key], "speedup_vs_abaqus": abaqus[key] / est,
+                     "core_seconds_ratio": est / (8 * abaqus[key]), "ms_per_step": ms,
+                     "ms_per_step_run": t["ms_per_step_run"], "startup_s": startup, "dt_s": dt,
+                     "detection": detection, "engine": t["engine_used"] or "default", "study_runs_wall_s": actual})
     return rows
 
 
@@ -107,3 +526,64 @@ def _actual_wall_times(source: str) -> list[float]:
     else:
         pattern = str(paths.RESULTS / "sacsayhuaman_table3" / f"record_{source}-*" / "summary.json")
     return [json.loads(Path(p).read_text())["run"]["wall_time_s"] for p in sorted(glob.glob(pattern))]
+
+
+def print_sacsayhuaman(sacs: list[dict]) -> None:
+    r0 = sacs[0]
+    print(f"\nSacsayhuaman section, one core, {r0['detection']} contacts ({r0['ms_per_step']:.2f} ms/step), "
+          "against the paper's Abaqus/Explicit on 8 cores:")
+    print(f"  {'analysis':17s} {'simulated':>9s} {'ours':>8s} {'Abaqus':>8s} {'ours/Abaqus':>11s} {'speed-up':>8s}")
+    for r in sacs:
+        done = (f"  study runs: {min(r['study_runs_wall_s']):.0f}-{max(r['study_runs_wall_s']):.0f} s"
+                if r["study_runs_wall_s"] else "")
+        print(f"  {r['analysis']:17s} {r['simulated_s']:7.1f} s {r['estimated_wall_s']:6.0f} s "
+              f"{r['abaqus_8_cores_s'] / 60:4.0f} min {r['ratio_to_abaqus']:11.4f} {r['speedup_vs_abaqus']:7.1f}x"
+              f"{done}", flush=True)
+
+
+# -- main ----------------------------------------------------------------------------------
+
+def write_results(results: dict, path: Path | None = None) -> Path:
+    """Merge ``results`` (sections of this run) into bench.json: sections not run this time
+    keep their earlier figures (each section carries its machine facts)."""
+    path = path or paths.RESULTS / "bench" / "bench.json"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    old = {}
+    if path.is_file():
+        try:
+            old = json.loads(path.read_text())
+        except json.JSONDecodeError:
+            old = {}
+    old.update(results)
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text(json.dumps(old, indent=1))
+    os.replace(tmp, path)
+    return path
+
+
+def main(only=None, sizes=SIZES, walls=WALLS, steps: int = 300, engines=None) -> dict:
+    """Run the sections ``only`` (default all, in SECTIONS' order) and write bench.json."""
+    only = list(SECTIONS) if not only else [s for s in SECTIONS if s in only]
+    facts = machine()
+    print(f"machine: {facts['cores']} cores, load average {facts['load_average_at_start'][0]:.2f} at the start, "
+          f"YADE {facts['yade_version']}; sections: {', '.join(only)}", flush=True)
+    results: dict = {}
+    t0 = time.time()
+    with tempfile.TemporaryDirectory(dir=paths.ROOT) as tmp:
+        tmp = Path(tmp)
+        prime(tmp)
+        if "running_bond" in only:
+            results["running_bond"] = running_bond_section(tmp)
+            results["running_bond_machine"] = facts
+        if "scale" in only:
+            results["scale"] = dict(scale_section(tmp, sizes, walls, steps, engines), machine=facts)
+        if "threads" in only:
+            results["threads"] = dict(threads_section(tmp), machine=facts)
+        if "sacsayhuaman" in only:
+            results["sacsayhuaman"] = sacsayhuaman_times(tmp)
+            results["sacsayhuaman_machine"] = facts
+            print_sacsayhuaman(results["sacsayhuaman"])
+    results["machine"] = dict(facts, sections=only, wall_s=time.time() - t0)
+    out = write_results(results)
+    print(f"written {out} ({time.time() - t0:.0f} s)")
+    return results

@@ -28,12 +28,24 @@ def main(argv=None) -> int:
                    help="override a case key, e.g. --set contact.law=stock_volumetric")
     r.add_argument("--out", help="output folder (default results/<case name>)")
     r.add_argument("-j", "--threads", type=int, default=1)
+    r.add_argument("--engine", choices=("compiled", "python"), default="compiled",
+                   help="step engine of the project's law (compiled: numba, default; python: numpy law with "
+                        "YADE's integrator, the reference)")
     r.add_argument("-q", "--quiet", action="store_true")
     k = sub.add_parser("keys", help="print the table of case-file keys (Markdown)")
     k.add_argument("--update-readme", action="store_true", help="write the table into README.md")
     c = sub.add_parser("compare", help="compare finished verification runs with the paper")
     c.add_argument("folders", nargs="+")
-    sub.add_parser("bench", help="speed figures for the 40-block running-bond wall")
+    b = sub.add_parser("bench", help="speed figures: 40-block wall, 500/2000-stone walls, threads, Sacsayhuaman")
+    b.add_argument("--only", nargs="+", choices=("running_bond", "scale", "threads", "sacsayhuaman"),
+                   help="run only these sections (bench.json keeps the others' earlier figures)")
+    b.add_argument("--sizes", nargs="+", type=int, choices=(40, 500, 2000), default=[40, 500, 2000],
+                   help="scale section: wall sizes (stones, about)")
+    b.add_argument("--walls", nargs="+", choices=("running_bond", "irregular"), default=["running_bond", "irregular"],
+                   help="scale section: wall kinds")
+    b.add_argument("--steps", type=int, default=300, help="scale section: steps per run (300)")
+    b.add_argument("--engines", nargs="+", choices=("compiled", "python"), default=None,
+                   help="scale section: step engines (default: the runner's default)")
     sub.add_parser("free-decay", help="damping ratio per mode of one block (both contact geometries) -> "
                    "results/free_decay/report.md")
     w = sub.add_parser("sweep", help="run a sweep file (many overrides of one case) in parallel, resumably")
@@ -48,7 +60,7 @@ def main(argv=None) -> int:
     try:
         if a.cmd == "run":
             from drystone import runner
-            s = runner.run(a.case, a.set, a.out, a.threads, a.quiet)
+            s = runner.run(a.case, a.set, a.out, a.threads, a.quiet, engine=a.engine)
             keys = [k for k in s if k.startswith(("penetration", "slip", "collapse_angle"))]
             print(json.dumps({k: s[k] for k in keys}, indent=1))
         elif a.cmd == "keys":
@@ -72,7 +84,7 @@ def main(argv=None) -> int:
             print(free_decay.report().read_text())
         elif a.cmd == "bench":
             from drystone import bench
-            bench.main()
+            bench.main(a.only, a.sizes, a.walls, a.steps, a.engines)
     except KeyboardInterrupt:
         print("interrupted: the results folder is unchanged", file=sys.stderr)
         return 130

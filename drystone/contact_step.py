@@ -250,7 +250,7 @@ def _global_inverse(R, d, out):
 
 @njit(cache=True)
 def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, angvel, moving, inv_mass,
-                    inv_inertia_local, mat, table, jkeys, jvals, prev_keys, prev_shear, dt, tol):
+                    inv_inertia_local, mat, table, jkeys, jvals, prev_keys, prev_shear, dt, tol, size):
     nb = len(nv)
     ia, ib, vol, c, n, area, pc, pj = ov.contacts_with_patches(verts, nv, normals, offsets, nf, faces, fk, pos, rot,
                                                               moving, tol)
@@ -318,6 +318,7 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, a
     T = np.zeros((nb, 3))
     e_el = 0.0
     om_max = 0.0
+    depth_ratio = 0.0  # largest depth V/A over the smaller block's size
     for k in range(m):
         a = ia[k]
         b = ib[k]
@@ -333,9 +334,12 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, a
         if area[k] > 0.0:
             e_el += 0.5 * fn[k] * vol[k] / area[k] + (fs[k, 0] ** 2 + fs[k, 1] ** 2 + fs[k, 2] ** 2) / (
                 2.0 * kt[k] * area[k])
+            r = vol[k] / area[k] / min(size[a], size[b])
+            if r > depth_ratio:
+                depth_ratio = r
         if om[k] > om_max:
             om_max = om[k]
-    return ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, F, T, e_el, om_max
+    return ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, F, T, e_el, om_max, depth_ratio
 
 
 class CompiledStep:
@@ -345,10 +349,12 @@ class CompiledStep:
     the body frame, kg m^2; ``local_vertices`` per body in its body frame, m;
     ``material`` (nb,) index into ``table`` (nm, nm, 4): kn, kt (N/m^3), mu, damping of
     each pair of materials; ``joints`` {(ia, ib): (kn, kt, mu, damping)} overrides for
-    pairs of bodies. ``state`` is the last step's contacts as a ``ContactState`` (built
-    when asked for)."""
+    pairs of bodies; ``size`` (nb,) each body's smallest dimension (m): ``depth_ratio``
+    is the largest contact depth V/A over the smaller size of its two bodies (the
+    tunnelling check, ``drystone.stability``). ``state`` is the last step's contacts as a
+    ``ContactState`` (built when asked for)."""
 
-    def __init__(self, mass, inertia, local_vertices, material, table, joints=None):
+    def __init__(self, mass, inertia, local_vertices, material, table, joints=None, size=None):
         self.mass = np.asarray(mass, float)
         self.moving = np.isfinite(self.mass)
         self.inv_mass = np.where(self.moving, 1.0 / np.where(self.moving, self.mass, 1.0), 0.0)
@@ -364,6 +370,8 @@ class CompiledStep:
         self.jvals = np.array([v for _, v in keys], float).reshape(-1, 4)
         self.keys = np.zeros(0, np.int64)
         self.shear_store = np.zeros((0, 3))
+        self.size = np.full(nb, np.inf) if size is None else np.asarray(size, float)
+        self.depth_ratio = 0.0
         self._raw = None
         self._state = None
         self.elastic = (0.0, 0.0)
@@ -373,10 +381,10 @@ class CompiledStep:
         """Contact forces and torques (nb, 3) on every body (N, N m) for the state given;
         updates the shear history, ``state``, ``elastic`` and ``max_omega_dt``."""
         s = self.shapes
-        (ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, F, T, e_el, om_max) = _contact_forces(
+        (ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, F, T, e_el, om_max, self.depth_ratio) = _contact_forces(
             s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, pos, rot, vel, angvel, self.moving,
             self.inv_mass, self.inv_inertia_local, self.material, self.table, self.jkeys, self.jvals, self.keys,
-            self.shear_store, dt, ov.TOL)
+            self.shear_store, dt, ov.TOL, self.size)
         self.keys, self.shear_store = keys, fs
         self.elastic = (self.elastic[1], e_el)
         self.max_omega_dt = max(self.max_omega_dt, om_max * dt)

@@ -157,7 +157,9 @@ class Driver:
         self.angmom = np.zeros((nb, 3))
         self.mass_int = np.where(np.isfinite(self.mass), self.mass, 1.0)  # never divided for non-moving bodies
         self.inertia_int = np.where(np.isfinite(self.mass)[:, None], inertia, 1.0)
-        return ce.Compiled(self.mass, inertia, local_v, material, table, joints)
+        sizes = {b["id"]: float(ph.extent(np.asarray(b["vertices"])).min()) for b in self.spec["blocks"]}
+        size = np.array([sizes[self.bid[i]] for i in range(nb)]) * stability.TUNNEL_FRACTION
+        return ce.Compiled(self.mass, inertia, local_v, material, table, joints, size)
 
     def _normalise_orientations(self):
         """YADE's first step (PyRunner does not run at step 0, NewtonIntegrator does)
@@ -215,7 +217,8 @@ class Driver:
             t_k = time.perf_counter()
             F, T = self.engine.step(O, (self.pos, self.vel, self.angvel, self.rot), apply_forces=False)
             self.kernel_time += time.perf_counter() - t_k
-            self._check_depth()
+            if self.engine.depth_ratio > 1.0:  # deeper than TUNNEL_FRACTION x the smaller block
+                self._check_depth()
             for y, f, start, end in self.forces:
                 if start <= t < end:
                     F[y] += tuple(f)

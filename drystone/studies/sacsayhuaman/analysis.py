@@ -205,7 +205,8 @@ def table3_markdown(rows: list[dict], paper: dict, records=("paruro2014", "cusco
                 if r.get("settled") is False:
                     ours += f" {NOT_SETTLED}"
                     unsettled = True
-                ours3 = f"{r['max_residual_3d_mm']:.1f} ({r['stones_3d']})"
+                # a collapsed stone falls off the platform: its |u| is a fall height, not a residual
+                ours3 = "-" if r["collapsed"] else f"{r['max_residual_3d_mm']:.1f} ({r['stones_3d']})"
             k = paper["pga_g"].index(g) if g in paper["pga_g"] else None
             if k is None:
                 theirs = "-"

@@ -412,6 +412,11 @@ def resonance_table() -> list[dict]:
     return sorted(rows, key=lambda r: (not r["paper_frequency"], r["frequency_hz"], r["pga_g"]))
 
 
+def _residual_cell(r: dict, key: str) -> str:
+    """A residual (mm) for a table, or 'collapse' when stones collapsed (module note)."""
+    return "collapse" if r["collapsed"] else f"{r[key]:.2f}"
+
+
 def table3(workers=None, backend="local", address=None) -> list[dict]:
     sweep.run(SWEEPS / "sacsayhuaman_table3.toml", workers, backend, address)
     return table3_rows()
@@ -496,9 +501,12 @@ def report(out: Path = OUT) -> Path:
         lines += ["| frequency (Hz) | PGA (g) | max out-of-plane residual (mm) | carried by | max 3D residual (mm) | "
                   "stones moved > 0.1 mm | collapsed stones | motion died out |", "|---|---|---|---|---|---|---|---|"]
         lines += [f"| {r['frequency_hz']:.3f}{' (paper)' if r['paper_frequency'] else ''} | {r['pga_g']:g} | "
-                  f"{r['max_residual_mm']:.2f} | {', '.join(map(str, r['stones']))} | {r['max_residual_3d_mm']:.2f} | "
+                  f"{_residual_cell(r, 'max_residual_mm')} | {', '.join(map(str, r['stones']))} | "
+                  f"{_residual_cell(r, 'max_residual_3d_mm')} | "
                   f"{len(r['moved'])} | {', '.join(map(str, r['collapsed'])) or '-'} | {_settled_text(r['settled'])} |"
                   for r in res]
+        lines += ["", "A run with collapsed stones has no residual: a stone past its seat falls off the platform "
+                      "and keeps falling (its displacement is a fall height, not a residual)."]
         for f in sorted({r["frequency_hz"] for r in res}):
             sub = [r for r in res if r["frequency_hz"] == f]
             lines.append(f"![resonance {f:.3f} Hz]("

@@ -1,0 +1,280 @@
+"""Lognormal fragility functions by binomial maximum likelihood (pure numpy/scipy, no YADE).
+
+A fragility function gives the probability that a damage state (DS) is reached or
+exceeded at an intensity measure IM = x (here PGA in g):
+
+    P(DS | IM = x) = Phi(ln(x / theta) / beta)
+
+with median theta (g) and logarithmic dispersion beta. From a multiple-stripe analysis
+(n_j runs at IM x_j, z_j of which reach the DS) the parameters are estimated by
+maximising the binomial likelihood over the stripes (Baker 2015, "Efficient analytical
+fragility function fitting using dynamic structural analysis", Earthquake Spectra 31(1),
+579-599, Eq. 11):
+
+    L(theta, beta) = prod_j C(n_j, z_j) p_j^z_j (1 - p_j)^(n_j - z_j),  p_j = Phi(ln(x_j/theta)/beta)
+
+Stripes with 0 % or 100 % exceedance enter the likelihood like any other (unlike a
+regression on the observed fractions, which cannot take probit(0) or probit(1)).
+
+Written as a probit regression, p_j = Phi(a + b ln x_j) with b = 1/beta and
+a = -ln(theta)/beta, the log-likelihood is concave in (a, b), so a maximum, when it
+exists, is unique and the optimiser (scipy.optimize.minimize, exact gradient and
+Hessian) finds it from any start. It exists (finite theta and beta > 0) if and only if the
+runs that reach the DS and those that do not overlap in IM: the smallest IM at which some
+run reached the DS is below the largest IM at which some run did not. Otherwise
+``fit`` raises ``FitError`` saying why (no exceedance at all, every run exceeding, or a
+jump from 0 % to 100 % between or at one stripe: the likelihood then keeps growing as
+beta -> 0 and only a bracket of theta can be given). Fewer than 2 stripes cannot identify
+two parameters and are refused as well.
+
+Confidence: ``bootstrap`` resamples the runs within each stripe (with replacement, n_j
+of them, seeded), refits, and gives percentile intervals of theta and beta and pointwise
+bands of the curve; replicates whose resample has no finite maximum are counted
+(``failed``) and left out. ``standard_errors`` gives the asymptotic (Fisher information)
+standard errors of ln(theta) and beta.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+from scipy import optimize, stats
+from scipy.special import log_ndtr, ndtr
+
+_LOG_SQRT_2PI = 0.5 * math.log(2 * math.pi)
+
+
+class FitError(ValueError):
+    """No lognormal fragility can be fitted to these data (the message says why)."""
+
+
+@dataclass
+class Fit:
+    """Maximum-likelihood lognormal fragility: median ``theta`` (IM units) and dispersion ``beta``."""
+
+    theta: float
+    beta: float
+    loglik: float
+    n_stripes: int
+    n_runs: int
+    n_exceed: int
+    se_ln_theta: float | None = None
+    se_beta: float | None = None
+    iterations: int = 0
+    stripes: list = field(default_factory=list)  # [im, n, z] per stripe
+
+    def probability(self, x) -> np.ndarray:
+        return probability(x, self.theta, self.beta)
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def probability(x, theta: float, beta: float) -> np.ndarray:
+    """P(DS | IM = x) = Phi(ln(x / theta) / beta)."""
+    x = np.asarray(x, float)
+    with np.errstate(divide="ignore"):
+        return ndtr(np.log(x / theta) / beta)
+
+
+def stripes_from_runs(im, exceeded) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Group runs (IM of each run, exceeded 0/1 or bool) into stripes: (x_j, n_j, z_j),
+    x_j ascending. Runs whose IM agree to 1e-9 relative form one stripe."""
+    im = np.asarray(im, float)
+    ex = np.asarray(exceeded).astype(bool)
+    if im.shape != ex.shape or im.ndim != 1:
+        raise ValueError(f"im and exceeded must be 1-D arrays of one length, got {im.shape} and {ex.shape}")
+    keys = np.round(np.log(im) * 1e9) if np.all(im > 0) else im
+    xs, n, z = [], [], []
+    for k in np.unique(keys):
+        sel = keys == k
+        xs.append(float(im[sel][0]))
+        n.append(int(sel.sum()))
+        z.append(int(ex[sel].sum()))
+    order = np.argsort(xs)
+    return np.asarray(xs)[order], np.asarray(n)[order], np.asarray(z)[order]
+
+
+def _check(x, n, z) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    x, n, z = (np.asarray(v, float).ravel() for v in (x, n, z))
+    if not (len(x) == len(n) == len(z)):
+        raise ValueError(f"x, n, z must have one length, got {len(x)}, {len(n)}, {len(z)}")
+    if not np.all(np.isfinite(x)) or np.any(x <= 0):
+        raise ValueError(f"the intensity measure of every stripe must be a positive number, got {x.tolist()}")
+    if np.any(n < 0) or np.any(z < 0) or np.any(z > n) or np.any(n != np.round(n)) or np.any(z != np.round(z)):
+        raise ValueError(f"n (runs) and z (exceedances) must be integers with 0 <= z <= n, got n={n.tolist()}, "
+                         f"z={z.tolist()}")
+    keep = n > 0
+    return x[keep], n[keep], z[keep]
+
+
+def why_no_fit(x, n, z) -> str | None:
+    """The reason no finite maximum-likelihood fit exists, or None when it exists."""
+    x, n, z = _check(x, n, z)
+    ux = np.unique(x)
+    if len(ux) < 2:
+        return (f"{len(ux)} stripe(s) with runs: a median and a dispersion cannot both be identified from fewer than "
+                "2 intensity levels")
+    if z.sum() == 0:
+        return (f"no run reached the damage state (0 of {int(n.sum())} runs, stripes {_fmt(ux)}): the median is only "
+                f"known to lie above about {ux.max():g} and the data say nothing about the dispersion")
+    if z.sum() == n.sum():
+        return (f"every run reached the damage state ({int(n.sum())} of {int(n.sum())}, stripes {_fmt(ux)}): the "
+                f"median is only known to lie below about {ux.min():g}")
+    lo_exceed = x[z > 0].min()      # smallest IM at which some run exceeded
+    hi_survive = x[z < n].max()     # largest IM at which some run did not
+    if lo_exceed > hi_survive:
+        return (f"the observed fraction jumps from 0 % (at {hi_survive:g} and below) to 100 % (at {lo_exceed:g} and "
+                f"above) between two stripes (complete separation): the likelihood grows without bound as beta -> 0; "
+                f"the median lies between {hi_survive:g} and {lo_exceed:g} and the dispersion is not resolved by "
+                "these stripes (add runs or stripes in between)")
+    if lo_exceed == hi_survive:
+        below, above = (ux < lo_exceed).any(), (ux > lo_exceed).any()
+        return (f"the runs that reached the damage state and those that did not share only the stripe at "
+                f"{lo_exceed:g}" + (f" (none reached it below {lo_exceed:g}" if below else " (no stripe below it")
+                + (f", all did above it)" if above else ", no stripe above it)")
+                + f" (quasi-complete separation): the likelihood grows without bound as beta -> 0 with the median at "
+                f"{lo_exceed:g}; the dispersion is not resolved by these stripes (add runs or stripes)")
+    return None
+
+
+def _fmt(v) -> str:
+    return ", ".join(f"{a:g}" for a in v)
+
+
+def _negll(params, lx, n, z):
+    a, b = params
+    u = a + b * lx
+    return -float(np.sum(z * log_ndtr(u) + (n - z) * log_ndtr(-u)))
+
+
+def _mills(u):
+    """phi(u)/Phi(u) and phi(u)/(1 - Phi(u)), stable for large |u|."""
+    lphi = -0.5 * u * u - _LOG_SQRT_2PI
+    return np.exp(lphi - log_ndtr(u)), np.exp(lphi - log_ndtr(-u))
+
+
+def _grad(params, lx, n, z):
+    a, b = params
+    u = a + b * lx
+    r1, r0 = _mills(u)
+    s = z * r1 - (n - z) * r0           # d loglik / d u_j
+    return -np.array([s.sum(), (s * lx).sum()])
+
+
+def _hess(params, lx, n, z):
+    a, b = params
+    u = a + b * lx
+    r1, r0 = _mills(u)
+    # d2 loglik / du2 = -z r1 (u + r1) - (n - z) r0 (r0 - u)  (<= 0: concave)
+    w = z * r1 * (u + r1) + (n - z) * r0 * (r0 - u)
+    return np.array([[w.sum(), (w * lx).sum()], [(w * lx).sum(), (w * lx * lx).sum()]])
+
+
+def _start(lx, n, z) -> np.ndarray:
+    """A starting point: least squares of probit((z + 0.5)/(n + 1)) on ln x, weighted by n."""
+    q = stats.norm.ppf((z + 0.5) / (n + 1.0))
+    A = np.column_stack([np.ones_like(lx), lx]) * np.sqrt(n)[:, None]
+    a, b = np.linalg.lstsq(A, q * np.sqrt(n), rcond=None)[0]
+    if not np.isfinite(b) or b <= 0:
+        b = 1.0 / 0.5
+        a = -b * float(np.average(lx, weights=n))
+    return np.array([a, b])
+
+
+def fisher_information(x, n, theta: float, beta: float) -> np.ndarray:
+    """Expected Fisher information of (a, b) = (-ln(theta)/beta, 1/beta) for stripes at x with
+    n runs each: sum_j n_j phi(u_j)^2 / (p_j (1 - p_j)) [1, ln x_j]^T [1, ln x_j]."""
+    lx = np.log(np.asarray(x, float))
+    n = np.asarray(n, float)
+    u = (lx - math.log(theta)) / beta
+    p = stats.norm.cdf(u)
+    w = n * stats.norm.pdf(u) ** 2 / np.maximum(p * (1 - p), 1e-300)
+    return np.array([[w.sum(), (w * lx).sum()], [(w * lx).sum(), (w * lx * lx).sum()]])
+
+
+def standard_errors(x, n, theta: float, beta: float) -> tuple[float, float]:
+    """Asymptotic standard errors (SE of ln theta, SE of beta) of the maximum-likelihood
+    estimates for n_j runs at each x_j, by the delta method from the Fisher information
+    of (a, b): ln theta = -a/b, beta = 1/b."""
+    cov = np.linalg.inv(fisher_information(x, n, theta, beta))
+    b = 1.0 / beta
+    a = -math.log(theta) * b
+    j_lnt = np.array([-1.0 / b, a / b ** 2])    # d(-a/b)/d(a, b)
+    j_beta = np.array([0.0, -1.0 / b ** 2])     # d(1/b)/d(a, b)
+    return float(math.sqrt(j_lnt @ cov @ j_lnt)), float(math.sqrt(j_beta @ cov @ j_beta))
+
+
+def fit(x, n, z) -> Fit:
+    """Maximum-likelihood lognormal fragility for stripes at IM ``x`` (> 0) with ``n`` runs
+    and ``z`` exceedances each. Raises FitError when no finite maximum exists (see
+    ``why_no_fit``), ValueError on malformed input."""
+    x, n, z = _check(x, n, z)
+    reason = why_no_fit(x, n, z)
+    if reason:
+        raise FitError(reason)
+    lx = np.log(x)
+    res = optimize.minimize(_negll, _start(lx, n, z), args=(lx, n, z), jac=_grad, hess=_hess,
+                            method="trust-exact", options={"gtol": 1e-10, "maxiter": 500})
+    a, b = res.x
+    g = np.abs(_grad(res.x, lx, n, z)).max()
+    if not np.all(np.isfinite(res.x)) or g > 1e-6 * max(1.0, float(n.sum())):
+        raise FitError(f"the optimiser did not converge ({res.message}; gradient {g:.2g})")
+    if b <= 0:  # cannot happen for overlapping data with probability increasing in x, but say so if it does
+        raise FitError(f"the fitted probability decreases with the intensity measure (slope {b:.3g}): the data do "
+                       "not describe a fragility")
+    theta, beta = math.exp(-a / b), 1.0 / b
+    try:
+        se_t, se_b = standard_errors(x, n, theta, beta)
+    except np.linalg.LinAlgError:
+        se_t = se_b = None
+    return Fit(theta=theta, beta=beta, loglik=-float(res.fun) + _log_binom(n, z), n_stripes=len(np.unique(x)),
+               n_runs=int(n.sum()), n_exceed=int(z.sum()), se_ln_theta=se_t, se_beta=se_b, iterations=int(res.nit),
+               stripes=[[float(a_), int(b_), int(c_)] for a_, b_, c_ in zip(x, n, z)])
+
+
+def _log_binom(n, z) -> float:
+    from scipy.special import gammaln
+
+    return float(np.sum(gammaln(n + 1) - gammaln(z + 1) - gammaln(n - z + 1)))
+
+
+def fit_runs(im, exceeded) -> Fit:
+    """``fit`` on runs given one by one (IM of each run, exceeded or not)."""
+    return fit(*stripes_from_runs(im, exceeded))
+
+
+def bootstrap(x, n, z, n_boot: int = 1000, seed: int = 0, grid=None, level: float = 0.95) -> dict:
+    """Non-parametric bootstrap: each replicate resamples the n_j runs of every stripe with
+    replacement (so its exceedance count is Binomial(n_j, z_j/n_j)), refits, and the
+    ``level`` percentile intervals of theta and beta and pointwise bands of P(DS | x) on
+    ``grid`` are returned. Replicates with no finite maximum (a resample that is
+    separated) are counted in ``failed`` and left out; the fraction is reported so that a
+    band built from few replicates is not mistaken for a tight one."""
+    x, n, z = _check(x, n, z)
+    rng = np.random.default_rng(seed)
+    grid = np.geomspace(x.min() / 2, x.max() * 1.5, 200) if grid is None else np.asarray(grid, float)
+    thetas, betas, curves = [], [], []
+    failed = 0
+    p = z / n
+    for _ in range(n_boot):
+        zb = rng.binomial(n.astype(int), p)
+        try:
+            f = fit(x, n, zb)
+        except FitError:
+            failed += 1
+            continue
+        thetas.append(f.theta)
+        betas.append(f.beta)
+        curves.append(probability(grid, f.theta, f.beta))
+    lo, hi = 50 * (1 - level), 50 * (1 + level)
+    out = {"n_boot": n_boot, "seed": seed, "level": level, "failed": failed, "grid": grid.tolist()}
+    if not thetas:
+        out.update(theta_ci=None, beta_ci=None, band_lo=None, band_hi=None)
+        return out
+    curves = np.array(curves)
+    out.update(theta_ci=[float(np.percentile(thetas, lo)), float(np.percentile(thetas, hi))],
+               beta_ci=[float(np.percentile(betas, lo)), float(np.percentile(betas, hi))],
+               band_lo=np.percentile(curves, lo, axis=0).tolist(), band_hi=np.percentile(curves, hi, axis=0).tolist())
+    return out

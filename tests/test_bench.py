@@ -1,0 +1,131 @@
+"""The bench's pure parts (drystone/bench.py): the fits, the walls it builds, the thread
+recommendation, the settled configuration it times the contact search on. No timing."""
+import json
+import math
+
+import numpy as np
+import pytest
+
+from drystone import bench, rotations
+from drystone import overlap as ov
+
+
+def test_growth_exponent_is_the_log_log_slope():
+    n = np.array([40, 500, 2000])
+    assert bench.growth_exponent(n, 3.0 * n ** 1.1) == pytest.approx(1.1, rel=1e-12)
+    assert bench.growth_exponent(n, 0.2 * n) == pytest.approx(1.0, rel=1e-12)
+    # least squares through three scattered points: the slope of the fit line
+    cost = np.array([2.0, 30.0, 100.0])
+    assert bench.growth_exponent(n, cost) == pytest.approx(np.polyfit(np.log(n), np.log(cost), 1)[0])
+    assert math.isnan(bench.growth_exponent([500], [3.0]))
+    assert math.isnan(bench.growth_exponent([500, 500], [3.0, 4.0]))
+
+
+def test_steady_rate_separates_start_up_and_steps():
+    ms, start = bench.steady_rate(20, 1.0 + 20 * 0.004, 680, 1.0 + 680 * 0.004)
+    assert ms == pytest.approx(4.0) and start == pytest.approx(1.0)
+    with pytest.raises(ValueError):
+        bench.steady_rate(20, 1.0, 20, 2.0)
+    assert not bench.disturbed(4.0, 1.0) and bench.disturbed(-1.0, 1.0) and bench.disturbed(4.0, 1.0, True)
+    # a kernel compiled during the short run (30 s): a start-up of half a minute
+    ms, start = bench.steady_rate(20, 31.0 + 20 * 0.004, 680, 1.0 + 680 * 0.004)
+    assert bench.disturbed(ms, start)
+    assert bench.sources_stamp() > 0
+
+
+@pytest.mark.parametrize("size, courses, per", [(40, 5, 8), (500, 20, 25), (2000, 40, 50)])
+def test_running_bond_walls_have_courses_times_per_course_stones(size, courses, per):
+    geo = bench.wall_geometry("running_bond", size)
+    data = bench.build_wall(geo)
+    assert bench.stone_count(data) == size == courses * per
+    assert sum(b["role"] == "fixed" for b in data["blocks"]) == per  # the first course
+    assert sum(b["role"] == "platform" for b in data["blocks"]) == 1
+    v = np.array([b["vertices"] for b in data["blocks"] if b["role"] != "platform"])
+    ext = v.max(axis=1) - v.min(axis=1)  # per stone: length, thickness, height
+    assert np.allclose(ext[:, 2], bench.COURSE_HEIGHT) and np.allclose(ext[:, 1], bench.THICKNESS)
+    assert 0.5 * bench.STONE_LENGTH - 1e-9 <= ext[:, 0].min() and ext[:, 0].max() <= 1.5 * bench.STONE_LENGTH + 1e-9
+
+
+@pytest.mark.parametrize("size, count", [(40, 42), (500, 498), (2000, 2012)])
+def test_irregular_walls_stone_counts(size, count):
+    """Seed 0's counts (the bench reports them); within 5 % of the size asked."""
+    data = bench.build_wall(bench.wall_geometry("irregular", size))
+    assert bench.stone_count(data) == count
+    assert abs(count - size) <= 0.05 * size + 2
+
+
+def test_wall_geometry_refuses_unknown_kinds_and_sizes():
+    with pytest.raises(ValueError):
+        bench.wall_geometry("herringbone", 500)
+    with pytest.raises(ValueError):
+        bench.wall_geometry("running_bond", 1000)
+
+
+def test_time_step_is_the_runners():
+    """The 40-block wall's step (the one its runs report: safety 0.5 x critical)."""
+    assert bench.time_step(bench.build_wall(bench.CASE["case"]["geometry"])) == pytest.approx(5.988554740864951e-4,
+                                                                                              rel=1e-12)
+
+
+def test_small_walls_run_more_steps():
+    assert bench.scale_steps(300, 40) == 1200 and bench.scale_steps(300, 500) == bench.scale_steps(300, 2000) == 300
+
+
+def test_cases_have_the_steps_asked():
+    geo = bench.wall_geometry("running_bond", 40)
+    c = bench.scale_case(geo, 4e-4, 300)
+    assert c["stages"][0]["duration"] / 4e-4 == pytest.approx(300)
+    assert c["output"]["interval"] == pytest.approx(300 * 4e-4 / 5)
+    w = bench.warm_case(c, 4e-4, 20)
+    assert w["case"]["geometry"] == geo and w["stages"] == [{"type": "gravity", "duration": 20 * 4e-4,
+                                                              "ramp": 10 * 4e-4}]
+    assert c["stages"][0]["duration"] == pytest.approx(300 * 4e-4)  # the original is unchanged
+
+
+def test_thread_recommendation():
+    def rows(a1, a2, s1, s2):
+        return [{"threads": 1, "second_run": False, "ms_per_step": a1}, {"threads": 2, "second_run": False,
+                                                                         "ms_per_step": a2},
+                {"threads": 1, "second_run": True, "ms_per_step": s1}, {"threads": 2, "second_run": True,
+                                                                        "ms_per_step": s2}]
+    assert bench.recommend_threads(rows(4.0, 2.5, 6.0, 4.0))[0] == 2
+    assert bench.recommend_threads(rows(4.0, 2.5, 6.0, 7.0))[0] == 1  # two threads lose with a second run
+    assert bench.recommend_threads(rows(4.0, 4.2, 6.0, 5.0))[0] == 1
+    assert "1.60x" in bench.recommend_threads(rows(4.0, 2.5, 6.0, 4.0))[1]
+
+
+def test_engine_supported_reads_the_signature(monkeypatch):
+    monkeypatch.setattr(bench.runner, "run_dict", lambda case_dict, case_path, overrides=None, engine="x": None)
+    assert bench.engine_supported()
+    monkeypatch.setattr(bench.runner, "run_dict", lambda case_dict, case_path, overrides=None, **kw: None)
+    monkeypatch.setattr(bench.runner, "run", lambda case_path, overrides=None, threads=1: None)
+    assert not bench.engine_supported()
+    monkeypatch.setattr(bench.runner, "run", lambda case_path, overrides=None, threads=1, engine="x": None)
+    assert bench.engine_supported()
+
+
+def test_write_results_keeps_the_sections_not_run(tmp_path):
+    p = tmp_path / "bench.json"
+    bench.write_results({"scale": {"a": 1}, "machine": {"cores": 2}}, p)
+    bench.write_results({"threads": {"b": 2}, "machine": {"cores": 4}}, p)
+    assert json.loads(p.read_text()) == {"scale": {"a": 1}, "threads": {"b": 2}, "machine": {"cores": 4}}
+
+
+def test_settled_configuration_places_the_blocks(tmp_path):
+    """A run's last state (YADE's body frames: origin at the centroid, any orientation)
+    back to the vertices: a block turned 90 degrees about z and lifted, one fixed."""
+    box = [[x, y, z] for x in (0.0, 2.0) for y in (0.0, 1.0) for z in (0.0, 0.5)]
+    spec = {"blocks": [{"id": 0, "role": "platform", "vertices": [[x, y, z - 0.5] for x, y, z in box]},
+                       {"id": 7, "role": "free", "vertices": box}]}
+    (tmp_path / "spec.json").write_text(json.dumps(spec))
+    q0 = np.array([0.0, 0.0, np.sin(0.1), np.cos(0.1)])  # a body frame turned from the world's
+    qz = np.array([0.0, 0.0, np.sin(np.pi / 4), np.cos(np.pi / 4)])  # then 90 degrees about z
+    q1 = rotations.multiply(qz, q0)
+    np.savez(tmp_path / "histories.npz", block_ids=np.array([7]), pos0=np.array([[1.0, 0.5, 0.25]]),
+             quat0=q0[None], pos=np.array([[[1.0, 0.5, 0.25]], [[0.0, 0.0, 1.0]]]), quat=np.stack([q0, q1])[:, None])
+    s, pos, rot, moving = bench.settled_configuration(tmp_path)
+    assert list(moving) == [False, True]
+    GV = ov._global_geometry(s.verts, s.nv, s.normals, s.offsets, s.nf, pos, rot)[0]
+    v = GV[1][:8]
+    assert v.min(axis=0) == pytest.approx([-0.5, -1.0, 0.75]) and v.max(axis=0) == pytest.approx([0.5, 1.0, 1.25])
+    assert GV[0][:8].min(axis=0) == pytest.approx([0.0, 0.0, -0.5])
