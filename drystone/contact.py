@@ -297,12 +297,13 @@ def _jacobi_sqrt(B, out, A, V):
             scale += A[i, i] * A[i, i]
             for j in range(i + 1, n):
                 off += A[i, j] * A[i, j]
-        if off <= 1e-30 * scale or scale == 0.0:
+        if off <= 1e-26 * scale or scale == 0.0:
             break
         for p in range(n - 1):
             for q in range(p + 1, n):
                 apq = A[p, q]
-                if apq == 0.0:
+                # an element below round-off of both diagonal entries is already zero
+                if abs(apq) <= 1e-17 * (abs(A[p, p]) + abs(A[q, q])):
                     continue
                 theta = (A[q, q] - A[p, p]) / (2.0 * apq)
                 t = (1.0 if theta >= 0 else -1.0) / (abs(theta) + np.sqrt(theta * theta + 1.0))

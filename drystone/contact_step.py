@@ -273,6 +273,7 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, a
     iia = np.empty((m, 3, 3))
     iib = np.empty((m, 3, 3))
     lever = np.empty((m, 3))
+    vr = np.empty(3)
     for k in range(m):
         a = ia[k]
         b = ib[k]
@@ -283,20 +284,27 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, a
             pa[k, q] = pc[k, q] - pos[a, q]
             pb[k, q] = pc[k, q] - pos[b, q]
             lever[k, q] = c[k, q] - pc[k, q]
-        # shear spring at the overlap centroid (contact.shear_spring)
-        vb = vel[b] + law._cross3(angvel[b], rb[k])
-        va = vel[a] + law._cross3(angvel[a], ra[k])
-        vr = vb - va
+        # shear spring at the overlap centroid (contact.shear_spring); B's velocity
+        # relative to A there: (v_b + w_b x r_b) - (v_a + w_a x r_a)
+        vr[0] = (vel[b, 0] + (angvel[b, 1] * rb[k, 2] - angvel[b, 2] * rb[k, 1])) \
+            - (vel[a, 0] + (angvel[a, 1] * ra[k, 2] - angvel[a, 2] * ra[k, 1]))
+        vr[1] = (vel[b, 1] + (angvel[b, 2] * rb[k, 0] - angvel[b, 0] * rb[k, 2])) \
+            - (vel[a, 1] + (angvel[a, 2] * ra[k, 0] - angvel[a, 0] * ra[k, 2]))
+        vr[2] = (vel[b, 2] + (angvel[b, 0] * rb[k, 1] - angvel[b, 1] * rb[k, 0])) \
+            - (vel[a, 2] + (angvel[a, 0] * ra[k, 1] - angvel[a, 1] * ra[k, 0]))
         vn = vr[0] * nk[0] + vr[1] * nk[1] + vr[2] * nk[2]
         f0 = fs_prev[k]
         mag = np.sqrt(f0[0] ** 2 + f0[1] ** 2 + f0[2] ** 2)
         f0n = f0[0] * nk[0] + f0[1] * nk[1] + f0[2] * nk[2]
-        proj = f0 - f0n * nk
-        pm = np.sqrt(proj[0] ** 2 + proj[1] ** 2 + proj[2] ** 2)
+        p0 = f0[0] - f0n * nk[0]
+        p1 = f0[1] - f0n * nk[1]
+        p2 = f0[2] - f0n * nk[2]
+        pm = np.sqrt(p0 ** 2 + p1 ** 2 + p2 ** 2)
         sc = mag / pm if pm > 0.0 else 0.0
         kta = kt[k] * area[k]
-        for q in range(3):
-            fs[k, q] = proj[q] * sc - kta * (vr[q] - vn * nk[q]) * dt
+        fs[k, 0] = p0 * sc - kta * (vr[0] - vn * nk[0]) * dt
+        fs[k, 1] = p1 * sc - kta * (vr[1] - vn * nk[1]) * dt
+        fs[k, 2] = p2 * sc - kta * (vr[2] - vn * nk[2]) * dt
         fm = np.sqrt(fs[k, 0] ** 2 + fs[k, 1] ** 2 + fs[k, 2] ** 2)
         fmax = mu[k] * fn[k]
         if fm > fmax:
@@ -305,10 +313,13 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, a
             for q in range(3):
                 fs[k, q] *= s
         # relative twist at the patch centroid, global inverse inertias
-        wb = vel[b] + law._cross3(angvel[b], pb[k])
-        wa = vel[a] + law._cross3(angvel[a], pa[k])
+        twist[k, 0] = (vel[b, 0] + (angvel[b, 1] * pb[k, 2] - angvel[b, 2] * pb[k, 1])) \
+            - (vel[a, 0] + (angvel[a, 1] * pa[k, 2] - angvel[a, 2] * pa[k, 1]))
+        twist[k, 1] = (vel[b, 1] + (angvel[b, 2] * pb[k, 0] - angvel[b, 0] * pb[k, 2])) \
+            - (vel[a, 1] + (angvel[a, 2] * pa[k, 0] - angvel[a, 0] * pa[k, 2]))
+        twist[k, 2] = (vel[b, 2] + (angvel[b, 0] * pb[k, 1] - angvel[b, 1] * pb[k, 0])) \
+            - (vel[a, 2] + (angvel[a, 0] * pa[k, 1] - angvel[a, 1] * pa[k, 0]))
         for q in range(3):
-            twist[k, q] = wb[q] - wa[q]
             twist[k, 3 + q] = angvel[b, q] - angvel[a, q]
         _global_inverse(rot[a], inv_inertia_local[a], iia[k])
         _global_inverse(rot[b], inv_inertia_local[b], iib[k])
@@ -322,15 +333,21 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, a
     for k in range(m):
         a = ia[k]
         b = ib[k]
-        fc = fs[k] + fn[k] * n[k]
-        f = fc + fd[k]
-        tb = law._cross3(rb[k], fc) + law._cross3(pb[k], fd[k]) + md[k]
-        ta = law._cross3(ra[k], fc) + law._cross3(pa[k], fd[k]) + md[k]
         for q in range(3):
-            F[b, q] += f[q]
-            F[a, q] -= f[q]
-            T[b, q] += tb[q]
-            T[a, q] -= ta[q]
+            fc = fs[k, q] + fn[k] * n[k, q]
+            F[b, q] += fc + fd[k, q]
+            F[a, q] -= fc + fd[k, q]
+        # torques: r x f_c at the overlap centroid, p x f_d at the patch centroid, + m_d
+        fc0 = fs[k, 0] + fn[k] * n[k, 0]
+        fc1 = fs[k, 1] + fn[k] * n[k, 1]
+        fc2 = fs[k, 2] + fn[k] * n[k, 2]
+        d0, d1, d2 = fd[k, 0], fd[k, 1], fd[k, 2]
+        T[b, 0] += (rb[k, 1] * fc2 - rb[k, 2] * fc1) + (pb[k, 1] * d2 - pb[k, 2] * d1) + md[k, 0]
+        T[b, 1] += (rb[k, 2] * fc0 - rb[k, 0] * fc2) + (pb[k, 2] * d0 - pb[k, 0] * d2) + md[k, 1]
+        T[b, 2] += (rb[k, 0] * fc1 - rb[k, 1] * fc0) + (pb[k, 0] * d1 - pb[k, 1] * d0) + md[k, 2]
+        T[a, 0] -= (ra[k, 1] * fc2 - ra[k, 2] * fc1) + (pa[k, 1] * d2 - pa[k, 2] * d1) + md[k, 0]
+        T[a, 1] -= (ra[k, 2] * fc0 - ra[k, 0] * fc2) + (pa[k, 2] * d0 - pa[k, 0] * d2) + md[k, 1]
+        T[a, 2] -= (ra[k, 0] * fc1 - ra[k, 1] * fc0) + (pa[k, 0] * d1 - pa[k, 1] * d0) + md[k, 2]
         if area[k] > 0.0:
             e_el += 0.5 * fn[k] * vol[k] / area[k] + (fs[k, 0] ** 2 + fs[k, 1] ** 2 + fs[k, 2] ** 2) / (
                 2.0 * kt[k] * area[k])

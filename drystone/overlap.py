@@ -145,7 +145,23 @@ def _faces_inside(V, F, FK, nf, N1, D1, N2, D2, nf2, dedup, tol, polys, counts, 
         for q in range(k):
             A[q] = V[F[f, q]]
         for p in range(nf2):
-            k = _clip(A, k, N2[p, 0], N2[p, 1], N2[p, 2], D2[p], B)
+            # a plane with the whole polygon on its inner side leaves it unchanged (the clip
+            # would copy it as it is), one with all of it strictly outside removes it
+            n0, n1, n2, d = N2[p, 0], N2[p, 1], N2[p, 2], D2[p]
+            smax = -np.inf
+            smin = np.inf
+            for q in range(k):
+                sq = n0 * A[q, 0] + n1 * A[q, 1] + n2 * A[q, 2] + d
+                if sq > smax or sq != sq:  # NaN (a blown-up body): the clip decides, as before
+                    smax = np.inf if sq != sq else sq
+                if sq < smin or sq != sq:
+                    smin = -np.inf if sq != sq else sq
+            if smax <= 0.0:
+                continue
+            if smin > 0.0:
+                k = 0
+                break
+            k = _clip(A, k, n0, n1, n2, d, B)
             if k < 3:
                 break
             for q in range(k):
@@ -172,19 +188,24 @@ def pair(VA, FA, FKA, nfa, NA, DA, VB, FB, FKB, nfb, NB, DB, tol):
 @njit(cache=True)
 def _volume(polys, counts, na, nt):
     """Volume, centroid and dV/dx_B of the overlap bounded by ``polys[:nt]`` (the first
-    ``na`` from A's faces)."""
+    ``na`` from A's faces). Scalar arithmetic (no temporaries: this runs for every pair)."""
     cen = np.zeros(3)
     g = np.zeros(3)
     if nt == 0:
         return 0.0, cen, g
-    r = np.zeros(3)
+    r0 = r1 = r2 = 0.0
     npts = 0
     for s in range(nt):
         for q in range(counts[s]):
-            r += polys[s, q]
+            r0 += polys[s, q, 0]
+            r1 += polys[s, q, 1]
+            r2 += polys[s, q, 2]
             npts += 1
-    r /= npts
+    r0 /= npts
+    r1 /= npts
+    r2 /= npts
     vol = 0.0
+    c0 = c1 = c2 = 0.0
     for s in range(nt):
         k = counts[s]
         P = polys[s]
@@ -193,17 +214,26 @@ def _volume(polys, counts, na, nt):
             g[0] += 0.5 * ax
             g[1] += 0.5 * ay
             g[2] += 0.5 * az
-        u = P[0] - r
+        ux = P[0, 0] - r0
+        uy = P[0, 1] - r1
+        uz = P[0, 2] - r2
         for q in range(1, k - 1):
-            v = P[q] - r
-            w = P[q + 1] - r
-            v6 = u[0] * (v[1] * w[2] - v[2] * w[1]) + u[1] * (v[2] * w[0] - v[0] * w[2]) \
-                + u[2] * (v[0] * w[1] - v[1] * w[0])
+            vx = P[q, 0] - r0
+            vy = P[q, 1] - r1
+            vz = P[q, 2] - r2
+            wx = P[q + 1, 0] - r0
+            wy = P[q + 1, 1] - r1
+            wz = P[q + 1, 2] - r2
+            v6 = ux * (vy * wz - vz * wy) + uy * (vz * wx - vx * wz) + uz * (vx * wy - vy * wx)
             vol += v6
-            cen += v6 * (u + v + w)
+            c0 += v6 * (ux + vx + wx)
+            c1 += v6 * (uy + vy + wy)
+            c2 += v6 * (uz + vz + wz)
     if vol <= 0.0:
         return 0.0, np.zeros(3), np.zeros(3)
-    cen = r + cen / (4.0 * vol)
+    cen[0] = r0 + c0 / (4.0 * vol)
+    cen[1] = r1 + c1 / (4.0 * vol)
+    cen[2] = r2 + c2 / (4.0 * vol)
     return vol / 6.0, cen, g
 
 
@@ -211,7 +241,7 @@ def _volume(polys, counts, na, nt):
 def _patch(polys, counts, first, last, cen, g):
     """Footprint of the overlap (module docstring) from the faces of B inside A
     (``polys[first:last]``): (area m^2, centroid p (3,), second moment about p (3, 3) m^4,
-    projected on the plane normal to n = -g/|g|)."""
+    projected on the plane normal to n = -g/|g|). Scalar arithmetic, as ``_volume``."""
     ga = np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
     s0 = 0.0
     s1 = np.zeros(3)
@@ -219,6 +249,10 @@ def _patch(polys, counts, first, last, cen, g):
     if ga <= 0.0:
         return 0.0, cen.copy(), s2
     n = -g / ga
+    x0 = np.empty(3)
+    x1 = np.empty(3)
+    x2 = np.empty(3)
+    sm = np.empty(3)
     for s in range(first, last):
         k = counts[s]
         P = polys[s]
@@ -227,29 +261,48 @@ def _patch(polys, counts, first, last, cen, g):
         if am <= 0.0:
             continue
         w = -(ax * n[0] + ay * n[1] + az * n[2]) / am  # cosine between the face normal and -n
-        x0 = P[0] - cen
+        for a in range(3):
+            x0[a] = P[0, a] - cen[a]
         for q in range(1, k - 1):
-            x1 = P[q] - cen
-            x2 = P[q + 1] - cen
+            for a in range(3):
+                x1[a] = P[q, a] - cen[a]
+                x2[a] = P[q + 1, a] - cen[a]
             cx = (x1[1] - x0[1]) * (x2[2] - x0[2]) - (x1[2] - x0[2]) * (x2[1] - x0[1])
             cy = (x1[2] - x0[2]) * (x2[0] - x0[0]) - (x1[0] - x0[0]) * (x2[2] - x0[2])
             cz = (x1[0] - x0[0]) * (x2[1] - x0[1]) - (x1[1] - x0[1]) * (x2[0] - x0[0])
             at = 0.5 * np.sqrt(cx * cx + cy * cy + cz * cz) * w
-            sm = x0 + x1 + x2
+            for a in range(3):
+                sm[a] = x0[a] + x1[a] + x2[a]
             s0 += at
-            s1 += at * sm / 3.0
+            for a in range(3):
+                s1[a] += at * sm[a] / 3.0
             for a in range(3):
                 for b in range(3):
                     s2[a, b] += at / 12.0 * (x0[a] * x0[b] + x1[a] * x1[b] + x2[a] * x2[b] + sm[a] * sm[b])
     if s0 <= 0.0:
         return 0.0, cen.copy(), np.zeros((3, 3))
+    # projections on the plane normal to n: centroid and second moment about it
     pr = np.eye(3)
     for a in range(3):
         for b in range(3):
             pr[a, b] -= n[a] * n[b]
     c1 = s1 / s0
-    m2 = s2 - s0 * np.outer(c1, c1)
-    return s0, cen + pr @ c1, pr @ m2 @ pr
+    m2 = np.empty((3, 3))
+    for a in range(3):
+        for b in range(3):
+            m2[a, b] = s2[a, b] - s0 * (c1[a] * c1[b])
+    p = cen.copy()
+    for a in range(3):
+        p[a] += pr[a, 0] * c1[0] + pr[a, 1] * c1[1] + pr[a, 2] * c1[2]
+    t = np.empty((3, 3))
+    J = np.empty((3, 3))
+    for a in range(3):
+        for b in range(3):
+            t[a, b] = pr[a, 0] * m2[0, b] + pr[a, 1] * m2[1, b] + pr[a, 2] * m2[2, b]
+    for a in range(3):
+        for b in range(3):
+            J[a, b] = t[a, 0] * pr[0, b] + t[a, 1] * pr[1, b] + t[a, 2] * pr[2, b]
+    return s0, p, J
 
 
 @njit(cache=True)
