@@ -288,7 +288,7 @@ class Excitation(StageType):
                      "a(t) = -A sin(wt) from a base at rest (the base velocity grows from 0); 'displacement' = the "
                      "paper's Eq. 9, base displacement d(t) = A/w^2 sin(wt), whose velocity A/w cos(wt) jumps from 0 "
                      "to A/w at the start: every free block gets the relative velocity -A/w along 'direction' when "
-                     "the stage begins (derivation: drystone/runner.py initial_relative_velocity)", str,
+                     "the stage begins (derivation: drystone/stages.py initial_relative_velocity)", str,
                      ("rest", "displacement")),
     }
 

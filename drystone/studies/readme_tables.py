@@ -167,7 +167,57 @@ def identification(results: Path) -> str:
     return "\n\n".join(out) + "\n\n" + _source_note(p, results=results)
 
 
-BLOCKS = {"verification": verification, "tilt": tilt, "tilt_checks": tilt_checks, "ogawa": ogawa,
+def bench(results: Path) -> str:
+    """Speed figures of ``make bench`` (results/bench/bench.json): the 40-block wall per law,
+    geometry and engine; the large walls and the cost's growth with N; threads; the
+    Sacsayhuaman analyses against the paper's Abaqus times."""
+    p = results / "bench" / "bench.json"
+    d = _json(p)
+    out = []
+    m = d.get("machine") or d.get("running_bond_machine") or {}
+    if m:
+        load = m.get("load_average_at_start", [float("nan")])[0]
+        out.append(f"Machine: {m.get('cores', '?')} cores, load average {load:.2f} at the start, YADE "
+                   f"{m.get('yade_version', '?')}.")
+    rb = d.get("running_bond") or []
+    if rb:
+        out += ["", "40-block running-bond wall under gravity (ms per step; the engine: `compiled` = the numba "
+                    "step, `python` = the numpy law with YADE's integrator, `yade` = YADE's own law):", "",
+                "| law | contact geometry | engine | threads | ms/step | contacts |", "|---|---|---|---|---|---|"]
+        out += [f"| {r['law']} | {r['detection']} | {r.get('engine_used', r.get('engine'))} | {r['threads']} | "
+                f"{r['ms_per_step']:.2f} | {r['contacts']} |" for r in rb]
+    sc = (d.get("scale") or {}).get("rows") or []
+    if sc:
+        out += ["", "Large walls under gravity (one thread, native geometry):", "",
+                "| wall | stones | ms/step | contacts | µs per contact-step | contact search alone (ms) |",
+                "|---|---|---|---|---|---|"]
+        for r in sc:
+            if "failed" in r:
+                out.append(f"| {r['wall']} | {r['stones']} | failed | - | - | - |")
+                continue
+            out.append(f"| {r['wall']} | {r['stones']} | {r['ms_per_step']:.2f} | {r['final_contacts']} | "
+                       f"{r['us_per_contact_step']:.1f} | {r['search']['search_ms']:.2f} |")
+        g = d["scale"].get("growth_exponent") or {}
+        if g:
+            out += ["", "Cost ~ N^k: " + ", ".join(f"{k} k = {v:.2f}" for k, v in g.items()) + "."]
+    th = d.get("threads") or {}
+    if th.get("rows"):
+        out += ["", "Threads (40-block wall, ms/step): " + "; ".join(
+            f"-j {r['threads']} {'with a second run' if r.get('second_run') else 'alone'} {r['ms_per_step']:.2f}"
+            for r in th["rows"]) + f". Default -j {th['recommended_threads']}: {th['why']}."]
+    sa = d.get("sacsayhuaman") or []
+    if sa:
+        out += ["", f"Sacsayhuaman analyses, one core ({sa[0]['ms_per_step']:.2f} ms/step, {sa[0]['engine']} engine) "
+                    "against the paper's Abaqus/Explicit on 8 cores:", "",
+                "| analysis | simulated (s) | ours (s) | Abaqus (s) | ours / Abaqus |", "|---|---|---|---|---|"]
+        out += [f"| {r['analysis']} | {r['simulated_s']:.0f} | {r['estimated_wall_s']:.0f} | {r['abaqus_8_cores_s']:.0f} | "
+                f"{r['ratio_to_abaqus']:.3f} |" for r in sa]
+    if not out:
+        raise Missing(f"{p} has no section")
+    return "\n".join(out) + "\n\n" + _source_note(p, results=results)
+
+
+BLOCKS = {"bench": bench, "verification": verification, "tilt": tilt, "tilt_checks": tilt_checks, "ogawa": ogawa,
           "sacsayhuaman_table3": sacsayhuaman_table3, "free_decay": free_decay, "identification": identification}
 
 
