@@ -11,7 +11,7 @@ RUN     := $(PY) -m drystone
 
 .PHONY: setup system-deps test demo run gravity4 settlement4 bench clean help records spectrum ogawa3d ogawa \
         reference sweep tilt tilt-rate tilt-sensitivity tilt-report sacsayhuaman sacsayhuaman-report vtk ogawa-pga readme free-decay \
-        fragility fragility-small fragility-report
+        fragility fragility-small fragility-report crosscheck
 
 help:
 	@echo "make setup        install Debian's YADE, make .venv, install PyPI dependencies"
@@ -37,6 +37,7 @@ help:
 	@echo "make vtk DIR=results/<run> [EVERY=5]   VTK files of a finished run for ParaView (<run>/vtk/blocks.pvd)"
 	@echo "make fragility [DASK=...]      fragility curves: FEMA P695 far field (22 records) x PGA 0.1-1.0 g, mu and K_n drawn per run (220 runs; cost in results/fragility/report.md)"
 	@echo "make fragility-small           the fragility pipeline on 4 short runs (~2 min on 2 cores; not a result)"
+	@echo "make crosscheck [XC=all]   LMGC90 (rigid) vs this package: toppling block + half-sine pulse (~3 min); XC=all adds the 40-block wall (~10 min) and the 5 tilt walls (hours); skipped without compas_lmgc90"
 
 setup: system-deps $(STAMP)
 
@@ -47,10 +48,12 @@ system-deps:
 	  $(SUDO) apt-get update -qq && DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq $$missing; \
 	fi
 
-$(STAMP): requirements.txt requirements-nodeps.txt constraints.txt pyproject.toml | system-deps
+$(STAMP): requirements.txt requirements-nodeps.txt requirements-crosscheck.txt constraints.txt pyproject.toml | system-deps
 	@test -x $(PY) || /usr/bin/python3 -m venv --system-site-packages $(VENV)
 	$(PY) -m pip install -q --disable-pip-version-check -c constraints.txt -r requirements.txt
 	$(PY) -m pip install -q --disable-pip-version-check --no-deps -r requirements-nodeps.txt
+	$(PY) -m pip install -q --disable-pip-version-check -c constraints.txt --no-deps -r requirements-crosscheck.txt \
+	  || echo "setup: compas_lmgc90 (LMGC90, optional) not installed: make crosscheck will be skipped"
 	$(PY) -m pip install -q --disable-pip-version-check --no-deps --no-build-isolation -e .
 	$(PY) -c "import numpy, scipy; assert numpy.__version__ == '1.24.2' and scipy.__version__ == '1.10.1', 'numpy/scipy are not Debian''s'"
 	@touch $@
@@ -144,6 +147,9 @@ fragility-small: setup
 
 fragility-report: setup
 	$(PY) -m drystone.studies.fragility report --config full
+
+crosscheck: setup
+	$(PY) -m drystone.crosscheck $(or $(XC),small)
 
 clean:
 	rm -rf results .numba_cache

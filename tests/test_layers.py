@@ -35,7 +35,7 @@ def _layer(mod: str) -> int:
         return 4
     if mod in TOP:
         return 5
-    if mod.startswith("drystone.studies"):
+    if mod.startswith(("drystone.studies", "drystone.crosscheck")):
         return 6
     raise AssertionError(f"module {mod} has no layer: add it to tests/test_layers.py")
 
