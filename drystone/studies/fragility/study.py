@@ -376,8 +376,12 @@ def report(config="full", out_dir: Path | None = None, results: Path | None = No
         L.append(f"| {s['pga_g']:g} | {s['runs']} | "
                  + " | ".join(f"{e['stripes'][j]['exceeded']} ({100 * e['stripes'][j]['fraction']:.0f} %)"
                               for e in fits.values()) + " |")
-    L += ["", "## Fragility curves: P(DS | PGA) = Φ(ln(PGA/θ)/β)", "",
-          "Binomial maximum likelihood over the stripes (Baker 2015, Earthquake Spectra 31(1)); 95 % intervals from "
+    L += ["", "## Fragility curves: P(DS | PGA) = Φ(ln(PGA/θ)/β)", ""]
+    if data["runs"]["pending"] or data["runs"]["failed"]:
+        recs = sorted({r["record_name"] for r in rows if r["status"] == "done"})
+        L += [f"**Preliminary: fitted on the {data['runs']['done']} finished runs of {len(rows)} planned, records "
+              f"{', '.join(recs) or 'none'} only: curves of those records, not of the set.**", ""]
+    L += ["Binomial maximum likelihood over the stripes (Baker 2015, Earthquake Spectra 31(1)); 95 % intervals from "
           f"{cfg.n_boot} bootstrap replicates (runs resampled within each stripe, seeded) and, for comparison, "
           "±1.96 asymptotic standard errors (Fisher information).", "",
           "| DS | θ (g) | 95 % bootstrap | θ·exp(±1.96 SE) | β | 95 % bootstrap | β ± 1.96 SE "
