@@ -15,7 +15,7 @@ RUN     := $(PY) -m drystone
 
 help:
 	@echo "make setup        install Debian's YADE, make .venv, install PyPI dependencies"
-	@echo "make demo         the main job: verification cases + the 40-stone wall under one record at two PGAs (~8 min)"
+	@echo "make demo         the main job: verification cases + the 40-stone wall under one record at two PGAs (~3 min)"
 	@echo "make test         the test suite"
 	@echo "make run CASE=cases/x.toml [SET='key=value ...']   run any case file"
 	@echo "make gravity4 | settlement4   the paper's four-block verification cases"
