@@ -516,28 +516,9 @@ def _contacts_all_pairs(verts, nv, normals, offsets, nf, faces, fk, pos, rot, mo
     """Reference for ``contacts_with_patches``: every pair i < j tested on its bounding
     boxes, then clipped (the O(n^2) search it replaced, without the touching rule; for
     tests and the bench)."""
+    GV, GN, GD, lo, hi = _global_geometry(verts, nv, normals, offsets, nf, pos, rot)
     nb = len(nv)
-    maxv = verts.shape[1]
-    maxf = normals.shape[1]
-    GV = np.empty((nb, maxv, 3))
-    GN = np.empty((nb, maxf, 3))
-    GD = np.empty((nb, maxf))
-    lo = np.empty((nb, 3))
-    hi = np.empty((nb, 3))
-    for i in range(nb):
-        _to_global(verts, nv, normals, offsets, nf, pos, rot, i, GV[i], GN[i], GD[i])
-        for a in range(3):
-            lo[i, a] = GV[i, :nv[i], a].min()
-            hi[i, a] = GV[i, :nv[i], a].max()
-    cap = 16 * nb + 16
-    id1 = np.empty(cap, np.int64)
-    id2 = np.empty(cap, np.int64)
-    vol = np.empty(cap)
-    cen = np.empty((cap, 3))
-    nrm = np.empty((cap, 3))
-    area = np.empty(cap)
-    pc = np.empty((cap, 3))
-    pj = np.empty((cap, 3, 3))
+    keys = np.empty(nb * (nb - 1) // 2 + 1, np.int64)
     m = 0
     for i in range(nb):
         for j in range(i + 1, nb):
@@ -546,35 +527,10 @@ def _contacts_all_pairs(verts, nv, normals, offsets, nf, faces, fk, pos, rot, mo
             if lo[i, 0] > hi[j, 0] or lo[j, 0] > hi[i, 0] or lo[i, 1] > hi[j, 1] or lo[j, 1] > hi[i, 1] \
                     or lo[i, 2] > hi[j, 2] or lo[j, 2] > hi[i, 2]:
                 continue
-            v, c, g, pa, p, J = pair_patch(GV[i], faces[i], fk[i], nf[i], GN[i], GD[i], GV[j], faces[j], fk[j],
-                                           nf[j], GN[j], GD[j], tol)
-            if v <= 0.0:
-                continue
-            ga = np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
-            if ga <= 0.0:
-                continue
-            if m == cap:  # grow
-                cap *= 2
-                id1 = _grow_i(id1, cap)
-                id2 = _grow_i(id2, cap)
-                vol = _grow_f(vol, cap)
-                area = _grow_f(area, cap)
-                cen = _grow_3(cen, cap)
-                nrm = _grow_3(nrm, cap)
-                pc = _grow_3(pc, cap)
-                pj2 = np.empty((cap, 3, 3))
-                pj2[:m] = pj[:m]
-                pj = pj2
-            id1[m] = i
-            id2[m] = j
-            vol[m] = v
-            cen[m] = c
-            nrm[m] = -g / ga
-            area[m] = ga
-            pc[m] = p
-            pj[m] = J
+            keys[m] = i * nb + j
             m += 1
-    return id1[:m], id2[:m], vol[:m], cen[:m], nrm[:m], area[:m], pc[:m], pj[:m]
+    keys = keys[:m]
+    return _contacts_of_pairs(GV, GN, GD, nv, nf, faces, fk, keys // nb, keys % nb, tol, False)
 
 
 @njit(cache=True)
@@ -608,20 +564,6 @@ def patches_of_pairs(verts, nv, normals, offsets, nf, faces, fk, pos, rot, ia, i
 @njit(cache=True)
 def _grow_i(a, cap):
     b = np.empty(cap, np.int64)
-    b[:len(a)] = a
-    return b
-
-
-@njit(cache=True)
-def _grow_f(a, cap):
-    b = np.empty(cap)
-    b[:len(a)] = a
-    return b
-
-
-@njit(cache=True)
-def _grow_3(a, cap):
-    b = np.empty((cap, 3))
     b[:len(a)] = a
     return b
 
