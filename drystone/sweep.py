@@ -168,7 +168,11 @@ def finished(job: Job, fingerprint: str | None = None) -> bool:
         done = json.loads(s.read_text())["inputs"]["provenance"]["overrides"]
         if done != job.overrides or not _histories_intact(out):
             return False
-        return fingerprint is None or runner.fingerprint(json.loads((out / "spec.json").read_text())) == fingerprint
+        if fingerprint is None:
+            return True
+        spec = json.loads((out / "spec.json").read_text())
+        spec["out_dir"] = str(out)  # the folder may have moved since (a worktree, a copied results/)
+        return runner.fingerprint(spec) == fingerprint
     except (KeyError, TypeError, ValueError, OSError):  # unreadable, or not the dict a run writes
         return False
 

@@ -105,6 +105,25 @@ def test_sweep_reruns_a_run_with_corrupt_histories_or_a_non_dict_summary(tmp_pat
     assert not sweep.finished(job)  # no traceback: just not finished
 
 
+def test_a_finished_run_moved_to_another_folder_keeps_its_fingerprint(tmp_path):
+    """spec.json records the absolute folder it was written in; a results folder copied from
+    another checkout must still be recognised by what it simulates (its excitation file is
+    read beside it, not at the old path)."""
+    from drystone import runner
+
+    out = tmp_path / "moved" / "r"
+    _fake_run(out, ["a=1"])
+    np.save(out / "excitation_0.npy", np.array([0.0, 1.0, -1.0]))
+    stage = {"type": "record", "start": 0.0, "end": 1.0, "params": {"acc_file": "excitation_0.npy"}}
+    spec = {"format": "drystone-spec", "version": 2, "out_dir": str(tmp_path / "gone" / "r"), "stages": [stage]}
+    (out / "spec.json").write_text(json.dumps(spec))
+    job = sweep.Job("r", "case.toml", ["a=1"], str(out))
+    want = runner.fingerprint(dict(spec, out_dir=str(out)))
+    assert sweep.finished(job, want)
+    np.save(out / "excitation_0.npy", np.array([0.0, 1.0, -2.0]))  # another record: run again
+    assert not sweep.finished(job, want)
+
+
 # -- with YADE ----------------------------------------------------------------------------
 @requires_yade
 def test_a_failing_rerun_keeps_the_good_run(outdir):
