@@ -100,13 +100,14 @@ def _twice_area_vector(P, k):
 
 
 @njit(cache=True)
-def _clip(P, k, n0, n1, n2, d, Q):
-    """Sutherland-Hodgman: keep the part of polygon P[:k] with n.x + d <= 0; into Q."""
+def _clip(P, k, S, Q):
+    """Sutherland-Hodgman: keep the part of polygon P[:k] whose signed distances S[:k] to
+    a plane are <= 0; into Q. Returns the new vertex count."""
     m = 0
     for i in range(k):
         j = i + 1 if i + 1 < k else 0
-        sa = n0 * P[i, 0] + n1 * P[i, 1] + n2 * P[i, 2] + d
-        sb = n0 * P[j, 0] + n1 * P[j, 1] + n2 * P[j, 2] + d
+        sa = S[i]
+        sb = S[j]
         if sa <= 0.0:
             Q[m, 0] = P[i, 0]
             Q[m, 1] = P[i, 1]
@@ -122,14 +123,12 @@ def _clip(P, k, n0, n1, n2, d, Q):
 
 
 @njit(cache=True)
-def _faces_inside(V, F, FK, nf, N1, D1, N2, D2, nf2, dedup, tol, polys, counts, start):
+def _faces_inside(V, F, FK, nf, N1, D1, N2, D2, nf2, dedup, tol, polys, counts, start, A, B, S):
     """Clip every face of one body (global vertices V, planes N1, D1) to the other body's
     half-spaces (N2 x + D2 <= 0); store the non-empty polygons from index ``start``.
     With ``dedup``, a face lying in a plane of the other body with the same outward
     normal (within ``tol``) is skipped: the other body's face already bounds the overlap
-    there."""
-    A = np.empty((MAXV, 3))
-    B = np.empty((MAXV, 3))
+    there. A, B: (MAXV, 3) work arrays; S (MAXV,) the signed distances."""
     c = start
     for f in range(nf):
         if dedup:
@@ -142,8 +141,12 @@ def _faces_inside(V, F, FK, nf, N1, D1, N2, D2, nf2, dedup, tol, polys, counts, 
             if dup:
                 continue
         k = FK[f]
+        P = A
+        Q = B
         for q in range(k):
-            A[q] = V[F[f, q]]
+            P[q, 0] = V[F[f, q], 0]
+            P[q, 1] = V[F[f, q], 1]
+            P[q, 2] = V[F[f, q], 2]
         for p in range(nf2):
             # a plane with the whole polygon on its inner side leaves it unchanged (the clip
             # would copy it as it is), one with all of it strictly outside removes it
@@ -151,7 +154,8 @@ def _faces_inside(V, F, FK, nf, N1, D1, N2, D2, nf2, dedup, tol, polys, counts, 
             smax = -np.inf
             smin = np.inf
             for q in range(k):
-                sq = n0 * A[q, 0] + n1 * A[q, 1] + n2 * A[q, 2] + d
+                sq = n0 * P[q, 0] + n1 * P[q, 1] + n2 * P[q, 2] + d
+                S[q] = sq
                 if sq > smax or sq != sq:  # NaN (a blown-up body): the clip decides, as before
                     smax = np.inf if sq != sq else sq
                 if sq < smin or sq != sq:
@@ -161,38 +165,58 @@ def _faces_inside(V, F, FK, nf, N1, D1, N2, D2, nf2, dedup, tol, polys, counts, 
             if smin > 0.0:
                 k = 0
                 break
-            k = _clip(A, k, n0, n1, n2, d, B)
+            k = _clip(P, k, S, Q)
+            P, Q = Q, P  # the clipped polygon is the next one to clip
             if k < 3:
                 break
-            for q in range(k):
-                A[q] = B[q]
         if k >= 3:
             for q in range(k):
-                polys[c, q] = A[q]
+                polys[c, q, 0] = P[q, 0]
+                polys[c, q, 1] = P[q, 1]
+                polys[c, q, 2] = P[q, 2]
             counts[c] = k
             c += 1
     return c
 
 
 @njit(cache=True)
-def pair(VA, FA, FKA, nfa, NA, DA, VB, FB, FKB, nfb, NB, DB, tol):
-    """Overlap of bodies A and B (global frame). Returns (V, centroid (3,), g (3,)) with
-    g = dV/dx_B (m^2); V = 0 when they do not overlap."""
-    polys = np.empty((nfa + nfb, MAXV, 3))
-    counts = np.zeros(nfa + nfb, np.int64)
-    na = _faces_inside(VA, FA, FKA, nfa, NA, DA, NB, DB, nfb, False, tol, polys, counts, 0)
-    nt = _faces_inside(VB, FB, FKB, nfb, NB, DB, NA, DA, nfa, True, tol, polys, counts, na)
-    return _volume(polys, counts, na, nt)
+def _work(maxf):
+    """(polys, counts, A, B, S): the work arrays of ``_clip_pair`` for bodies of <= maxf faces."""
+    return (np.empty((2 * maxf, MAXV, 3)), np.zeros(2 * maxf, np.int64), np.empty((MAXV, 3)), np.empty((MAXV, 3)),
+            np.empty(MAXV))
 
 
 @njit(cache=True)
-def _volume(polys, counts, na, nt):
-    """Volume, centroid and dV/dx_B of the overlap bounded by ``polys[:nt]`` (the first
-    ``na`` from A's faces). Scalar arithmetic (no temporaries: this runs for every pair)."""
+def _clip_pair(VA, FA, FKA, nfa, NA, DA, VB, FB, FKB, nfb, NB, DB, tol, polys, counts, A, B, S):
+    """The polygons bounding A ∩ B into ``polys``: A's faces clipped to B (the first
+    ``na``), then B's faces clipped to A (to ``nt``); returns (na, nt)."""
+    na = _faces_inside(VA, FA, FKA, nfa, NA, DA, NB, DB, nfb, False, tol, polys, counts, 0, A, B, S)
+    nt = _faces_inside(VB, FB, FKB, nfb, NB, DB, NA, DA, nfa, True, tol, polys, counts, na, A, B, S)
+    return na, nt
+
+
+@njit(cache=True)
+def pair(VA, FA, FKA, nfa, NA, DA, VB, FB, FKB, nfb, NB, DB, tol):
+    """Overlap of bodies A and B (global frame). Returns (V, centroid (3,), g (3,)) with
+    g = dV/dx_B (m^2); V = 0 when they do not overlap."""
+    polys, counts, A, B, S = _work(max(nfa, nfb))
+    na, nt = _clip_pair(VA, FA, FKA, nfa, NA, DA, VB, FB, FKB, nfb, NB, DB, tol, polys, counts, A, B, S)
     cen = np.zeros(3)
     g = np.zeros(3)
+    v = _volume(polys, counts, na, nt, cen, g)
+    return v, cen, g
+
+
+@njit(cache=True)
+def _volume(polys, counts, na, nt, cen, g):
+    """Volume (returned) of the overlap bounded by ``polys[:nt]`` (the first ``na`` from
+    A's faces); its centroid into ``cen`` and dV/dx_B into ``g`` ((3,) each; zero when the
+    volume is zero). Scalar arithmetic (no temporaries: this runs for every pair)."""
+    for a in range(3):
+        cen[a] = 0.0
+        g[a] = 0.0
     if nt == 0:
-        return 0.0, cen, g
+        return 0.0
     r0 = r1 = r2 = 0.0
     npts = 0
     for s in range(nt):
@@ -230,29 +254,31 @@ def _volume(polys, counts, na, nt):
             c1 += v6 * (uy + vy + wy)
             c2 += v6 * (uz + vz + wz)
     if vol <= 0.0:
-        return 0.0, np.zeros(3), np.zeros(3)
+        g[0] = g[1] = g[2] = 0.0
+        return 0.0
     cen[0] = r0 + c0 / (4.0 * vol)
     cen[1] = r1 + c1 / (4.0 * vol)
     cen[2] = r2 + c2 / (4.0 * vol)
-    return vol / 6.0, cen, g
+    return vol / 6.0
 
 
 @njit(cache=True)
-def _patch(polys, counts, first, last, cen, g):
+def _patch(polys, counts, first, last, cen, g, p, J):
     """Footprint of the overlap (module docstring) from the faces of B inside A
-    (``polys[first:last]``): (area m^2, centroid p (3,), second moment about p (3, 3) m^4,
-    projected on the plane normal to n = -g/|g|). Scalar arithmetic, as ``_volume``."""
+    (``polys[first:last]``), projected on the plane normal to n = -g/|g|: returns its area
+    (m^2), writes its centroid into p (3,) and its second moment about p into J (3, 3)
+    (m^4). Scalar arithmetic, as ``_volume``."""
     ga = np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
-    s0 = 0.0
-    s1 = np.zeros(3)
-    s2 = np.zeros((3, 3))
+    for a in range(3):
+        p[a] = cen[a]
+        for b in range(3):
+            J[a, b] = 0.0
     if ga <= 0.0:
-        return 0.0, cen.copy(), s2
-    n = -g / ga
-    x0 = np.empty(3)
-    x1 = np.empty(3)
-    x2 = np.empty(3)
-    sm = np.empty(3)
+        return 0.0
+    n = (-g[0] / ga, -g[1] / ga, -g[2] / ga)
+    s0 = 0.0
+    s10 = s11 = s12 = 0.0
+    s00_ = s01_ = s02_ = s11_ = s12_ = s22_ = 0.0  # the symmetric sum of second moments
     for s in range(first, last):
         k = counts[s]
         P = polys[s]
@@ -261,62 +287,79 @@ def _patch(polys, counts, first, last, cen, g):
         if am <= 0.0:
             continue
         w = -(ax * n[0] + ay * n[1] + az * n[2]) / am  # cosine between the face normal and -n
-        for a in range(3):
-            x0[a] = P[0, a] - cen[a]
+        x00 = P[0, 0] - cen[0]
+        x01 = P[0, 1] - cen[1]
+        x02 = P[0, 2] - cen[2]
         for q in range(1, k - 1):
-            for a in range(3):
-                x1[a] = P[q, a] - cen[a]
-                x2[a] = P[q + 1, a] - cen[a]
-            cx = (x1[1] - x0[1]) * (x2[2] - x0[2]) - (x1[2] - x0[2]) * (x2[1] - x0[1])
-            cy = (x1[2] - x0[2]) * (x2[0] - x0[0]) - (x1[0] - x0[0]) * (x2[2] - x0[2])
-            cz = (x1[0] - x0[0]) * (x2[1] - x0[1]) - (x1[1] - x0[1]) * (x2[0] - x0[0])
+            x10 = P[q, 0] - cen[0]
+            x11 = P[q, 1] - cen[1]
+            x12 = P[q, 2] - cen[2]
+            x20 = P[q + 1, 0] - cen[0]
+            x21 = P[q + 1, 1] - cen[1]
+            x22 = P[q + 1, 2] - cen[2]
+            cx = (x11 - x01) * (x22 - x02) - (x12 - x02) * (x21 - x01)
+            cy = (x12 - x02) * (x20 - x00) - (x10 - x00) * (x22 - x02)
+            cz = (x10 - x00) * (x21 - x01) - (x11 - x01) * (x20 - x00)
             at = 0.5 * np.sqrt(cx * cx + cy * cy + cz * cz) * w
-            for a in range(3):
-                sm[a] = x0[a] + x1[a] + x2[a]
+            m0 = x00 + x10 + x20
+            m1 = x01 + x11 + x21
+            m2 = x02 + x12 + x22
             s0 += at
-            for a in range(3):
-                s1[a] += at * sm[a] / 3.0
-            for a in range(3):
-                for b in range(3):
-                    s2[a, b] += at / 12.0 * (x0[a] * x0[b] + x1[a] * x1[b] + x2[a] * x2[b] + sm[a] * sm[b])
+            s10 += at * m0 / 3.0
+            s11 += at * m1 / 3.0
+            s12 += at * m2 / 3.0
+            f = at / 12.0
+            s00_ += f * (x00 * x00 + x10 * x10 + x20 * x20 + m0 * m0)
+            s01_ += f * (x00 * x01 + x10 * x11 + x20 * x21 + m0 * m1)
+            s02_ += f * (x00 * x02 + x10 * x12 + x20 * x22 + m0 * m2)
+            s11_ += f * (x01 * x01 + x11 * x11 + x21 * x21 + m1 * m1)
+            s12_ += f * (x01 * x02 + x11 * x12 + x21 * x22 + m1 * m2)
+            s22_ += f * (x02 * x02 + x12 * x12 + x22 * x22 + m2 * m2)
     if s0 <= 0.0:
-        return 0.0, cen.copy(), np.zeros((3, 3))
+        return 0.0
     # projections on the plane normal to n: centroid and second moment about it
-    pr = np.eye(3)
+    c = (s10 / s0, s11 / s0, s12 / s0)
+    m2s = (s00_ - s0 * (c[0] * c[0]), s01_ - s0 * (c[0] * c[1]), s02_ - s0 * (c[0] * c[2]),
+           s11_ - s0 * (c[1] * c[1]), s12_ - s0 * (c[1] * c[2]), s22_ - s0 * (c[2] * c[2]))
     for a in range(3):
+        p[a] = cen[a] + (_pr(n, a, 0) * c[0] + _pr(n, a, 1) * c[1] + _pr(n, a, 2) * c[2])
+    for a in range(3):  # J = pr m2 pr, row by row
+        t0 = _pr(n, a, 0) * _sym(m2s, 0, 0) + _pr(n, a, 1) * _sym(m2s, 1, 0) + _pr(n, a, 2) * _sym(m2s, 2, 0)
+        t1 = _pr(n, a, 0) * _sym(m2s, 0, 1) + _pr(n, a, 1) * _sym(m2s, 1, 1) + _pr(n, a, 2) * _sym(m2s, 2, 1)
+        t2 = _pr(n, a, 0) * _sym(m2s, 0, 2) + _pr(n, a, 1) * _sym(m2s, 1, 2) + _pr(n, a, 2) * _sym(m2s, 2, 2)
         for b in range(3):
-            pr[a, b] -= n[a] * n[b]
-    c1 = s1 / s0
-    m2 = np.empty((3, 3))
-    for a in range(3):
-        for b in range(3):
-            m2[a, b] = s2[a, b] - s0 * (c1[a] * c1[b])
-    p = cen.copy()
-    for a in range(3):
-        p[a] += pr[a, 0] * c1[0] + pr[a, 1] * c1[1] + pr[a, 2] * c1[2]
-    t = np.empty((3, 3))
-    J = np.empty((3, 3))
-    for a in range(3):
-        for b in range(3):
-            t[a, b] = pr[a, 0] * m2[0, b] + pr[a, 1] * m2[1, b] + pr[a, 2] * m2[2, b]
-    for a in range(3):
-        for b in range(3):
-            J[a, b] = t[a, 0] * pr[0, b] + t[a, 1] * pr[1, b] + t[a, 2] * pr[2, b]
-    return s0, p, J
+            J[a, b] = t0 * _pr(n, 0, b) + t1 * _pr(n, 1, b) + t2 * _pr(n, 2, b)
+    return s0
+
+
+@njit(cache=True, inline="always")
+def _pr(n, a, b):
+    """Element (a, b) of the projector 1 - n n^T."""
+    return (1.0 if a == b else 0.0) - n[a] * n[b]
+
+
+@njit(cache=True, inline="always")
+def _sym(m, a, b):
+    """Element (a, b) of a symmetric 3 x 3 stored as (00, 01, 02, 11, 12, 22)."""
+    i = min(a, b)
+    j = max(a, b)
+    return m[3 * i - i * (i - 1) // 2 + (j - i)]
 
 
 @njit(cache=True)
 def pair_patch(VA, FA, FKA, nfa, NA, DA, VB, FB, FKB, nfb, NB, DB, tol):
     """``pair`` plus the contact patch: (V, centroid, g, patch area, patch centroid p,
     patch second moment J about p)."""
-    polys = np.empty((nfa + nfb, MAXV, 3))
-    counts = np.zeros(nfa + nfb, np.int64)
-    na = _faces_inside(VA, FA, FKA, nfa, NA, DA, NB, DB, nfb, False, tol, polys, counts, 0)
-    nt = _faces_inside(VB, FB, FKB, nfb, NB, DB, NA, DA, nfa, True, tol, polys, counts, na)
-    v, c, g = _volume(polys, counts, na, nt)
+    polys, counts, A, B, S = _work(max(nfa, nfb))
+    na, nt = _clip_pair(VA, FA, FKA, nfa, NA, DA, VB, FB, FKB, nfb, NB, DB, tol, polys, counts, A, B, S)
+    c = np.zeros(3)
+    g = np.zeros(3)
+    p = np.zeros(3)
+    J = np.zeros((3, 3))
+    v = _volume(polys, counts, na, nt, c, g)
     if v <= 0.0:
-        return 0.0, c, g, 0.0, c.copy(), np.zeros((3, 3))
-    a, p, J = _patch(polys, counts, na, nt, c, g)
+        return 0.0, c, g, 0.0, c.copy(), J
+    a = _patch(polys, counts, na, nt, c, g, p, J)
     return v, c, g, a, p, J
 
 
@@ -455,7 +498,7 @@ def _apart(VA, nva, NA, DA, nfa, VB, nvb, NB, DB, nfb, tol):
 
 @njit(cache=True)
 def _contacts_of_pairs(GV, GN, GD, nv, nf, faces, fk, ia, ib, tol, touching):
-    """The exact overlaps (``pair_patch``) of the candidate pairs (ia, ib), kept where the
+    """The exact overlaps (as ``pair_patch``) of the candidate pairs (ia, ib), kept where the
     volume and its gradient are positive, in the candidates' order. ``touching``: pairs
     that touch within ``tol`` or are apart (``_apart``) are no contact, without a clip
     (module docstring, "Touching")."""
@@ -468,27 +511,29 @@ def _contacts_of_pairs(GV, GN, GD, nv, nf, faces, fk, ia, ib, tol, touching):
     area = np.empty(cap)
     pc = np.empty((cap, 3))
     pj = np.empty((cap, 3, 3))
+    polys, counts, A, B, S = _work(GN.shape[1])
+    g = np.empty(3)
     m = 0
     for k in range(cap):
         i = ia[k]
         j = ib[k]
         if touching and _apart(GV[i], nv[i], GN[i], GD[i], nf[i], GV[j], nv[j], GN[j], GD[j], nf[j], tol):
             continue
-        v, c, g, pa, p, J = pair_patch(GV[i], faces[i], fk[i], nf[i], GN[i], GD[i], GV[j], faces[j], fk[j],
-                                       nf[j], GN[j], GD[j], tol)
+        na, nt = _clip_pair(GV[i], faces[i], fk[i], nf[i], GN[i], GD[i], GV[j], faces[j], fk[j], nf[j], GN[j], GD[j],
+                            tol, polys, counts, A, B, S)
+        v = _volume(polys, counts, na, nt, cen[m], g)
         if v <= 0.0:
             continue
         ga = np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
         if ga <= 0.0:
             continue
+        _patch(polys, counts, na, nt, cen[m], g, pc[m], pj[m])  # its area is |g| (module docstring)
         id1[m] = i
         id2[m] = j
         vol[m] = v
-        cen[m] = c
-        nrm[m] = -g / ga
+        for a in range(3):
+            nrm[m, a] = -g[a] / ga
         area[m] = ga
-        pc[m] = p
-        pj[m] = J
         m += 1
     return id1[:m], id2[:m], vol[:m], cen[:m], nrm[:m], area[:m], pc[:m], pj[:m]
 
