@@ -409,6 +409,28 @@ class CompiledStep:
         self._state = None
         return F, T
 
+    def advance(self, pos, rot, vel, angvel, dt, g, F_ext, motion):
+        """Steps one after another, each as ``forces`` then ``integrate`` (in place), with
+        the body accelerations ``g`` (n, 3) m/s^2 of the steps and the external forces
+        ``F_ext`` (nb, 3) N added to the contact forces of each. ``motion``: the remaining
+        arguments of ``integrate`` (mass, inertia, lin_free, rot_free, aspherical, angmom,
+        quat). Stops before integrating a step whose contact depth ratio exceeds 1 (the
+        caller checks it). Returns (steps completed, F, T of the last step computed, that
+        step integrated?); ``state``, ``elastic``, ``max_omega_dt``, ``depth_ratio`` and the
+        shear history as after the same calls of ``forces``."""
+        s = self.shapes
+        (done, ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, F, T, e_prev, e_last, om_max,
+         self.depth_ratio) = _advance(
+            s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, pos, rot, vel, angvel, self.moving,
+            self.inv_mass, self.inv_inertia_local, self.material, self.table, self.jkeys, self.jvals, self.keys,
+            self.shear_store, dt, ov.TOL, self.size, g, F_ext, self.elastic[1], *motion)
+        self.keys, self.shear_store = keys, fs
+        self.elastic = (e_prev, e_last)
+        self.max_omega_dt = max(self.max_omega_dt, om_max * dt)
+        self._raw = (ia, ib, vol, c, n, area, fn, fs, fd, slipping)
+        self._state = None
+        return done, F, T, done == len(g)
+
     @property
     def state(self) -> ContactState:
         if self._state is None:
@@ -556,3 +578,32 @@ def free_directions(blocked: str, moving: bool) -> tuple[np.ndarray, np.ndarray]
 def matrices(quat) -> np.ndarray:
     """Rotation matrices of (nb, 4) quaternions (``drystone.rotations``)."""
     return rotations.to_matrix(quat)
+
+
+@njit(cache=True)
+def _advance(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, angvel, moving, inv_mass, inv_inertia_local,
+             mat, table, jkeys, jvals, keys, shear, dt, tol, size, g, F_ext, e_last, mass, inertia, lin_free, rot_free,
+             aspherical, angmom, quat):
+    """``CompiledStep.advance``: len(g) steps of ``_contact_forces`` + ``integrate``
+    without leaving compiled code; the arithmetic of each step is that of one call of
+    each (the same results bit for bit)."""
+    n = len(g)
+    e_prev = e_last
+    om_max = 0.0
+    s = 0
+    while True:
+        (ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, F, T, e_el, om, depth) = _contact_forces(
+            verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, angvel, moving, inv_mass, inv_inertia_local,
+            mat, table, jkeys, jvals, keys, shear, dt, tol, size)
+        shear = fs
+        e_prev = e_last
+        e_last = e_el
+        if om > om_max:
+            om_max = om
+        F += F_ext
+        if depth > 1.0:  # the caller checks it before this step is integrated
+            return s, ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, F, T, e_prev, e_last, om_max, depth
+        integrate(dt, g[s], F, T, mass, inertia, lin_free, rot_free, aspherical, pos, vel, angvel, angmom, quat, rot)
+        s += 1
+        if s == n:
+            return s, ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, F, T, e_prev, e_last, om_max, depth

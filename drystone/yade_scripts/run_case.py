@@ -120,6 +120,9 @@ class Driver:
         self.t_wall0 = time.time()
         self.t_print = self.t_wall0
         self.done = False
+        # the step being taken: YADE's iteration and time (the compiled engine keeps them
+        # itself, as YADE would: time accumulated by dt per iteration)
+        self.iter, self.t = 0, 0.0
         self.python_time = 0.0  # s spent in this per-step Python engine
         self.kernel_time = 0.0  # of which in the compiled contact step and integration
         # blow-up checks at every recorded sample (drystone/stability.py)
@@ -206,9 +209,13 @@ class Driver:
 
     # -- every step ---------------------------------------------------------------
     def step(self):
+        """One step with every per-step check (YADE's PyRunner calls it each iteration;
+        the compiled engine's loop, ``_run_compiled``, for the steps that need Python)."""
         t_py = time.perf_counter()
         O = self.O
-        t = O.time
+        if not self.compiled:
+            self.iter, self.t = O.iter, O.time
+        t = self.t
         g = self.prog.body_acceleration(t)
         k = self.prog.stage_index(t)
         if k != self.stage:
@@ -222,7 +229,7 @@ class Driver:
             for y, f, start, end in self.forces:
                 if start <= t < end:
                     F[y] += tuple(f)
-            if O.iter % self.rec_every == 0:
+            if self.iter % self.rec_every == 0:
                 self._record(t)
             t_k = time.perf_counter()
             cs.integrate(O.dt, g, F, T, self.mass_int, self.inertia_int, self.lin_free, self.rot_free,
@@ -238,10 +245,20 @@ class Driver:
             for y, f, start, end in self.forces:
                 if start <= t < end:
                     O.forces.addF(y, f)
-            if O.iter % self.rec_every == 0:
+            if self.iter % self.rec_every == 0:
                 if self.law_name != "penalty_coulomb":
                     self._read_states(ids)
                 self._record(t)
+        self._progress(t, k)
+        if self.stop_at is not None and t >= self.stop_at:
+            self.done = True
+            if not self.compiled:
+                O.pause()
+        if not self.compiled:
+            self.python_time += time.perf_counter() - t_py
+
+    def _progress(self, t, k):
+        """A progress line every 5 s of wall time."""
         now = time.time()
         if now - self.t_print > 5.0:
             self.t_print = now
@@ -251,17 +268,87 @@ class Driver:
             print(f"[{self.spec['name']}] t = {t:7.3f} / {self.prog.end:.3f} s ({100 * frac:5.1f} %)  "
                   f"stage {k + 1}/{len(self.prog.stages)} {st.type}  tilt {self.prog.tilt_deg(t):6.2f} deg  "
                   f"contacts {len(self._contacts().fn)}  ETA {eta:6.0f} s", flush=True)
-        if self.stop_at is not None and t >= self.stop_at:
-            self.done = True
-            O.pause()
+
+    def _run_compiled(self):
+        """The compiled engine's time loop, in place of YADE's (its scene is written back
+        at the end, ``_sync_yade``). It does what ``O.run`` with the PyRunner did, step
+        for step and bit for bit: YADE's iteration 0 moves nothing (the PyRunner does not
+        run at iteration 0 and there is no integrator), each later iteration is one step.
+        A step that needs Python (a recorded sample, a stage's start, an external force
+        switched on or off) goes through ``step``; the steps between them run in one
+        compiled call (``CompiledStep.advance``): one Python call per recorded sample."""
+        t_py = time.perf_counter()
+        dt = self.O.dt
+        self.iter, self.t = 1, 0.0 + dt
+        while self.iter < self.steps_total and not self.done and self.failure is None:
+            self.step()
+            self.iter += 1
+            self.t += dt
+            if self.done or self.failure is not None:
+                break
+            self._advance_quietly(dt)
         self.python_time += time.perf_counter() - t_py
+
+    def _quiet_steps(self, dt) -> np.ndarray:
+        """Times (s) of the steps from ``self.iter`` on that need no Python: up to the next
+        recorded sample, stage start or switch of an external force, and to the step
+        after which the run stops (``stop_at``), at most the run's end."""
+        i = self.iter
+        nxt = min((i // self.rec_every + 1) * self.rec_every if i % self.rec_every else i, self.steps_total)
+        if nxt <= i:
+            return np.zeros(0)
+        ts = np.add.accumulate(np.concatenate([[self.t], np.full(nxt - i - 1, dt)]))  # as YADE adds dt
+        ends = np.array([st.end for st in self.prog.stages])
+        k = np.minimum(np.searchsorted(ends, ts, side="right"), len(ends) - 1)  # prog.stage_index
+        cut = len(ts) if np.all(k == k[0]) else int(np.argmax(k != k[0]))
+        for _, _, start, end in self.forces:
+            on = (start <= ts) & (ts < end)
+            if not np.all(on == on[0]):
+                cut = min(cut, int(np.argmax(on != on[0])))
+        if k[0] != self.stage:  # step() enters a stage
+            cut = 0
+        if self.stop_at is not None:
+            past = np.flatnonzero(ts[:cut] >= self.stop_at)
+            if len(past):
+                cut = int(past[0]) + 1  # the run stops after that step
+        return ts[:cut]
+
+    def _advance_quietly(self, dt):
+        """The steps of ``_quiet_steps`` in one compiled call (the depth check stops it,
+        ``CompiledStep.advance``)."""
+        ts = self._quiet_steps(dt)
+        if len(ts) == 0:
+            return
+        g = np.array([self.prog.body_acceleration(t) for t in ts])
+        F_ext = np.zeros_like(self.pos)
+        for y, f, start, end in self.forces:
+            if start <= ts[0] < end:
+                F_ext[y] += tuple(f)
+        t_k = time.perf_counter()
+        done, F, T, integrated = self.engine.advance(
+            self.pos, self.rot, self.vel, self.angvel, dt, g, F_ext,
+            (self.mass_int, self.inertia_int, self.lin_free, self.rot_free, self.aspherical, self.angmom, self.quat))
+        self.kernel_time += time.perf_counter() - t_k
+        if not integrated:  # stopped on the depth check before integrating step ts[done]
+            self._check_depth()
+            if self.failure is not None:
+                return
+            cs.integrate(dt, g[done], F, T, self.mass_int, self.inertia_int, self.lin_free, self.rot_free,
+                         self.aspherical, self.pos, self.vel, self.angvel, self.angmom, self.quat, self.rot)
+            done += 1
+        self.iter += done
+        last = ts[done - 1]  # the time of the last step taken
+        self.t = last + dt
+        if self.stop_at is not None and last >= self.stop_at:
+            self.done = True
+        self._progress(self.t, self.stage)
 
     def _enter_stage(self, k):
         self.stage = k
         st = self.prog.stages[k]
         print(f"[{self.spec['name']}] stage {k + 1}/{len(self.prog.stages)}: {st.type} "
               f"{st.start:.3f}-{st.end:.3f} s", flush=True)
-        for block, v in self.prog.imposed_velocities(self.O.time).items():
+        for block, v in self.prog.imposed_velocities(self.t).items():
             self._set_velocity(self.yid[block], v)
         dv = self.prog.velocity_jump(k)
         if np.any(dv):
@@ -273,7 +360,7 @@ class Driver:
                 v0 = self._velocity(int(i))
                 self._set_velocity(int(i), v0 + dv * free)
                 self.energy.inject(0.5 * self.mass[i] * (np.sum((v0 + dv * free) ** 2) - np.sum(v0 ** 2)))
-            self.jumps.append({"stage": k + 1, "time_s": float(self.O.time), "relative_velocity_m_s": dv.tolist()})
+            self.jumps.append({"stage": k + 1, "time_s": float(self.t), "relative_velocity_m_s": dv.tolist()})
             print(f"[{self.spec['name']}] stage {k + 1}: base velocity jump, free blocks get {dv.tolist()} m/s "
                   "relative to the platform", flush=True)
         cfg = self.prog.settle(k, self.w_free)
@@ -432,14 +519,17 @@ class Driver:
         O = self.O
         builtins._drystone_step = self.step
         wall0 = time.time()
-        O.run(self.steps_total, True)
-        wall = time.time() - wall0
         if self.compiled:
+            self._run_compiled()
             self._sync_yade()
+        else:
+            O.run(self.steps_total, True)
+            self.iter, self.t = O.iter, O.time
+        wall = time.time() - wall0
         if self.failure is None:
             if not self.compiled:  # the state after the last integration (the arrays are current)
                 self._read_states(np.concatenate([self.dyn, np.array(self.moving_static, int)]))
-            self._record(O.time)
+            self._record(self.t)
         if self.failure is not None:  # no histories: nothing that looks like a result
             (self.out / "failure.txt").write_text(self.failure + "\n")
             sys.stdout.flush()
@@ -461,7 +551,7 @@ class Driver:
         tmp = self.out / "histories.tmp.npz"
         np.savez_compressed(tmp, **arrays)
         os.replace(tmp, self.out / "histories.npz")
-        info = {"steps": int(self.O.iter), "simulated_time_s": float(self.O.time), "wall_time_s": wall,
+        info = {"steps": int(self.iter), "simulated_time_s": float(self.t), "wall_time_s": wall,
                 "dt_s": float(self.O.dt), "threads": int(yade.Omega().numThreads),
                 "max_contacts": int(self.max_contacts), "final_contacts": int(self.h["n_contacts"][-1]),
                 "stopped_early": bool(self.done), "collapse": self.collapse,
@@ -469,9 +559,9 @@ class Driver:
                 "max_contact_omega_dt": float(self.engine.max_omega_dt),
                 "yade_version": yade.config.version if hasattr(yade, "config") else "unknown",
                 "engine": self.engine_name,
-                "us_per_step": 1e6 * wall / max(1, self.O.iter),
-                "python_us_per_step": 1e6 * self.python_time / max(1, self.O.iter),
-                "kernel_us_per_step": 1e6 * self.kernel_time / max(1, self.O.iter)}
+                "us_per_step": 1e6 * wall / max(1, self.iter),
+                "python_us_per_step": 1e6 * self.python_time / max(1, self.iter),
+                "kernel_us_per_step": 1e6 * self.kernel_time / max(1, self.iter)}
         tmp = self.out / "run_info.tmp.json"
         tmp.write_text(json.dumps(info, indent=1))
         os.replace(tmp, self.out / "run_info.json")
