@@ -226,17 +226,17 @@ def _props(ia, ib, nb, mat, table, jkeys, jvals):
 
 
 @njit(cache=True)
-def _previous_shear(keys, prev_keys, prev_shear):
-    """Shear force of each contact at the previous step (zero for a new contact); both
-    key arrays sorted ascending."""
+def _previous(keys, prev_keys):
+    """Index of each contact among the previous step's (-1 for a new contact); both key
+    arrays sorted ascending (one merge walk)."""
     m = len(keys)
-    out = np.zeros((m, 3))
+    out = np.full(m, -1, np.int64)
     j = 0
     for c in range(m):
         while j < len(prev_keys) and prev_keys[j] < keys[c]:
             j += 1
         if j < len(prev_keys) and prev_keys[j] == keys[c]:
-            out[c] = prev_shear[j]
+            out[c] = j
     return out
 
 
@@ -250,7 +250,7 @@ def _global_inverse(R, d, out):
 
 @njit(cache=True)
 def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, angvel, moving, inv_mass,
-                    inv_inertia_local, mat, table, jkeys, jvals, prev_keys, prev_shear, dt, tol, size):
+                    inv_inertia_local, mat, table, jkeys, jvals, prev_keys, prev_shear, prev_basis, dt, tol, size):
     nb = len(nv)
     ia, ib, vol, c, n, area, pc, pj = ov.contacts_with_patches(verts, nv, normals, offsets, nf, faces, fk, pos, rot,
                                                               moving, tol)
@@ -261,7 +261,19 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, a
     kt = P[:, 1].copy()
     mu = P[:, 2].copy()
     xi = P[:, 3].copy()
-    fs_prev = _previous_shear(keys, prev_keys, prev_shear)
+    # each contact's history: its shear force and its damping's modal basis (zero and the
+    # identity for a new contact)
+    prev = _previous(keys, prev_keys)
+    fs_prev = np.zeros((m, 3))
+    basis = np.zeros((m, 6, 6))
+    warm = prev >= 0
+    for k in range(m):
+        if warm[k]:
+            fs_prev[k] = prev_shear[prev[k]]
+            basis[k] = prev_basis[prev[k]]
+        else:
+            for q in range(6):
+                basis[k, q, q] = 1.0
     fn = kn * vol
     fs = np.empty((m, 3))
     slipping = np.zeros(m, np.bool_)
@@ -323,8 +335,8 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, a
             twist[k, 3 + q] = angvel[b, q] - angvel[a, q]
         _global_inverse(rot[a], inv_inertia_local[a], iia[k])
         _global_inverse(rot[b], inv_inertia_local[b], iib[k])
-    fd, md, om = law.damping_wrenches(n, area, pj, kn, kt, xi, ~slipping, pa, pb, inv_mass[ia], inv_mass[ib], iia,
-                                      iib, twist, fn, fs, mu, lever)
+    fd, md, om = law.damping_wrenches_warm(n, area, pj, kn, kt, xi, ~slipping, pa, pb, inv_mass[ia], inv_mass[ib],
+                                           iia, iib, twist, fn, fs, mu, lever, basis, warm)
     F = np.zeros((nb, 3))
     T = np.zeros((nb, 3))
     e_el = 0.0
@@ -356,7 +368,7 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, a
                 depth_ratio = r
         if om[k] > om_max:
             om_max = om[k]
-    return ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, F, T, e_el, om_max, depth_ratio
+    return ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, basis, F, T, e_el, om_max, depth_ratio
 
 
 class CompiledStep:
@@ -387,6 +399,7 @@ class CompiledStep:
         self.jvals = np.array([v for _, v in keys], float).reshape(-1, 4)
         self.keys = np.zeros(0, np.int64)
         self.shear_store = np.zeros((0, 3))
+        self.basis_store = np.zeros((0, 6, 6))  # each contact's damping modes (contact.damping_wrenches_warm)
         self.size = np.full(nb, np.inf) if size is None else np.asarray(size, float)
         self.depth_ratio = 0.0
         self._raw = None
@@ -398,11 +411,12 @@ class CompiledStep:
         """Contact forces and torques (nb, 3) on every body (N, N m) for the state given;
         updates the shear history, ``state``, ``elastic`` and ``max_omega_dt``."""
         s = self.shapes
-        (ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, F, T, e_el, om_max, self.depth_ratio) = _contact_forces(
+        (ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, basis, F, T, e_el, om_max,
+         self.depth_ratio) = _contact_forces(
             s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, pos, rot, vel, angvel, self.moving,
             self.inv_mass, self.inv_inertia_local, self.material, self.table, self.jkeys, self.jvals, self.keys,
-            self.shear_store, dt, ov.TOL, self.size)
-        self.keys, self.shear_store = keys, fs
+            self.shear_store, self.basis_store, dt, ov.TOL, self.size)
+        self.keys, self.shear_store, self.basis_store = keys, fs, basis
         self.elastic = (self.elastic[1], e_el)
         self.max_omega_dt = max(self.max_omega_dt, om_max * dt)
         self._raw = (ia, ib, vol, c, n, area, fn, fs, fd, slipping)
@@ -419,12 +433,12 @@ class CompiledStep:
         step integrated?); ``state``, ``elastic``, ``max_omega_dt``, ``depth_ratio`` and the
         shear history as after the same calls of ``forces``."""
         s = self.shapes
-        (done, ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, F, T, e_prev, e_last, om_max,
+        (done, ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, basis, F, T, e_prev, e_last, om_max,
          self.depth_ratio) = _advance(
             s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, pos, rot, vel, angvel, self.moving,
             self.inv_mass, self.inv_inertia_local, self.material, self.table, self.jkeys, self.jvals, self.keys,
-            self.shear_store, dt, ov.TOL, self.size, g, F_ext, self.elastic[1], *motion)
-        self.keys, self.shear_store = keys, fs
+            self.shear_store, self.basis_store, dt, ov.TOL, self.size, g, F_ext, self.elastic[1], *motion)
+        self.keys, self.shear_store, self.basis_store = keys, fs, basis
         self.elastic = (e_prev, e_last)
         self.max_omega_dt = max(self.max_omega_dt, om_max * dt)
         self._raw = (ia, ib, vol, c, n, area, fn, fs, fd, slipping)
@@ -582,8 +596,8 @@ def matrices(quat) -> np.ndarray:
 
 @njit(cache=True)
 def _advance(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, angvel, moving, inv_mass, inv_inertia_local,
-             mat, table, jkeys, jvals, keys, shear, dt, tol, size, g, F_ext, e_last, mass, inertia, lin_free, rot_free,
-             aspherical, angmom, quat):
+             mat, table, jkeys, jvals, keys, shear, basis, dt, tol, size, g, F_ext, e_last, mass, inertia, lin_free,
+             rot_free, aspherical, angmom, quat):
     """``CompiledStep.advance``: len(g) steps of ``_contact_forces`` + ``integrate``
     without leaving compiled code; the arithmetic of each step is that of one call of
     each (the same results bit for bit)."""
@@ -592,9 +606,9 @@ def _advance(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, angvel, 
     om_max = 0.0
     s = 0
     while True:
-        (ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, F, T, e_el, om, depth) = _contact_forces(
+        (ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, basis, F, T, e_el, om, depth) = _contact_forces(
             verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, angvel, moving, inv_mass, inv_inertia_local,
-            mat, table, jkeys, jvals, keys, shear, dt, tol, size)
+            mat, table, jkeys, jvals, keys, shear, basis, dt, tol, size)
         shear = fs
         e_prev = e_last
         e_last = e_el
@@ -602,8 +616,8 @@ def _advance(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, angvel, 
             om_max = om
         F += F_ext
         if depth > 1.0:  # the caller checks it before this step is integrated
-            return s, ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, F, T, e_prev, e_last, om_max, depth
+            return s, ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, basis, F, T, e_prev, e_last, om_max, depth
         integrate(dt, g[s], F, T, mass, inertia, lin_free, rot_free, aspherical, pos, vel, angvel, angmom, quat, rot)
         s += 1
         if s == n:
-            return s, ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, F, T, e_prev, e_last, om_max, depth
+            return s, ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, basis, F, T, e_prev, e_last, om_max, depth

@@ -123,14 +123,25 @@ def _clip(P, k, S, Q):
 
 
 @njit(cache=True)
-def _faces_inside(V, F, FK, nf, N1, D1, N2, D2, nf2, dedup, tol, polys, counts, start, A, B, S):
+def _faces_inside(V, F, FK, nf, N1, D1, V2, nv2, N2, D2, nf2, dedup, tol, polys, counts, start, A, B, S):
     """Clip every face of one body (global vertices V, planes N1, D1) to the other body's
-    half-spaces (N2 x + D2 <= 0); store the non-empty polygons from index ``start``.
-    With ``dedup``, a face lying in a plane of the other body with the same outward
-    normal (within ``tol``) is skipped: the other body's face already bounds the overlap
-    there. A, B: (MAXV, 3) work arrays; S (MAXV,) the signed distances."""
+    half-spaces (N2 x + D2 <= 0; its vertices V2[:nv2]); store the non-empty polygons from
+    index ``start``. A face whose plane the other body does not reach (all its vertices
+    more than ``tol`` inside the plane) is skipped without a clip: no part of it can be in
+    the other body. With ``dedup``, a face lying in a plane of the other body with the same
+    outward normal (within ``tol``) is skipped: the other body's face already bounds the
+    overlap there. A, B: (MAXV, 3) work arrays; S (MAXV,) the signed distances."""
     c = start
     for f in range(nf):
+        reach = -np.inf
+        total = 0.0  # NaN if a vertex is (a blown-up body): then the clip decides
+        for q in range(nv2):
+            sq = N1[f, 0] * V2[q, 0] + N1[f, 1] * V2[q, 1] + N1[f, 2] * V2[q, 2] + D1[f]
+            total += sq
+            if sq > reach:
+                reach = sq
+        if reach < -tol and total == total:
+            continue
         if dedup:
             dup = False
             for p in range(nf2):
@@ -187,20 +198,21 @@ def _work(maxf):
 
 
 @njit(cache=True)
-def _clip_pair(VA, FA, FKA, nfa, NA, DA, VB, FB, FKB, nfb, NB, DB, tol, polys, counts, A, B, S):
+def _clip_pair(VA, nva, FA, FKA, nfa, NA, DA, VB, nvb, FB, FKB, nfb, NB, DB, tol, polys, counts, A, B, S):
     """The polygons bounding A ∩ B into ``polys``: A's faces clipped to B (the first
     ``na``), then B's faces clipped to A (to ``nt``); returns (na, nt)."""
-    na = _faces_inside(VA, FA, FKA, nfa, NA, DA, NB, DB, nfb, False, tol, polys, counts, 0, A, B, S)
-    nt = _faces_inside(VB, FB, FKB, nfb, NB, DB, NA, DA, nfa, True, tol, polys, counts, na, A, B, S)
+    na = _faces_inside(VA, FA, FKA, nfa, NA, DA, VB, nvb, NB, DB, nfb, False, tol, polys, counts, 0, A, B, S)
+    nt = _faces_inside(VB, FB, FKB, nfb, NB, DB, VA, nva, NA, DA, nfa, True, tol, polys, counts, na, A, B, S)
     return na, nt
 
 
 @njit(cache=True)
-def pair(VA, FA, FKA, nfa, NA, DA, VB, FB, FKB, nfb, NB, DB, tol):
-    """Overlap of bodies A and B (global frame). Returns (V, centroid (3,), g (3,)) with
+def pair(VA, nva, FA, FKA, nfa, NA, DA, VB, nvb, FB, FKB, nfb, NB, DB, tol):
+    """Overlap of bodies A and B (global frame; vertices VA[:nva], faces FA as vertex
+    indices, FKA vertices per face, planes NA x + DA <= 0, the same for B). Returns (V, centroid (3,), g (3,)) with
     g = dV/dx_B (m^2); V = 0 when they do not overlap."""
     polys, counts, A, B, S = _work(max(nfa, nfb))
-    na, nt = _clip_pair(VA, FA, FKA, nfa, NA, DA, VB, FB, FKB, nfb, NB, DB, tol, polys, counts, A, B, S)
+    na, nt = _clip_pair(VA, nva, FA, FKA, nfa, NA, DA, VB, nvb, FB, FKB, nfb, NB, DB, tol, polys, counts, A, B, S)
     cen = np.zeros(3)
     g = np.zeros(3)
     v = _volume(polys, counts, na, nt, cen, g)
@@ -347,11 +359,11 @@ def _sym(m, a, b):
 
 
 @njit(cache=True)
-def pair_patch(VA, FA, FKA, nfa, NA, DA, VB, FB, FKB, nfb, NB, DB, tol):
+def pair_patch(VA, nva, FA, FKA, nfa, NA, DA, VB, nvb, FB, FKB, nfb, NB, DB, tol):
     """``pair`` plus the contact patch: (V, centroid, g, patch area, patch centroid p,
     patch second moment J about p)."""
     polys, counts, A, B, S = _work(max(nfa, nfb))
-    na, nt = _clip_pair(VA, FA, FKA, nfa, NA, DA, VB, FB, FKB, nfb, NB, DB, tol, polys, counts, A, B, S)
+    na, nt = _clip_pair(VA, nva, FA, FKA, nfa, NA, DA, VB, nvb, FB, FKB, nfb, NB, DB, tol, polys, counts, A, B, S)
     c = np.zeros(3)
     g = np.zeros(3)
     p = np.zeros(3)
@@ -519,8 +531,8 @@ def _contacts_of_pairs(GV, GN, GD, nv, nf, faces, fk, ia, ib, tol, touching):
         j = ib[k]
         if touching and _apart(GV[i], nv[i], GN[i], GD[i], nf[i], GV[j], nv[j], GN[j], GD[j], nf[j], tol):
             continue
-        na, nt = _clip_pair(GV[i], faces[i], fk[i], nf[i], GN[i], GD[i], GV[j], faces[j], fk[j], nf[j], GN[j], GD[j],
-                            tol, polys, counts, A, B, S)
+        na, nt = _clip_pair(GV[i], nv[i], faces[i], fk[i], nf[i], GN[i], GD[i], GV[j], nv[j], faces[j], fk[j], nf[j],
+                            GN[j], GD[j], tol, polys, counts, A, B, S)
         v = _volume(polys, counts, na, nt, cen[m], g)
         if v <= 0.0:
             continue
@@ -599,7 +611,8 @@ def patches_of_pairs(verts, nv, normals, offsets, nf, faces, fk, pos, rot, ia, i
         j = ib[k]
         _to_global(verts, nv, normals, offsets, nf, pos, rot, i, VA, NA, DA)
         _to_global(verts, nv, normals, offsets, nf, pos, rot, j, VB, NB, DB)
-        v, c, g, a, p, J = pair_patch(VA, faces[i], fk[i], nf[i], NA, DA, VB, faces[j], fk[j], nf[j], NB, DB, tol)
+        v, c, g, a, p, J = pair_patch(VA, nv[i], faces[i], fk[i], nf[i], NA, DA, VB, nv[j], faces[j], fk[j], nf[j], NB,
+                                      DB, tol)
         area[k] = a
         pc[k] = p
         pj[k] = J
@@ -629,4 +642,4 @@ def overlap(va, vb, tol: float = TOL, patch: bool = False) -> tuple:
         out.append((V, N, D))
     (VA, NA, DA), (VB, NB, DB) = out
     fn = pair_patch if patch else pair
-    return fn(VA, s.faces[0], s.fk[0], s.nf[0], NA, DA, VB, s.faces[1], s.fk[1], s.nf[1], NB, DB, tol)
+    return fn(VA, s.nv[0], s.faces[0], s.fk[0], s.nf[0], NA, DA, VB, s.nv[1], s.faces[1], s.fk[1], s.nf[1], NB, DB, tol)
