@@ -129,3 +129,20 @@ def test_settled_configuration_places_the_blocks(tmp_path):
     v = GV[1][:8]
     assert v.min(axis=0) == pytest.approx([-0.5, -1.0, 0.75]) and v.max(axis=0) == pytest.approx([0.5, 1.0, 1.25])
     assert GV[0][:8].min(axis=0) == pytest.approx([0.0, 0.0, -0.5])
+
+
+def _row(engine, threads, ms):
+    return {"law": "penalty_coulomb", "detection": "native", "engine_used": engine, "threads": threads,
+            "ms_per_step": ms}
+
+
+def test_goal_reads_the_one_thread_rows():
+    """The issue-14 goal is judged on the one-thread compiled and python rows, not on others."""
+    rows = [_row("python", 1, 1.5), _row("compiled", 1, 0.24), _row("compiled", 2, 0.9), _row("python", 2, 9.0),
+            {"law": "stock_volumetric", "detection": "yade", "engine_used": None, "threads": 1, "ms_per_step": 13.0}]
+    g = bench.goal(rows)
+    assert g["compiled_ms"] == 0.24 and g["ms_met"]
+    assert g["speedup"] == pytest.approx(1.5 / 0.24) and g["speedup_met"]
+    g = bench.goal([_row("python", 1, 1.2), _row("compiled", 1, 0.26)])
+    assert not g["ms_met"] and not g["speedup_met"]  # 0.26 > 0.25 ms, 4.6x < 6x
+    assert bench.goal([_row("python", 1, 1.2)]) is None

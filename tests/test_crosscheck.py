@@ -216,3 +216,26 @@ def test_lmgc90_half_sine_pulse_matches_the_rigid_plastic_slide(tmp_path):
     # after the pulse the block rides with the base: the last samples do not move
     h = r["histories"]
     assert abs(h["pos"][-1, 0, 1] - h["pos"][-20, 0, 1]) < 1e-9
+
+
+def test_package_only_rerun_keeps_lmgc90_and_the_other_stiffnesses(tmp_path, monkeypatch):
+    """``run_case(lmgc90_side=False)`` adds package runs at new K_n to a case already run:
+    LMGC90's entry and the package runs at the other K_n stay, sorted by K_n; without an
+    LMGC90 run recorded it refuses, naming the case."""
+    from drystone.crosscheck import study
+
+    def fake_package(cc, folder, kn, variant=None, log=print):
+        return {"kn": kn, "value": 10.0 + math.log10(kn), "folder": str(folder)}
+
+    monkeypatch.setattr(study, "run_package", fake_package)
+    with pytest.raises(ValueError, match="tilt_wall_0: no LMGC90 run"):
+        study.run_case("tilt_wall", tmp_path, kn_factors=[10.0], variants=(0,), lmgc90_side=False, log=lambda m: None)
+    data = study.load(tmp_path)
+    data["cases"]["tilt_wall_0"] = {"lmgc90": {"value": 19.0}, "closed_forms": {"experiment_deg": 14.33},
+                                    "package": [{"kn": 2e8, "value": 14.8}, {"kn": 2e10, "value": 18.0}]}
+    study.save(data, tmp_path)
+    study.run_case("tilt_wall", tmp_path, kn_factors=[10.0], variants=(0,), lmgc90_side=False, log=lambda m: None)
+    e = study.load(tmp_path)["cases"]["tilt_wall_0"]
+    assert e["lmgc90"] == {"value": 19.0} and e["closed_forms"] == {"experiment_deg": 14.33}
+    assert [p["kn"] for p in e["package"]] == [2e8, 2e9, 2e10]
+    assert [p["value"] for p in e["package"]] == [14.8, pytest.approx(10.0 + math.log10(2e9)), 18.0]

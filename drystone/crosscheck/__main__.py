@@ -30,6 +30,8 @@ def main(argv=None) -> int:
     ap.add_argument("--seeds", nargs="+", type=int, help="tilt_wall seeds (default 0-4)")
     ap.add_argument("--no-package", action="store_true", help="LMGC90 and closed forms only (keeps the package "
                     "runs already in crosscheck.json)")
+    ap.add_argument("--no-lmgc90", action="store_true", help="the package only, at --kn-factors (keeps LMGC90's run "
+                    "and the package runs at other K_n already in crosscheck.json)")
     ap.add_argument("--out", help="output folder (default results/crosscheck)")
     args = ap.parse_args(argv)
 
@@ -53,7 +55,8 @@ def main(argv=None) -> int:
     t0 = time.time()
     for name in names:
         variants = tuple(args.seeds) if (name == "tilt_wall" and args.seeds) else None
-        study.run_case(name, out, kn_factors=args.kn_factors, variants=variants, package_side=not args.no_package)
+        study.run_case(name, out, kn_factors=args.kn_factors, variants=variants, package_side=not args.no_package,
+                       lmgc90_side=not args.no_lmgc90)
     path = report.write(out)
     print(f"crosscheck: {', '.join(names)} in {time.time() - t0:.0f} s; report {path}")
     return 0

@@ -105,8 +105,11 @@ def _fmt(v) -> str:
 
 
 def run_case(name: str, out: Path = OUT, kn_factors=None, variants=None, package_side: bool = True,
-             dt_check: bool | None = None, log=print) -> dict:
-    """Run one case (every variant) in both engines; updates crosscheck.json; returns its entries."""
+             dt_check: bool | None = None, lmgc90_side: bool = True, log=print) -> dict:
+    """Run one case (every variant) in both engines; updates crosscheck.json; returns its
+    entries. ``package_side=False``: LMGC90 and the closed forms only (the package runs
+    already recorded are kept); ``lmgc90_side=False``: the package only, at ``kn_factors``
+    (LMGC90's entry and the package runs at other K_n already recorded are kept)."""
     cc = cases.CASES[name]
     factors = tuple(cc.kn_factors if kn_factors is None else kn_factors)
     dt_check = (name in cases.SMALL) if dt_check is None else dt_check
@@ -115,19 +118,27 @@ def run_case(name: str, out: Path = OUT, kn_factors=None, variants=None, package
     for variant in (cc.variants if variants is None else variants):
         k = key(name, variant)
         base = Path(out) / "runs" / k
-        shutil.rmtree(base / "lmgc90", ignore_errors=True)
+        old = data["cases"].get(k, {})
         entry = {"name": name, "title": cc.title, "variant": variant, "quantity": cc.quantity, "unit": cc.unit}
-        try:
-            lm = run_lmgc90(cc, base / "lmgc90", variant, log=log)
-            entry["lmgc90"] = lm["out"]
-            entry["closed_forms"] = cc.closed_forms(lm["run"]["spec"], [cases.KN0 * f for f in factors],
-                                                   lm["run"]["folder"])
-            if dt_check:
-                half = run_lmgc90(cc, base / "lmgc90_half_dt", variant, dt=cc.dt / 2, log=log)["out"]
-                entry["lmgc90_half_dt"] = half
-        except lmgc90.LMGC90Error as exc:
-            entry["lmgc90"] = {"error": str(exc)}
-            log(f"[crosscheck] {k}: LMGC90 failed: {exc}")
+        if lmgc90_side:
+            shutil.rmtree(base / "lmgc90", ignore_errors=True)
+            try:
+                lm = run_lmgc90(cc, base / "lmgc90", variant, log=log)
+                entry["lmgc90"] = lm["out"]
+                entry["closed_forms"] = cc.closed_forms(lm["run"]["spec"], [cases.KN0 * f for f in factors],
+                                                       lm["run"]["folder"])
+                if dt_check:
+                    half = run_lmgc90(cc, base / "lmgc90_half_dt", variant, dt=cc.dt / 2, log=log)["out"]
+                    entry["lmgc90_half_dt"] = half
+            except lmgc90.LMGC90Error as exc:
+                entry["lmgc90"] = {"error": str(exc)}
+                log(f"[crosscheck] {k}: LMGC90 failed: {exc}")
+        else:
+            if "lmgc90" not in old:
+                raise ValueError(f"{k}: no LMGC90 run recorded in {Path(out) / JSON}: run it first")
+            for part in ("lmgc90", "closed_forms", "lmgc90_half_dt"):
+                if part in old:
+                    entry[part] = old[part]
         entry["package"] = []
         if package_side:
             for f in factors:
@@ -138,10 +149,12 @@ def run_case(name: str, out: Path = OUT, kn_factors=None, variants=None, package
                 except Exception as exc:  # a failed run is reported, the others go on
                     entry["package"].append({"kn": kn, "error": f"{type(exc).__name__}: {exc}"})
                     log(f"[crosscheck] {k}: package at K_n = {kn:.3g} failed: {exc}")
-        else:
-            old = data["cases"].get(k, {}).get("package")
-            if old:
-                entry["package"] = old
+            if not lmgc90_side:  # keep the runs at the other K_n
+                new = {p["kn"] for p in entry["package"]}
+                entry["package"] = sorted([p for p in old.get("package", []) if p["kn"] not in new]
+                                          + entry["package"], key=lambda p: p["kn"])
+        elif old.get("package"):
+            entry["package"] = old["package"]
         entry["time"] = time.strftime("%Y-%m-%d %H:%M:%S")
         data["cases"][k] = entry
         save(data, out)
