@@ -76,3 +76,23 @@ def test_repository_readme_blocks_are_known_and_closed():
     assert {"verification", "tilt", "ogawa"} <= set(names)
     assert set(names) <= set(rt.BLOCKS)
     assert [m.group(2) for m in rt.MARK.finditer(text)] == names
+
+
+def test_fragility_block_keeps_the_preliminary_warning(tmp_path):
+    """The fragility block carries the run count, the fit table and the cost line, and the
+    report's warning when the fit is on a subset of the plan (never a bare table)."""
+    (tmp_path / "fragility").mkdir()
+    report = ("# F\n\n## What ran\n\n* Runs: 220 planned = 22 x 10; 40 finished, 0 failed, 180 not run.\n\n"
+              "## Fragility curves: P(DS | PGA)\n\n**Preliminary: fitted on the 40 finished runs of 220.**\n\n"
+              "| DS | theta |\n|---|---|\n| DS1 | 0.8 |\n\n![f](f.png)\n\n## Cost\n\n"
+              "Measured on this machine (40 runs): 28 s per run.\n")
+    (tmp_path / "fragility" / "report.md").write_text(report)
+    block = rt.fragility(tmp_path)
+    assert block.startswith("Runs: 220 planned = 22 x 10; 40 finished")
+    assert "**Preliminary: fitted on the 40 finished runs of 220.**" in block
+    assert "| DS1 | 0.8 |" in block and "28 s per run" in block and "results/fragility/report.md" in block
+    full = block.replace("**Preliminary", "").count("Preliminary")
+    assert full == 0
+    (tmp_path / "fragility" / "report.md").write_text(report.replace("**Preliminary: fitted on the 40 finished runs "
+                                                                     "of 220.**\n\n", ""))
+    assert "Preliminary" not in rt.fragility(tmp_path)

@@ -188,6 +188,29 @@ def _case_section(k: str, entry: dict, figs: dict) -> list[str]:
     return L
 
 
+def _tilt_walls_summary(entries: dict) -> list[str]:
+    """One row per Santa-Cruz wall run: LMGC90's rigid collapse angle beside the package's
+    at each K_n, the experiment and the paper's model (all in degrees of tilt)."""
+    walls = {k: e for k, e in entries.items() if e.get("name") == "tilt_wall"}
+    if not walls:
+        return []
+    kns = sorted({p["kn"] for e in walls.values() for p in e.get("package", []) if p.get("value") is not None})
+    L = ["## Santa-Cruz tilt walls: summary", "",
+         "Collapse angle (deg of tilt), each engine's onset read with the package's rule; the experiment is the "
+         "mean of three walls, the paper's model its Fig. 13 value; the walls are generated (ASSUMED layout).", "",
+         "| wall (seed) | LMGC90 (rigid) | " + " | ".join(f"package K_n {k:.0e}" for k in kns) + " |",
+         "|---|---|" + "---|" * len(kns)]
+    for k, e in sorted(walls.items(), key=lambda kv: str(kv[1].get("variant"))):
+        lm = (e.get("lmgc90") or {}).get("value")
+        by_kn = {p["kn"]: p.get("value") for p in e.get("package", [])}
+        L.append(f"| {e.get('variant')} | {_f(lm, 2)} | " + " | ".join(_f(by_kn.get(x), 2) for x in kns) + " |")
+    cf = next((e.get("closed_forms") for e in walls.values() if e.get("closed_forms")), {}) or {}
+    if cf:
+        L += ["", f"Experiment {_f(cf.get('experiment_deg'), 2)} ± {_f(cf.get('experiment_sd_deg'), 2)} deg; "
+                  f"the paper's model {_f(cf.get('paper_model_deg'), 2)} deg."]
+    return L + [""]
+
+
 def write(out: Path = study.OUT) -> Path:
     data = study.load(out)
     out = Path(out)
@@ -212,6 +235,7 @@ def write(out: Path = study.OUT) -> Path:
          "`__bulk_behaviour_MOD_grav1..3`, `__prprx_MOD_sto_set_explicit_detection_prprx`.", ""]
     if not data["cases"]:
         L += ["No case has been run yet: `python -m drystone.crosscheck small` (or `all`).", ""]
+    L += _tilt_walls_summary(data["cases"])
     for k, entry in data["cases"].items():
         L += _case_section(k, entry, figs)
     path = out / "report.md"

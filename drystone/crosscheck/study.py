@@ -156,6 +156,7 @@ def run_case(name: str, out: Path = OUT, kn_factors=None, variants=None, package
         elif old.get("package"):
             entry["package"] = old["package"]
         entry["time"] = time.strftime("%Y-%m-%d %H:%M:%S")
+        data = load(out)  # again: another cross-check process may have saved a case meanwhile
         data["cases"][k] = entry
         save(data, out)
         done[k] = entry

@@ -167,6 +167,28 @@ def identification(results: Path) -> str:
     return "\n\n".join(out) + "\n\n" + _source_note(p, results=results)
 
 
+def fragility(results: Path) -> str:
+    """The fragility study's run count, its fitted curves (with the report's preliminary
+    warning when the fit is on a subset of the plan) and its measured cost."""
+    p = results / "fragility" / "report.md"
+    if not p.is_file():
+        raise Missing(f"{p} missing")
+    lines = p.read_text().splitlines()
+    out = [ln.lstrip("* ") for ln in lines if ln.startswith("* Runs:")][:1]
+    out += [ln for ln in lines if ln.startswith("**Preliminary")][:1]
+    out.append(first_table_after(p, "Fragility curves"))
+    out += [ln for ln in lines if ln.startswith("Measured on this machine")][:1]
+    return "\n\n".join(out) + "\n\n" + _source_note(p, results=results)
+
+
+def crosscheck(results: Path) -> str:
+    """The LMGC90 cross-check's Santa-Cruz tilt-wall summary (collapse angles per wall)."""
+    p = results / "crosscheck" / "report.md"
+    out = [first_table_after(p, "Santa-Cruz tilt walls: summary")]
+    out += [ln for ln in p.read_text().splitlines() if ln.startswith("Experiment ")][:1]
+    return "\n\n".join(out) + "\n\n" + _source_note(p, results=results)
+
+
 def bench(results: Path) -> str:
     """Speed figures of ``make bench`` (results/bench/bench.json): the 40-block wall per law,
     geometry and engine; the large walls and the cost's growth with N; threads; the
@@ -228,7 +250,8 @@ def bench(results: Path) -> str:
 
 
 BLOCKS = {"bench": bench, "verification": verification, "tilt": tilt, "tilt_checks": tilt_checks, "ogawa": ogawa,
-          "sacsayhuaman_table3": sacsayhuaman_table3, "free_decay": free_decay, "identification": identification}
+          "sacsayhuaman_table3": sacsayhuaman_table3, "free_decay": free_decay, "identification": identification,
+          "fragility": fragility, "crosscheck": crosscheck}
 
 
 def update(text: str, results: Path, blocks: dict | None = None) -> tuple[str, list[str], list[str]]:
