@@ -289,8 +289,18 @@ def _jacobi_sqrt(B, out, A, V, warm):
     previous step's eigenvectors of the same contact, which nearly diagonalise B: cyclic
     Jacobi then converges in one or two sweeps instead of five to seven; the result is the
     same to round-off). The basis is re-orthonormalised first (modified Gram-Schmidt), so
-    round-off in it never accumulates over the steps of a long-lived contact."""
+    round-off in it never accumulates over the steps of a long-lived contact; one with a
+    column far from unit length or not finite is not used."""
     n = 6
+    if warm:
+        # a basis that is not one (non-finite: a blown-up step) is dropped: start cold
+        for j in range(n):
+            d = 0.0
+            for k in range(n):
+                d += V[k, j] * V[k, j]
+            if not d > 0.5:
+                warm = False
+                break
     if warm:
         for j in range(n):
             for i in range(j):

@@ -199,3 +199,47 @@ def test_compiled_kernel_matches_the_reference(sticking):
     assert np.allclose(om2, om, rtol=tol.NUMERICAL_REL)
     assert np.allclose(f, f_ref, rtol=tol.KERNEL_REL, atol=tol.KERNEL_REL * np.abs(f_ref).max())
     assert np.allclose(mo, m_ref, rtol=tol.KERNEL_REL, atol=tol.KERNEL_REL * np.abs(m_ref).max())
+
+
+def test_warm_start_gives_the_cold_result_and_survives_a_broken_basis():
+    """``damping_wrenches_warm`` started from a near basis (another contact state's modes),
+    from the identity, or from a non-finite basis gives the cold solve's wrenches: the warm
+    start changes the work, not the result. Tolerance ``KERNEL_REL`` of the largest wrench,
+    as for the kernel against numpy: the contact's twist about n has no stiffness, so B has
+    a zero eigenvalue that either solve leaves at +-1e-16 of the largest, and its square
+    root, ~1e-8 of the largest, differs between any two solves (measured here: 1e-9 to
+    2e-9 of the largest force); the highest modal frequency is a simple eigenvalue and
+    agrees to ``NUMERICAL_REL``."""
+    rng = np.random.default_rng(7)
+    m = 12
+    n = rng.normal(size=(m, 3))
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    ra, rb = 0.3 * rng.normal(size=(m, 3)), 0.3 * rng.normal(size=(m, 3))
+    ima, imb = np.full(m, 1.0 / 200), np.full(m, 1.0 / 150)
+    iia = np.tile(np.diag([0.1, 0.05, 0.2]), (m, 1, 1))
+    iib = np.tile(np.diag([0.08, 0.1, 0.03]), (m, 1, 1))
+    pj = np.empty((m, 3, 3))
+    for k in range(m):
+        t = np.linalg.svd(n[k][None])[2][1:]
+        pj[k] = t.T @ np.diag(rng.uniform(1e-4, 1e-3, 2)) @ t
+    area = rng.uniform(0.01, 0.2, m)
+    kn, kt, xi, mu = np.full(m, 2e8), np.full(m, 1e8), np.full(m, 0.3), np.full(m, 0.5)
+    stick = rng.random(m) < 0.7
+    twist = rng.normal(size=(m, 6)) * 1e-3
+    fn = rng.uniform(50, 200, m)
+    fs = np.zeros((m, 3))
+    lever = np.zeros((m, 3))
+    args = (n, area, pj, kn, kt, xi, stick, ra, rb, ima, imb, iia, iib, twist, fn, fs, mu, lever)
+    f0, m0, om0 = law.damping_wrenches(*args)
+    basis = np.zeros((m, 6, 6))
+    law.damping_wrenches_warm(*args[:5], 0.999 * xi, *args[6:], basis, np.zeros(m, bool))  # modes of this state
+    ra2 = ra + 1e-3 * rng.normal(size=(m, 3))  # a nearby state: its modes are the start
+    near = basis.copy()
+    law.damping_wrenches_warm(n, area, pj, kn, kt, xi, stick, ra2, rb, ima, imb, iia, iib, twist, fn, fs, mu, lever,
+                              near, np.zeros(m, bool))
+    starts = {"near": near, "identity": np.tile(np.eye(6), (m, 1, 1)), "nan": np.full((m, 6, 6), np.nan)}
+    for name, b in starts.items():
+        f1, m1, om1 = law.damping_wrenches_warm(*args, b.copy(), np.ones(m, bool))
+        assert np.allclose(f1, f0, rtol=0, atol=tol.KERNEL_REL * np.abs(f0).max()), name
+        assert np.allclose(m1, m0, rtol=0, atol=tol.KERNEL_REL * np.abs(m0).max()), name
+        assert np.allclose(om1, om0, rtol=tol.NUMERICAL_REL), name
