@@ -154,3 +154,19 @@ def test_white_noise_peak_displacement_and_flat_spectrum():
     # seeded: same seed same samples, another seed other samples
     np.testing.assert_array_equal(generators.white_noise(seed=7).acc, r.acc)
     assert not np.allclose(generators.white_noise(seed=8).acc, r.acc)
+
+
+def test_sine_samples_are_the_c_librarys_on_every_processor():
+    """The sine's samples are -A sin(w t_i) by the C library's sin, bit for bit (not numpy's
+    AVX-512 variant, whose last bits differ on some processors): a run's fingerprint hashes
+    these samples, so they must not depend on the machine (tests/test_spec.py pins it)."""
+    import math
+
+    r = generators.sine(2.7, duration=3.0, amplitude=0.5, dt=0.001)
+    w = 2 * math.pi * 2.7
+    t = np.arange(len(r.acc)) * 0.001
+    expected = np.array([-0.5 * math.sin(w * x) for x in t])
+    assert np.array_equal(r.acc, expected)
+    x = np.linspace(-40.0, 40.0, 101).reshape(101, 1)
+    assert generators.libm_sin(x).shape == (101, 1)
+    assert np.array_equal(generators.libm_sin(x).ravel(), [math.sin(v) for v in x.ravel()])
