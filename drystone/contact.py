@@ -282,16 +282,18 @@ def critical_time_step(mass, stiffness, damping_ratio=0.0) -> float:
 # triangular solves.
 
 @njit(cache=True)
-def _jacobi_sqrt(B, out, A, V, warm):
-    """out = B^1/2 for a symmetric positive semi-definite 6 x 6 B (negative round-off
-    eigenvalues clipped); returns the largest eigenvalue. A: 6 x 6 work array. V: on exit
-    B's eigenvectors (columns); on entry, with ``warm``, a basis to start from (the
-    previous step's eigenvectors of the same contact, which nearly diagonalise B: cyclic
-    Jacobi then converges in one or two sweeps instead of five to seven; the result is the
-    same to round-off). The basis is re-orthonormalised first (modified Gram-Schmidt), so
-    round-off in it never accumulates over the steps of a long-lived contact; one with a
-    column far from unit length or not finite is not used."""
+def _jacobi_sqrt(B, T, A, V, warm):
+    """B^1/2 = V diag(A) V^T for a symmetric positive semi-definite 6 x 6 B: on exit V
+    holds B's eigenvectors (columns) and A's diagonal the square roots of its eigenvalues
+    (negative round-off ones clipped to 0); returns the largest eigenvalue. T: 6 x 6 work
+    array. On entry, with ``warm``, V is a basis to start from (the previous step's
+    eigenvectors of the same contact, which nearly diagonalise B: cyclic Jacobi then
+    converges in one or two sweeps instead of five to seven; the result is the same to
+    round-off). A basis whose columns have drifted from unit length (round-off over many
+    steps: > 1e-13) is re-orthonormalised first (modified Gram-Schmidt); one with a column
+    far from unit length or not finite is not used."""
     n = 6
+    drift = False
     if warm:
         # a basis that is not one (non-finite: a blown-up step) is dropped: start cold
         for j in range(n):
@@ -301,7 +303,9 @@ def _jacobi_sqrt(B, out, A, V, warm):
             if not d > 0.5:
                 warm = False
                 break
-    if warm:
+            if abs(d - 1.0) > 1e-13:
+                drift = True
+    if warm and drift:
         for j in range(n):
             for i in range(j):
                 d = 0.0
@@ -315,18 +319,19 @@ def _jacobi_sqrt(B, out, A, V, warm):
             d = 1.0 / np.sqrt(d)
             for k in range(n):
                 V[k, j] *= d
-        # A = V^T B V (out as B V)
+    if warm:
+        # A = V^T B V (T = B V)
         for i in range(n):
             for j in range(n):
                 acc = 0.0
                 for k in range(n):
                     acc += B[i, k] * V[k, j]
-                out[i, j] = acc
+                T[i, j] = acc
         for i in range(n):
             for j in range(i, n):
                 acc = 0.0
                 for k in range(n):
-                    acc += V[k, i] * out[k, j]
+                    acc += V[k, i] * T[k, j]
                 A[i, j] = acc
                 A[j, i] = acc
     else:
@@ -378,13 +383,6 @@ def _jacobi_sqrt(B, out, A, V, warm):
             lmax = A[i, i]
     for k in range(n):
         A[k, k] = np.sqrt(A[k, k]) if A[k, k] > 0.0 else 0.0
-    for i in range(n):
-        for j in range(i, n):
-            acc = 0.0
-            for k in range(n):
-                acc += V[i, k] * A[k, k] * V[j, k]
-            out[i, j] = acc
-            out[j, i] = acc
     return lmax
 
 
@@ -451,7 +449,8 @@ def damping_wrenches_warm(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, 
     L = np.empty((6, 6))
     KL = np.empty((6, 6))
     B = np.empty((6, 6))
-    R = np.empty((6, 6))
+    R = np.empty((6, 6))  # work array of _jacobi_sqrt
+    w6 = np.empty(6)
     A6 = np.empty((6, 6))
     Rr = np.empty((3, 3))
     S = np.zeros((3, 3))
@@ -520,7 +519,8 @@ def damping_wrenches_warm(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, 
         for i in range(6):
             for j in range(i + 1, 6):
                 B[j, i] = B[i, j]
-        lmax = _jacobi_sqrt(B, R, A6, basis[c], warm[c])
+        V6 = basis[c]
+        lmax = _jacobi_sqrt(B, R, A6, V6, warm[c])
         om[c] = np.sqrt(lmax)
         # y = L^-1 u (forward), z = R y, w = L^-T z (backward); wrench = -2 xi w
         for i in range(6):
@@ -528,10 +528,15 @@ def damping_wrenches_warm(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, 
             for k in range(i):
                 s -= L[i, k] * y[k]
             y[i] = s / L[i, i]
+        for k in range(6):  # z = B^1/2 y = V diag(A6) V^T y
+            s = 0.0
+            for i in range(6):
+                s += V6[i, k] * y[i]
+            w6[k] = A6[k, k] * s
         for i in range(6):
             s = 0.0
             for k in range(6):
-                s += R[i, k] * y[k]
+                s += V6[i, k] * w6[k]
             z[i] = s
         for i in range(5, -1, -1):
             s = z[i]
