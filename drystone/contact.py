@@ -439,7 +439,9 @@ def damping_wrenches_warm(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, 
     """``damping_wrenches`` with each contact's modal basis carried between steps:
     ``basis`` (m,6,6) holds on entry, where ``warm``, the contact's eigenvectors of the
     previous step (of B = L^T K L, the scaled stiffness), and on exit this step's, for every
-    contact damped here (``_jacobi_sqrt``). The result is that of a cold solve to round-off."""
+    contact damped here (``_jacobi_sqrt``). A basis that is not one (zeros, NaN) gives a cold
+    solve. The result is the cold solve's to ~1e-9 of the largest wrench (the twist about n
+    has no stiffness: the square root of B's zero eigenvalue amplifies round-off)."""
     m = len(parea)
     fd = np.zeros((m, 3))
     md = np.zeros((m, 3))
@@ -449,7 +451,7 @@ def damping_wrenches_warm(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, 
     L = np.empty((6, 6))
     KL = np.empty((6, 6))
     B = np.empty((6, 6))
-    R = np.empty((6, 6))  # work array of _jacobi_sqrt
+    T6 = np.empty((6, 6))  # work array of _jacobi_sqrt
     w6 = np.empty(6)
     A6 = np.empty((6, 6))
     Rr = np.empty((3, 3))
@@ -520,9 +522,9 @@ def damping_wrenches_warm(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, 
             for j in range(i + 1, 6):
                 B[j, i] = B[i, j]
         V6 = basis[c]
-        lmax = _jacobi_sqrt(B, R, A6, V6, warm[c])
+        lmax = _jacobi_sqrt(B, T6, A6, V6, warm[c])
         om[c] = np.sqrt(lmax)
-        # y = L^-1 u (forward), z = R y, w = L^-T z (backward); wrench = -2 xi w
+        # y = L^-1 u (forward), z = B^1/2 y, w = L^-T z (backward); wrench = -2 xi w
         for i in range(6):
             s = twist[c, i]
             for k in range(i):

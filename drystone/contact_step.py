@@ -261,8 +261,8 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, a
     kt = P[:, 1].copy()
     mu = P[:, 2].copy()
     xi = P[:, 3].copy()
-    # each contact's history: its shear force and its damping's modal basis (zero and the
-    # identity for a new contact)
+    # each contact's history: its shear force and its damping's modal basis (zeros for a new
+    # contact: no basis, a cold solve, also at the next step if it is not damped now)
     prev = _previous(keys, prev_keys)
     fs_prev = np.zeros((m, 3))
     basis = np.zeros((m, 6, 6))
@@ -271,9 +271,6 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, a
         if warm[k]:
             fs_prev[k] = prev_shear[prev[k]]
             basis[k] = prev_basis[prev[k]]
-        else:
-            for q in range(6):
-                basis[k, q, q] = 1.0
     fn = kn * vol
     fs = np.empty((m, 3))
     slipping = np.zeros(m, np.bool_)

@@ -143,6 +143,10 @@ def test_goal_reads_the_one_thread_rows():
     g = bench.goal(rows)
     assert g["compiled_ms"] == 0.24 and g["ms_met"]
     assert g["speedup"] == pytest.approx(1.5 / 0.24) and g["speedup_met"]
+    assert g["text"] == ("compiled step 0.240 ms/step on one thread (goal <= 0.25 ms: met), 6.2x the numpy step's "
+                         "1.50 ms (goal >= 6x: met)")
     g = bench.goal([_row("python", 1, 1.2), _row("compiled", 1, 0.26)])
     assert not g["ms_met"] and not g["speedup_met"]  # 0.26 > 0.25 ms, 4.6x < 6x
+    rows = [_row("python", 1, 1.2), dict(_row("compiled", 1, 0.26), repeats=[0.3, 0.26])]
+    assert bench.goal(rows)["text"].endswith("not met); the fastest of 2 runs (0.300, 0.260 ms/step)")
     assert bench.goal([_row("python", 1, 1.2)]) is None

@@ -200,7 +200,7 @@ def _tilt_walls_summary(entries: dict) -> list[str]:
          "mean of three walls, the paper's model its Fig. 13 value; the walls are generated (ASSUMED layout).", "",
          "| wall (seed) | LMGC90 (rigid) | " + " | ".join(f"package K_n {k:.0e}" for k in kns) + " |",
          "|---|---|" + "---|" * len(kns)]
-    for k, e in sorted(walls.items(), key=lambda kv: str(kv[1].get("variant"))):
+    for k, e in sorted(walls.items(), key=lambda kv: (kv[1].get("variant") is None, kv[1].get("variant") or 0)):
         lm = (e.get("lmgc90") or {}).get("value")
         by_kn = {p["kn"]: p.get("value") for p in e.get("package", [])}
         L.append(f"| {e.get('variant')} | {_f(lm, 2)} | " + " | ".join(_f(by_kn.get(x), 2) for x in kns) + " |")
