@@ -287,9 +287,9 @@ def _jacobi_sqrt(B, T, A, V, warm):
     holds B's eigenvectors (columns) and A's diagonal the square roots of its eigenvalues
     (negative round-off ones clipped to 0); returns the largest eigenvalue. T: 6 x 6 work
     array. On entry, with ``warm``, V is a basis to start from (the previous step's
-    eigenvectors of the same contact, which nearly diagonalise B: cyclic Jacobi then
-    converges in one or two sweeps instead of five to seven; the result is the same to
-    round-off). A basis whose columns have drifted from unit length (round-off over many
+    eigenvectors of the same contact, which nearly diagonalise B: cyclic Jacobi, quadratically
+    convergent, then needs fewer sweeps; the result is a cold solve's to ~1e-9 of the
+    largest eigenvalue's scale). A basis whose columns have drifted from unit length (round-off over many
     steps: > 1e-13) is re-orthonormalised first (modified Gram-Schmidt); one with a column
     far from unit length or not finite is not used."""
     n = 6
