@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from drystone import libm
 from drystone.spec import upgrade_stage
 from drystone.stages import REGISTRY, StageType
 from drystone.units import GRAVITY
@@ -97,34 +98,63 @@ class LoadProgramme:
                 return k
         return len(self.stages) - 1
 
-    def gravity_scale(self, t: float) -> float:
-        """Fraction of gravity applied at t (0..1): the first gravity stage's ramp."""
+    # The body-force field at many times in one call (``*_at``: ``ts`` a 1-D array, s) and
+    # at one (the scalar methods, which call them): the same numbers bit for bit, so a
+    # compiled loop given a sample's worth of steps at once runs as one step at a time.
+    def gravity_scale_at(self, ts: np.ndarray) -> np.ndarray:
+        """Fraction of gravity applied at each time (0..1): the first gravity stage's ramp."""
         for s in self.stages:
-            scale = s.behaviour.gravity_scale(s, t)
+            scale = s.behaviour.gravity_scale(s, ts)
             if scale is not None:
                 return scale
-        return 1.0  # no gravity stage: gravity on from the start
+        return np.ones(len(ts))  # no gravity stage: gravity on from the start
 
-    def tilt_deg(self, t: float) -> float:
-        """Platform tilt at t (deg), accumulated over tilt stages."""
-        theta = 0.0
+    def tilt_deg_at(self, ts: np.ndarray) -> np.ndarray:
+        """Platform tilt at each time (deg), accumulated over tilt stages."""
+        theta = np.zeros(len(ts))
         for s in self.stages:
-            theta += s.behaviour.tilt_increment(s, t)
+            theta = theta + s.behaviour.tilt_increment(s, ts)
         return theta
 
-    def base_acceleration(self, t: float) -> np.ndarray:
-        """Base acceleration vector (m/s^2) at t, linear interpolation of the samples."""
+    def base_acceleration_at(self, ts: np.ndarray) -> np.ndarray:
+        """Base acceleration vectors (m/s^2, (n, 3)) at the times: linear interpolation of
+        the samples of the stage that shakes the base then (the first, if several)."""
+        out = np.zeros((len(ts), 3))
+        free = np.ones(len(ts), bool)  # times no stage has claimed yet
         for s in self.stages:
-            a = s.behaviour.base_acceleration(s, t)
-            if a is not None:
-                return a
-        return np.zeros(3)
+            got = s.behaviour.base_acceleration(s, ts)
+            if got is not None:
+                on, a = got
+                claim = free[on]
+                out[np.flatnonzero(on)[claim]] = a[claim]
+                free &= ~on
+        return out
+
+    def body_acceleration_at(self, ts: np.ndarray) -> np.ndarray:
+        """Effective body-force field per unit mass in the platform frame (m/s^2, (n, 3)) at
+        the times: gravity turned by the tilt, minus the base acceleration. sin and cos are
+        the C library's (``drystone.libm``: numpy's AVX-512 variants differ in the last bits)."""
+        ts = np.asarray(ts, float)
+        th = self.tilt_deg_at(ts) * (math.pi / 180.0)  # as math.radians
+        s, c = libm.sin(th)[:, None], libm.cos(th)[:, None]
+        g = (self.gravity * self.gravity_scale_at(ts))[:, None] * (s * self._towards - c * Z)
+        return g - self.base_acceleration_at(ts)
+
+    def gravity_scale(self, t: float) -> float:
+        """Fraction of gravity applied at t (0..1)."""
+        return float(self.gravity_scale_at(np.array([t]))[0])
+
+    def tilt_deg(self, t: float) -> float:
+        """Platform tilt at t (deg)."""
+        return float(self.tilt_deg_at(np.array([t]))[0])
+
+    def base_acceleration(self, t: float) -> np.ndarray:
+        """Base acceleration vector (m/s^2) at t."""
+        return self.base_acceleration_at(np.array([t]))[0]
 
     def body_acceleration(self, t: float) -> np.ndarray:
-        """Effective body-force field per unit mass in the platform frame (m/s^2)."""
-        th = math.radians(self.tilt_deg(t))
-        g = self.gravity * self.gravity_scale(t) * (math.sin(th) * self._towards - math.cos(th) * Z)
-        return g - self.base_acceleration(t)
+        """Effective body-force field per unit mass in the platform frame (m/s^2) at t."""
+        return self.body_acceleration_at(np.array([t]))[0]
 
     def velocity_jump(self, k: int) -> np.ndarray:
         """Relative velocity (m/s, platform frame) added to every free block when stage k

@@ -50,7 +50,10 @@ class ResolveContext:
 class StageType:
     """A stage type. ``validate`` and ``resolve`` take the case stage (a dict filled with
     the defaults of ``keys``); the load hooks take a resolved stage ``st`` (``start``,
-    ``end`` s and ``params``, a drystone.loading.Stage) and a time ``t`` (s)."""
+    ``end`` s and ``params``, a drystone.loading.Stage) and a time ``t`` (s): the body-force
+    hooks (``gravity_scale``, ``tilt_increment``, ``base_acceleration``) a 1-D array of times,
+    evaluated element by element with the scalar formula (a programme's values at many steps
+    in one call are those of one step at a time, bit for bit), the others one time."""
 
     name: ClassVar[str]
     keys: ClassVar[dict[str, Key]]
@@ -69,20 +72,21 @@ class StageType:
         raise NotImplementedError
 
     # -- the load at t ------------------------------------------------------------
-    def gravity_scale(self, st, t: float) -> float | None:
-        """Fraction of gravity at t if this stage governs it, else None."""
+    def gravity_scale(self, st, t: np.ndarray) -> np.ndarray | None:
+        """Fraction of gravity at each time of ``t`` if this stage governs it, else None."""
         return None
 
-    def tilt_increment(self, st, t: float) -> float:
-        """Platform rotation (deg) this stage has added by t."""
-        return 0.0
+    def tilt_increment(self, st, t: np.ndarray) -> np.ndarray:
+        """Platform rotation (deg) this stage has added by each time of ``t``."""
+        return np.zeros(len(t))
 
     def towards(self, st) -> np.ndarray | None:
         """Horizontal unit vector the platform tilts towards, if this stage tilts it."""
         return None
 
-    def base_acceleration(self, st, t: float) -> np.ndarray | None:
-        """Base acceleration vector (m/s^2) at t if this stage shakes the base then, else None."""
+    def base_acceleration(self, st, t: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """Where among the times ``t`` this stage shakes the base, and the base acceleration
+        vectors there (m/s^2): (mask of t, (mask.sum(), 3) array); None if it never does."""
         return None
 
     def imposed_velocities(self, st, t: float) -> dict[int, np.ndarray]:
@@ -137,8 +141,8 @@ class Gravity(StageType):
     def gravity_scale(self, st, t):
         ramp = st.params.get("ramp", 0.0)
         if ramp <= 0:
-            return 1.0 if t >= st.start else 0.0
-        return float(np.clip((t - st.start) / ramp, 0.0, 1.0))
+            return np.where(t >= st.start, 1.0, 0.0)
+        return np.clip((t - st.start) / ramp, 0.0, 1.0)
 
 
 @register
@@ -206,9 +210,7 @@ class Tilt(StageType):
                      "after_collapse": s["after_collapse"]}
 
     def tilt_increment(self, st, t):
-        if t <= st.start:
-            return 0.0
-        return st.params["rate_deg_s"] * (min(t, st.end) - st.start)
+        return np.where(t <= st.start, 0.0, st.params["rate_deg_s"] * (np.minimum(t, st.end) - st.start))
 
     def towards(self, st):
         return np.asarray(st.params["towards"], float)
@@ -320,16 +322,16 @@ class Excitation(StageType):
         return dur, params
 
     def base_acceleration(self, st, t):
-        if not st.start <= t < st.end:
-            return None
-        acc = st.params["acc"]
-        x = (t - st.start) / st.params["dt"]
-        i = int(x)
-        if i + 1 >= len(acc):
-            a = acc[-1] if i < len(acc) else 0.0
-        else:
-            a = acc[i] + (x - i) * (acc[i + 1] - acc[i])
-        return float(a) * np.asarray(st.params["direction"], float)
+        """Linear interpolation of the samples; the last sample held to its end, zero past it."""
+        on = (st.start <= t) & (t < st.end)
+        acc = np.asarray(st.params["acc"], float)
+        x = (t[on] - st.start) / st.params["dt"]
+        i = x.astype(np.int64)  # x >= 0: truncation is the floor
+        a = np.where(i < len(acc), acc[-1] if len(acc) else 0.0, 0.0)
+        between = i + 1 < len(acc)
+        j = i[between]
+        a[between] = acc[j] + (x[between] - j) * (acc[j + 1] - acc[j])
+        return on, a[:, None] * np.asarray(st.params["direction"], float)
 
     def velocity_jump(self, st):
         return np.asarray(st.params.get("initial_relative_velocity", (0.0, 0.0, 0.0)), float)

@@ -148,3 +148,46 @@ def test_the_programme_of_a_version_1_spec_is_the_same():
         assert np.array_equal(q.body_acceleration(t), p.body_acceleration(t))
         assert q.imposed_velocities(t).keys() == p.imposed_velocities(t).keys() == {3}
     assert q.moving_blocks() == [3]
+
+
+def _one_time(p: LoadProgramme, t: float) -> np.ndarray:
+    """The body force at one time by the formulas written out in plain Python floats (the
+    programme's per-step path before it took arrays): the reference for bit-for-bit checks."""
+    st = {s.type: s for s in p.stages}
+    g, tilt, exc = st["gravity"], st["tilt"], st["excitation"]
+    scale = min(max((t - g.start) / g.params["ramp"], 0.0), 1.0)
+    theta = 0.0 if t <= tilt.start else tilt.params["rate_deg_s"] * (min(t, tilt.end) - tilt.start)
+    th = math.radians(theta)
+    body = p.gravity * scale * (math.sin(th) * np.array(tilt.params["towards"], float) - math.cos(th) * np.array([0, 0, 1.0]))
+    a = 0.0
+    if exc.start <= t < exc.end:
+        acc = exc.params["acc"]
+        x = (t - exc.start) / exc.params["dt"]
+        i = int(x)
+        a = (acc[-1] if i < len(acc) else 0.0) if i + 1 >= len(acc) else acc[i] + (x - i) * (acc[i + 1] - acc[i])
+    return body - float(a) * np.array(exc.params["direction"], float)
+
+
+def test_many_times_at_once_are_each_time_alone_bit_for_bit():
+    """``body_acceleration_at`` (a recorded sample's steps in one call, what the compiled
+    loop is given) equals the per-time formula bit for bit, signs of zeros included, across
+    the ramp, a tilt, a record held at its last sample and zero past it, and every stage
+    boundary; the scalar methods agree with it."""
+    p = LoadProgramme([
+        Stage("gravity", 0.0, 2.0, {"ramp": 1.0}),
+        Stage("tilt", 2.0, 12.0, {"rate_deg_s": 1.3, "towards": [0, -1, 0]}),
+        Stage("excitation", 12.0, 14.0, {"acc": np.array([0.0, -1.0, 2.5]), "dt": 0.5, "direction": [1, 0, 0]}),
+        Stage("rest", 14.0, 15.0, {}),
+    ], G)
+    rng = np.random.default_rng(1)
+    ts = np.concatenate([rng.uniform(-0.5, 16.0, 2000), [0.0, 1.0, 2.0, 12.0, 12.5, 13.0, 13.5, 14.0, 15.0]])
+    many = p.body_acceleration_at(ts)
+    one = np.array([_one_time(p, t) for t in ts])
+    assert np.array_equal(many, one) and np.array_equal(np.signbit(many), np.signbit(one))
+    held = (ts >= 13.0) & (ts < 13.5)  # i = 2: the last sample held
+    assert held.any() and np.all(p.base_acceleration_at(ts[held])[:, 0] == 2.5)
+    past = (ts >= 13.5) & (ts < 14.0)
+    assert past.any() and np.all(p.base_acceleration_at(ts[past]) == 0.0)
+    for t in ts[:50]:
+        assert np.array_equal(p.body_acceleration(t), p.body_acceleration_at(np.array([t]))[0])
+        assert p.tilt_deg(t) == p.tilt_deg_at(np.array([t]))[0]

@@ -86,8 +86,9 @@ def test_resolve_per_type(tmp_path):
 def test_types_that_impose_nothing_return_neutral_values():
     st = Stage("rest", 0.0, 1.0, {})
     t = REGISTRY["rest"]
-    assert t.gravity_scale(st, 0.5) is None and t.base_acceleration(st, 0.5) is None and t.towards(st) is None
-    assert t.tilt_increment(st, 0.5) == 0.0 and t.imposed_velocities(st, 0.5) == {}
+    ts = np.array([0.25, 0.5])  # the body-force hooks take arrays of times
+    assert t.gravity_scale(st, ts) is None and t.base_acceleration(st, ts) is None and t.towards(st) is None
+    assert np.array_equal(t.tilt_increment(st, ts), [0.0, 0.0]) and t.imposed_velocities(st, 0.5) == {}
     assert np.array_equal(t.velocity_jump(st), np.zeros(3)) and t.settle(st, 1.0) is None
     assert t.moving_blocks(st) == []
 
@@ -101,7 +102,8 @@ def test_a_new_type_needs_only_its_class(monkeypatch):
         keys = {"duration": Key(1.0, "s", "stage length", float, positive=True)}
 
         def base_acceleration(self, st, t):
-            return np.array([1.0, 0.0, 0.0]) if st.start <= t < st.end else None
+            on = (st.start <= t) & (t < st.end)
+            return on, np.tile([1.0, 0.0, 0.0], (int(on.sum()), 1))
 
     monkeypatch.setitem(REGISTRY, "push", Push())
     prog = LoadProgramme([Stage("gravity", 0.0, 1.0, {"ramp": 0.0}), Stage("push", 1.0, 2.0)], 9.81)

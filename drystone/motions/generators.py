@@ -27,10 +27,9 @@ Both refuse (ValueError, before allocating) a motion of more than ``MAX_SAMPLES`
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
+from drystone import libm
 from drystone.motions.record import G, Record
 
 SAMPLES_PER_PERIOD = 64  # a multiple of 4: the peaks fall on samples, the sampled PGA is exact
@@ -41,16 +40,6 @@ def _check_samples(n: float, what: str):
     """Refuse (ValueError) a motion of more than MAX_SAMPLES samples, before allocating it."""
     if not n <= MAX_SAMPLES:
         raise ValueError(f"{what} would need {n:.3g} samples, more than {MAX_SAMPLES:.0e}")
-
-
-def libm_sin(x) -> np.ndarray:
-    """sin of each element by the C library's ``sin`` (Python's ``math.sin``), the same on
-    every x86-64 machine with the same libc. numpy's own ``np.sin`` switches to another
-    implementation (SVML) on processors with AVX-512, whose last bits differ: generated
-    samples would then depend on the machine, and so would a run's fingerprint, which
-    hashes them (``resolve.fingerprint``: a finished run would not be recognised on a
-    cluster node of another processor). Equal to ``np.sin`` where numpy uses the C library."""
-    return np.fromiter((math.sin(v) for v in np.asarray(x, float).ravel()), float).reshape(np.shape(x))
 
 
 def sine(frequency_hz: float, duration: float = 10.0, amplitude: float = 0.5, pga_g: float | None = None,
@@ -72,7 +61,7 @@ def sine(frequency_hz: float, duration: float = 10.0, amplitude: float = 0.5, pg
     n = int(round(duration / dt)) + 1
     t = np.arange(n) * dt
     w = 2 * np.pi * f
-    acc = -amp * libm_sin(w * t)
+    acc = -amp * libm.sin(w * t)  # not np.sin: the samples are hashed (drystone.libm)
     note = f"generated: Eq. 9 sine, f = {f:g} Hz, acceleration amplitude {amp:g} m/s^2, {duration:g} s, dt = {dt:g} s"
     return Record(acc, dt, event=f"sine {f:g} Hz", station="synthetic", component="horizontal",
                   units_in_file="m/s^2", source="generators.sine (Sacsayhuaman paper Eq. 9)",

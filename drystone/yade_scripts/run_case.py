@@ -319,7 +319,7 @@ class Driver:
         ts = self._quiet_steps(dt)
         if len(ts) == 0:
             return
-        g = np.array([self.prog.body_acceleration(t) for t in ts])
+        g = self.prog.body_acceleration_at(ts)  # bit for bit the per-step values
         F_ext = np.zeros_like(self.pos)
         for y, f, start, end in self.forces:
             if start <= ts[0] < end:
