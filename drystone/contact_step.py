@@ -495,14 +495,21 @@ def _eigen_matrix(q, R):
 
 
 @njit(cache=True)
-def _dot_q(w, q):
-    """dQ/dt for the body-frame angular velocity w at orientation q (x, y, z, w)."""
-    out = np.empty(4)
+def _dot_q(w, q, out):
+    """dQ/dt into ``out`` (4,) for the body-frame angular velocity w at orientation q (x, y, z, w)."""
     out[3] = (-q[0] * w[0] - q[1] * w[1] - q[2] * w[2]) / 2.0
     out[0] = (q[3] * w[0] - q[2] * w[1] + q[1] * w[2]) / 2.0
     out[1] = (q[2] * w[0] + q[3] * w[1] - q[0] * w[2]) / 2.0
     out[2] = (-q[1] * w[0] + q[0] * w[1] + q[3] * w[2]) / 2.0
-    return out
+
+
+@njit(cache=True)
+def _to_body(A, x, inertia, out):
+    """out = (A x) / inertia, elementwise (3,): A x row by row, left to right, as Eigen's
+    3 x 3 product without fused multiply-adds (numpy's ``@`` calls BLAS, whose order and
+    FMAs differ in the last bit)."""
+    for a in range(3):
+        out[a] = (A[a, 0] * x[0] + A[a, 1] * x[1] + A[a, 2] * x[2]) / inertia[a]
 
 
 @njit(cache=True)
@@ -520,8 +527,14 @@ def integrate(dt, g, F, T, mass, inertia, lin_free, rot_free, aspherical, pos, v
     directions (all 0 for non-moving bodies, which still move with their velocity);
     aspherical (nb,) bool: Fincham's scheme (all rotations free). ``rot`` is refreshed."""
     nb = len(mass)
+    # work arrays, once per call (no allocation per body)
     A = np.empty((3, 3))
     conj = np.empty(4)
+    ln = np.empty(3)
+    wv = np.empty(3)
+    dq = np.empty(4)
+    qh = np.empty(4)
+    qn = np.empty(4)
     for i in range(nb):
         for a in range(3):
             if lin_free[i, a] > 0.0:
@@ -532,22 +545,28 @@ def integrate(dt, g, F, T, mass, inertia, lin_free, rot_free, aspherical, pos, v
             conj[0], conj[1], conj[2], conj[3] = -q[0], -q[1], -q[2], q[3]
             _eigen_matrix(conj, A)  # global -> body
             M = T[i]
-            ln = angmom[i] + dt / 2.0 * M
-            wn = (A @ ln) / inertia[i]
-            dq = _dot_q(wn, q)
-            qh = q + dt / 2.0 * dq
+            for a in range(3):
+                ln[a] = angmom[i, a] + dt / 2.0 * M[a]
+            _to_body(A, ln, inertia[i], wv)  # body-frame angular velocity at the half step
+            _dot_q(wv, q, dq)
+            for a in range(4):
+                qh[a] = q[a] + dt / 2.0 * dq[a]
             for a in range(3):
                 angmom[i, a] += dt * M[a]
-            wh = (A @ angmom[i]) / inertia[i]
-            dqh = _dot_q(wh, qh)
-            qn = q + dt * dqh
-            # angVel = qn * wh (Eigen's quaternion-vector product on the unnormalised qn)
-            u = qn[:3]
-            uv = law._cross3(u, wh)
-            uv = uv + uv
-            w_glob = wh + qn[3] * uv + law._cross3(u, uv)
-            for a in range(3):
-                angvel[i, a] = w_glob[a]
+            _to_body(A, angmom[i], inertia[i], wv)  # ... and at the step's end
+            _dot_q(wv, qh, dq)
+            for a in range(4):
+                qn[a] = q[a] + dt * dq[a]
+            # angVel = qn * wh (Eigen's quaternion-vector product on the unnormalised qn):
+            # uv = 2 u x wh, w = wh + qn_w uv + u x uv
+            u0, u1, u2, w0, w1, w2 = qn[0], qn[1], qn[2], wv[0], wv[1], wv[2]
+            c0 = u1 * w2 - u2 * w1
+            c1 = u2 * w0 - u0 * w2
+            c2 = u0 * w1 - u1 * w0
+            c0, c1, c2 = c0 + c0, c1 + c1, c2 + c2
+            angvel[i, 0] = w0 + qn[3] * c0 + (u1 * c2 - u2 * c1)
+            angvel[i, 1] = w1 + qn[3] * c1 + (u2 * c0 - u0 * c2)
+            angvel[i, 2] = w2 + qn[3] * c2 + (u0 * c1 - u1 * c0)
             _normalise(qn)
             for a in range(4):
                 quat[i, a] = qn[a]
@@ -560,14 +579,12 @@ def integrate(dt, g, F, T, mass, inertia, lin_free, rot_free, aspherical, pos, v
                 ang = np.sqrt(w2)
                 h = (ang * dt) * 0.5
                 s = np.sin(h)
-                r = np.array([s * (angvel[i, 0] / ang), s * (angvel[i, 1] / ang), s * (angvel[i, 2] / ang), np.cos(h)])
-                qn = np.empty(4)
-                qn[3] = r[3] * q[3] - r[0] * q[0] - r[1] * q[1] - r[2] * q[2]
-                qn[0] = r[3] * q[0] + r[0] * q[3] + r[1] * q[2] - r[2] * q[1]
-                qn[1] = r[3] * q[1] + r[1] * q[3] + r[2] * q[0] - r[0] * q[2]
-                qn[2] = r[3] * q[2] + r[2] * q[3] + r[0] * q[1] - r[1] * q[0]
-                for a in range(4):
-                    quat[i, a] = qn[a]
+                r0, r1, r2, r3 = s * (angvel[i, 0] / ang), s * (angvel[i, 1] / ang), s * (angvel[i, 2] / ang), np.cos(h)
+                x0 = r3 * q[0] + r0 * q[3] + r1 * q[2] - r2 * q[1]
+                x1 = r3 * q[1] + r1 * q[3] + r2 * q[0] - r0 * q[2]
+                x2 = r3 * q[2] + r2 * q[3] + r0 * q[1] - r1 * q[0]
+                x3 = r3 * q[3] - r0 * q[0] - r1 * q[1] - r2 * q[2]
+                quat[i, 0], quat[i, 1], quat[i, 2], quat[i, 3] = x0, x1, x2, x3
                 _normalise(quat[i])
             elif not lin_free[i].any() and not rot_free[i].any():
                 continue  # a non-moving body that does not turn keeps its orientation as given

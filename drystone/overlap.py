@@ -133,14 +133,13 @@ def _faces_inside(V, F, FK, nf, N1, D1, V2, nv2, N2, D2, nf2, dedup, tol, polys,
     overlap there. A, B: (MAXV, 3) work arrays; S (MAXV,) the signed distances."""
     c = start
     for f in range(nf):
-        reach = -np.inf
-        total = 0.0  # NaN if a vertex is (a blown-up body): then the clip decides
+        reached = False  # a vertex of the other body within tol of the plane or beyond it
         for q in range(nv2):
             sq = N1[f, 0] * V2[q, 0] + N1[f, 1] * V2[q, 1] + N1[f, 2] * V2[q, 2] + D1[f]
-            total += sq
-            if sq > reach:
-                reach = sq
-        if reach < -tol and total == total:
+            if not sq < -tol:  # NaN too (a blown-up body): then the clip decides
+                reached = True
+                break
+        if not reached:
             continue
         if dedup:
             dup = False
@@ -164,18 +163,21 @@ def _faces_inside(V, F, FK, nf, N1, D1, V2, nv2, N2, D2, nf2, dedup, tol, polys,
             n0, n1, n2, d = N2[p, 0], N2[p, 1], N2[p, 2], D2[p]
             smax = -np.inf
             smin = np.inf
+            total = 0.0  # NaN if a distance is (a blown-up body): then the clip decides
             for q in range(k):
                 sq = n0 * P[q, 0] + n1 * P[q, 1] + n2 * P[q, 2] + d
                 S[q] = sq
-                if sq > smax or sq != sq:  # NaN (a blown-up body): the clip decides, as before
-                    smax = np.inf if sq != sq else sq
-                if sq < smin or sq != sq:
-                    smin = -np.inf if sq != sq else sq
-            if smax <= 0.0:
-                continue
-            if smin > 0.0:
-                k = 0
-                break
+                total += sq
+                if sq > smax:
+                    smax = sq
+                if sq < smin:
+                    smin = sq
+            if total == total:
+                if smax <= 0.0:
+                    continue
+                if smin > 0.0:
+                    k = 0
+                    break
             k = _clip(P, k, S, Q)
             P, Q = Q, P  # the clipped polygon is the next one to clip
             if k < 3:
