@@ -57,8 +57,11 @@ CASE = {
 }
 
 #: the speed goal of the compiled step on the 40-block wall (issue 14): at most this many ms
-#: per step on one thread, and at least this many times faster than the numpy (python) step
-GOAL_MS, GOAL_SPEEDUP = 0.25, 6.0
+#: per step on one thread, and at least this many times faster than the package's step when
+#: the goal was set ("today's": ``BASELINE_MS``, the issue's figure, ~1.6 ms/step on a quiet
+#: 2-core machine, 1.47 ms of it Python); the numpy step of the same bench run (``python``
+#: engine, which has been made faster since) is reported beside it
+GOAL_MS, GOAL_SPEEDUP, BASELINE_MS = 0.25, 6.0, 1.6
 #: the compiled step on one thread is timed this many times, the fastest kept (the least
 #: disturbed by other jobs: its steps are short, so another process's burst shows)
 REPEATS = 3
@@ -183,27 +186,40 @@ def measure(law: str, detection: str, threads: int, workdir: Path, engine: str |
 
 
 def goal(rows: list[dict]) -> dict | None:
-    """The issue-14 goal on the 40-block wall's rows: the compiled step on one thread
-    against ``GOAL_MS`` and against the numpy step (``python`` engine, one thread); ``text``
-    says it in one sentence (printed here, and the README's Speed block reads it)."""
+    """The issue-14 goal on the 40-block wall's rows: the compiled step on one thread against
+    ``GOAL_MS`` and against ``GOAL_SPEEDUP`` x the issue's ``BASELINE_MS``; beside it, the
+    ratio to this run's numpy step (``python`` engine, one thread). ``text`` says it in one
+    sentence (printed here, and the README's Speed block reads it)."""
     one = {r.get("engine_used"): r for r in rows
            if r["law"] == "penalty_coulomb" and r["detection"] == "native" and r["threads"] == 1}
     c, p = one.get("compiled"), one.get("python")
     if c is None:
         return None
-    out = {"compiled_ms": c["ms_per_step"], "goal_ms": GOAL_MS, "ms_met": c["ms_per_step"] <= GOAL_MS}
-    text = (f"compiled step {c['ms_per_step']:.3f} ms/step on one thread (goal <= {GOAL_MS} ms: "
-            f"{'met' if out['ms_met'] else 'not met'})")
+    ms = c["ms_per_step"]
+    out = {"compiled_ms": ms, "goal_ms": GOAL_MS, "ms_met": ms <= GOAL_MS, "baseline_ms": BASELINE_MS,
+           "speedup": BASELINE_MS / ms, "goal_speedup": GOAL_SPEEDUP, "speedup_met": BASELINE_MS / ms >= GOAL_SPEEDUP}
+    text = (f"compiled step {ms:.3f} ms/step on one thread (goal <= {GOAL_MS} ms: {'met' if out['ms_met'] else 'not met'}), "
+            f"{out['speedup']:.1f}x the issue's {BASELINE_MS} ms/step (goal >= {GOAL_SPEEDUP:.0f}x: "
+            f"{'met' if out['speedup_met'] else 'not met'})")
     if p is not None:
-        out.update(python_ms=p["ms_per_step"], speedup=p["ms_per_step"] / c["ms_per_step"], goal_speedup=GOAL_SPEEDUP,
-                   speedup_met=p["ms_per_step"] / c["ms_per_step"] >= GOAL_SPEEDUP)
-        text += (f", {out['speedup']:.1f}x the numpy step's {p['ms_per_step']:.2f} ms (goal >= {GOAL_SPEEDUP:.0f}x: "
-                 f"{'met' if out['speedup_met'] else 'not met'})")
+        out.update(python_ms=p["ms_per_step"], numpy_speedup=p["ms_per_step"] / ms)
+        text += f"; {out['numpy_speedup']:.1f}x this run's numpy step ({p['ms_per_step']:.2f} ms/step)"
     reps = c.get("repeats") or []
     if len(reps) > 1:
         text += f"; the fastest of {len(reps)} runs (" + ", ".join(f"{x:.3f}" for x in reps) + " ms/step)"
     out["text"] = text
     return out
+
+
+def _print_row(r: dict) -> None:
+    """One row of the 40-block section, as measured (``measure``)."""
+    py = f"python {r['python_ms_per_step']:6.2f} ms/step  " if r["python_ms_per_step"] is not None else ""
+    reps = r.get("repeats") or []
+    rep = (" (fastest of " + ", ".join(f"{x:.3f}" for x in reps) + ")") if len(reps) > 1 else ""
+    print(f"  {r['law']:17s} {r['detection']:6s} {r['engine']:8s} {r['threads']} thread(s): {r['ms_per_step']:7.3f} "
+          f"ms/step{rep}  {r['steps_per_s']:7.1f} steps/s  {r['contacts']:4d} contacts  {py}"
+          f"(whole run {r['ms_per_step_run']:.2f} ms/step, start-up {r['startup_s']:.1f} s; "
+          f"{r['steps']} steps of {r['dt_s']:.2e} s){DISTURBED if r['disturbed'] else ''}", flush=True)
 
 
 def running_bond_section(workdir: Path) -> list[dict]:
