@@ -283,6 +283,10 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, a
     iib = np.empty((m, 3, 3))
     lever = np.empty((m, 3))
     vr = np.empty(3)
+    # each body's inverse inertia in the global frame, once per body (a body has several contacts)
+    inv_glob = np.empty((nb, 3, 3))
+    for i in range(nb):
+        _global_inverse(rot[i], inv_inertia_local[i], inv_glob[i])
     for k in range(m):
         a = ia[k]
         b = ib[k]
@@ -330,8 +334,8 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, a
             - (vel[a, 2] + (angvel[a, 0] * pa[k, 1] - angvel[a, 1] * pa[k, 0]))
         for q in range(3):
             twist[k, 3 + q] = angvel[b, q] - angvel[a, q]
-        _global_inverse(rot[a], inv_inertia_local[a], iia[k])
-        _global_inverse(rot[b], inv_inertia_local[b], iib[k])
+        iia[k] = inv_glob[a]
+        iib[k] = inv_glob[b]
     fd, md, om = law.damping_wrenches_warm(n, area, pj, kn, kt, xi, ~slipping, pa, pb, inv_mass[ia], inv_mass[ib],
                                            iia, iib, twist, fn, fs, mu, lever, basis, warm)
     F = np.zeros((nb, 3))
