@@ -393,6 +393,40 @@ def contact_search_times(run_dir: Path, budget_s: float = 1.0) -> dict:
     return r
 
 
+def step_times(run_dir: Path, budget_s: float = 1.0) -> dict:
+    """ms per call, outside YADE, on a run's settled positions (``settled_configuration``),
+    of the compiled step's two halves: the contact forces (``CompiledStep.forces``: search,
+    law and damping, each contact's history from the call before) and the integration of
+    every body (``contact_step.integrate``, Fincham's scheme for the free blocks). Masses
+    are the run's (histories.npz); principal moments those of each block's box in its body
+    frame, materials the spec's first (the cost does not depend on their values)."""
+    from drystone import contact as law
+    from drystone import contact_step as cs
+
+    s, pos, rot, moving = settled_configuration(run_dir)
+    spec = json.loads((run_dir / "spec.json").read_text())
+    h = np.load(run_dir / "histories.npz")
+    row = {int(b): k for k, b in enumerate(h["block_ids"])}
+    nb = len(s.nv)
+    mass = np.array([h["mass"][row[b["id"]]] if b["id"] in row else np.inf for b in spec["blocks"]], float)
+    ext = np.array([np.ptp(s.verts[i, :s.nv[i]], axis=0) for i in range(nb)])
+    box = np.stack([ext[:, 1] ** 2 + ext[:, 2] ** 2, ext[:, 0] ** 2 + ext[:, 2] ** 2, ext[:, 0] ** 2 + ext[:, 1] ** 2], 1)
+    inertia = np.where(moving[:, None], np.where(moving, mass, 1.0)[:, None] / 12.0 * box, 1.0)
+    mat = next(iter(spec["materials"].values()))
+    props = law.pair_properties(mat, mat)
+    table = np.array([[[props[k] for k in ("kn", "kt", "mu", "damping")]]])
+    step = cs.CompiledStep(mass, inertia, [s.verts[i, :s.nv[i]] for i in range(nb)], np.zeros(nb, int), table)
+    vel, w, dt = np.zeros((nb, 3)), np.zeros((nb, 3)), float(spec["dt"])
+    F, T = step.forces(pos, rot, vel, w, dt)
+    free = np.where(moving[:, None], 1.0, 0.0) * np.ones((nb, 3))
+    m_int = np.where(moving, mass, 1.0)
+    state = [pos.copy(), vel.copy(), w.copy(), np.zeros((nb, 3)), np.tile([0.0, 0.0, 0.0, 1.0], (nb, 1)), rot.copy()]
+    return {"contacts": int(len(step.keys)),
+            "forces_ms": _best_ms(lambda: step.forces(pos, rot, vel, w, dt), budget_s),
+            "integrate_ms": _best_ms(lambda: cs.integrate(dt, np.zeros(3), F, T, m_int, inertia, free, free,
+                                                          moving.copy(), *state), budget_s / 2)}
+
+
 def scale_section(workdir: Path, sizes=SIZES, walls=WALLS, steps: int = 300, engines=None) -> dict:
     """Section b: each wall under gravity for ``steps`` steps (our law, native geometry,
     one thread; each of ``engines``, default the runner's), then its contact search alone
@@ -420,7 +454,9 @@ def scale_section(workdir: Path, sizes=SIZES, walls=WALLS, steps: int = 300, eng
                 print(f"  {kind:12s} {engine or 'default':8s} {n:5d} stones: FAILED: {exc}", flush=True)
                 continue
             r["us_per_contact_step"] = 1e3 * r["ms_per_step"] / max(1, r["final_contacts"] or r["contacts"])
-            r["search"] = contact_search_times(Path(r.pop("out")))
+            run_dir = Path(r.pop("out"))
+            r["search"] = contact_search_times(run_dir)
+            r["split"] = step_times(run_dir)
             r["search_share"] = r["search"]["search_ms"] / r["ms_per_step"]
             r["broad_phase_share"] = (r["search"]["geometry_ms"] + r["search"]["broad_phase_ms"]) / r["ms_per_step"]
             rows.append(r)
@@ -432,7 +468,10 @@ def scale_section(workdir: Path, sizes=SIZES, walls=WALLS, steps: int = 300, eng
                   f"  {'':21s} contact search alone {sr['search_ms']:.2f} ms ({100 * r['search_share']:.0f} % of the "
                   f"step): broad phase {sr['geometry_ms'] + sr['broad_phase_ms']:.3f} ms "
                   f"({100 * r['broad_phase_share']:.1f} %), clip of {sr['candidates']} candidates "
-                  f"{sr['clip_ms']:.2f} ms; the former all-pairs search {sr['all_pairs_ms']:.2f} ms", flush=True)
+                  f"{sr['clip_ms']:.2f} ms; the former all-pairs search {sr['all_pairs_ms']:.2f} ms\n"
+                  f"  {'':21s} step in two halves alone: contact forces (search, law, damping) "
+                  f"{r['split']['forces_ms']:.3f} ms, integration of {n} stones {r['split']['integrate_ms']:.3f} ms",
+                  flush=True)
     fits = {}
     for kind, engine in [(k, e or "default") for k in walls for e in engines]:
         pts = [(r["stones"], r["ms_per_step"]) for r in rows

@@ -214,14 +214,17 @@ def bench(results: Path) -> str:
     sc = (d.get("scale") or {}).get("rows") or []
     if sc:
         out += ["", "Large walls under gravity (one thread, native geometry):", "",
-                "| wall | stones | ms/step | contacts | µs per contact-step | contact search alone (ms) |",
-                "|---|---|---|---|---|---|"]
+                "| wall | stones | ms/step | contacts | µs per contact-step | contact search alone (ms) | "
+                "contact forces alone (ms) | integration alone (ms) |",
+                "|---|---|---|---|---|---|---|---|"]
         for r in sc:
             if "failed" in r:
-                out.append(f"| {r['wall']} | {r['stones']} | failed | - | - | - |")
+                out.append(f"| {r['wall']} | {r['stones']} | failed | - | - | - | - | - |")
                 continue
+            split = r.get("split") or {}  # bench.json of runs before the split was timed: "-"
+            halves = " | ".join(f"{split[k]:.3f}" if k in split else "-" for k in ("forces_ms", "integrate_ms"))
             out.append(f"| {r['wall']} | {r['stones']} | {r['ms_per_step']:.2f} | {r['final_contacts']} | "
-                       f"{r['us_per_contact_step']:.1f} | {r['search']['search_ms']:.2f} |")
+                       f"{r['us_per_contact_step']:.1f} | {r['search']['search_ms']:.2f} | {halves} |")
         g = d["scale"].get("growth_exponent") or {}
         if g:
             out += ["", "Cost ~ N^k: " + ", ".join(f"{k} k = {v:.2f}" for k, v in g.items()) + "."]
