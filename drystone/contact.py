@@ -387,16 +387,6 @@ def _jacobi_sqrt(B, T, A, V, warm):
 
 
 @njit(cache=True)
-def _cross3(a, b):
-    """a x b of two 3-vectors."""
-    out = np.empty(3)
-    out[0] = a[1] * b[2] - a[2] * b[1]
-    out[1] = a[2] * b[0] - a[0] * b[2]
-    out[2] = a[0] * b[1] - a[1] * b[0]
-    return out
-
-
-@njit(cache=True)
 def _add_body(W, r, im, ii):
     """W += G^T diag(im, ii) G for one body (see ``mobility``), written out in 3 x 3
     blocks with S = [r]x: [[im 1 - S ii S, -S ii], [ii S, ii]]."""
