@@ -239,3 +239,20 @@ def test_package_only_rerun_keeps_lmgc90_and_the_other_stiffnesses(tmp_path, mon
     assert e["lmgc90"] == {"value": 19.0} and e["closed_forms"] == {"experiment_deg": 14.33}
     assert [p["kn"] for p in e["package"]] == [2e8, 2e9, 2e10]
     assert [p["value"] for p in e["package"]] == [14.8, pytest.approx(10.0 + math.log10(2e9)), 18.0]
+
+
+def test_base_velocity_integrates_the_programmes_base_acceleration():
+    """LMGC90's moving base gets v(t) from the programme's base acceleration by the
+    trapezoid rule, exact for a piecewise-linear record sampled on the grid: samples
+    0, 1, 2, 2 m/s^2 every 0.5 s give v = t^2 over the first second, then 1 + 2 (t - 1)."""
+    from drystone.crosscheck.engine import base_velocity
+    from drystone.loading import LoadProgramme, Stage
+
+    prog = LoadProgramme([Stage("gravity", 0.0, 1.0, {"ramp": 0.5}),
+                          Stage("excitation", 1.0, 2.5, {"acc": np.array([0.0, 1.0, 2.0, 2.0]), "dt": 0.5,
+                                                         "direction": [0, 1, 0]})], 9.81)
+    t = np.linspace(1.0, 2.5, 61)[:-1]  # the stage's own times (its last time belongs to no stage)
+    v = base_velocity(prog, t)
+    s = t - 1.0
+    expected = np.where(s <= 1.0, s ** 2, 1.0 + 2.0 * (s - 1.0))
+    assert np.allclose(v[:, 1], expected, rtol=0, atol=tol.EXACT_ABS) and not v[:, [0, 2]].any()

@@ -48,7 +48,7 @@ def base_velocity(prog: LoadProgramme, times: np.ndarray) -> np.ndarray:
     """Base velocity (m/s, (n, 3)) at ``times`` from rest: the trapezoidal integral of the
     programme's base acceleration on the ``times`` grid (its samples are linearly
     interpolated: the trapezoid rule is exact between samples that fall on the grid)."""
-    acc = np.array([prog.base_acceleration(float(t)) for t in times])
+    acc = prog.base_acceleration_at(np.asarray(times, float))
     v = np.zeros_like(acc)
     v[1:] = np.cumsum(0.5 * (acc[1:] + acc[:-1]) * np.diff(times)[:, None], axis=0)
     return v
