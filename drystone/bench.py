@@ -7,7 +7,8 @@
                   and 2 threads: ms per step, steps per second, active contacts and the share
                   of the step spent in our per-step Python engine; the compiled step on one
                   thread is timed ``REPEATS`` times (the fastest kept) and set against the
-                  goal of issue 14 (``GOAL_MS``, ``GOAL_SPEEDUP`` over the numpy step).
+                  goal of issue 14 (``GOAL_MS``, ``GOAL_SPEEDUP`` over the issue's
+                  ``BASELINE_MS``; this run's numpy step beside it).
 ``scale``         running-bond and irregular walls of about 40, 500 and 2000 stones under
                   gravity for a few hundred steps (our law, native geometry, one thread): ms
                   per step, contacts, us per contact-step, the growth exponent of the cost
@@ -185,6 +186,12 @@ def measure(law: str, detection: str, threads: int, workdir: Path, engine: str |
     return r
 
 
+def _repeats(r: dict) -> str | None:
+    """The ms/step of a row's timed runs, "a, b, c" (None for a row timed once)."""
+    reps = r.get("repeats") or []
+    return ", ".join(f"{x:.3f}" for x in reps) if len(reps) > 1 else None
+
+
 def goal(rows: list[dict]) -> dict | None:
     """The issue-14 goal on the 40-block wall's rows: the compiled step on one thread against
     ``GOAL_MS`` and against ``GOAL_SPEEDUP`` x the issue's ``BASELINE_MS``; beside it, the
@@ -204,9 +211,8 @@ def goal(rows: list[dict]) -> dict | None:
     if p is not None:
         out.update(python_ms=p["ms_per_step"], numpy_speedup=p["ms_per_step"] / ms)
         text += f"; {out['numpy_speedup']:.1f}x this run's numpy step ({p['ms_per_step']:.2f} ms/step)"
-    reps = c.get("repeats") or []
-    if len(reps) > 1:
-        text += f"; the fastest of {len(reps)} runs (" + ", ".join(f"{x:.3f}" for x in reps) + " ms/step)"
+    if _repeats(c):
+        text += f"; the fastest of {len(c['repeats'])} runs ({_repeats(c)} ms/step)"
     out["text"] = text
     return out
 
@@ -214,8 +220,7 @@ def goal(rows: list[dict]) -> dict | None:
 def _print_row(r: dict) -> None:
     """One row of the 40-block section, as measured (``measure``)."""
     py = f"python {r['python_ms_per_step']:6.2f} ms/step  " if r["python_ms_per_step"] is not None else ""
-    reps = r.get("repeats") or []
-    rep = (" (fastest of " + ", ".join(f"{x:.3f}" for x in reps) + ")") if len(reps) > 1 else ""
+    rep = f" (fastest of {_repeats(r)})" if _repeats(r) else ""
     print(f"  {r['law']:17s} {r['detection']:6s} {r['engine']:8s} {r['threads']} thread(s): {r['ms_per_step']:7.3f} "
           f"ms/step{rep}  {r['steps_per_s']:7.1f} steps/s  {r['contacts']:4d} contacts  {py}"
           f"(whole run {r['ms_per_step_run']:.2f} ms/step, start-up {r['startup_s']:.1f} s; "

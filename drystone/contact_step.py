@@ -279,14 +279,15 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, a
     pa = np.empty((m, 3))
     pb = np.empty((m, 3))
     twist = np.empty((m, 6))
-    iia = np.empty((m, 3, 3))
-    iib = np.empty((m, 3, 3))
     lever = np.empty((m, 3))
     vr = np.empty(3)
-    # each body's inverse inertia in the global frame, once per body (a body has several contacts)
+    # each body's inverse inertia in the global frame, once per body (a body has several
+    # contacts), then each contact's two
     inv_glob = np.empty((nb, 3, 3))
     for i in range(nb):
         _global_inverse(rot[i], inv_inertia_local[i], inv_glob[i])
+    iia = inv_glob[ia]
+    iib = inv_glob[ib]
     for k in range(m):
         a = ia[k]
         b = ib[k]
@@ -325,7 +326,7 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, a
             s = fmax / fm
             for q in range(3):
                 fs[k, q] *= s
-        # relative twist at the patch centroid, global inverse inertias
+        # relative twist at the patch centroid
         twist[k, 0] = (vel[b, 0] + (angvel[b, 1] * pb[k, 2] - angvel[b, 2] * pb[k, 1])) \
             - (vel[a, 0] + (angvel[a, 1] * pa[k, 2] - angvel[a, 2] * pa[k, 1]))
         twist[k, 1] = (vel[b, 1] + (angvel[b, 2] * pb[k, 0] - angvel[b, 0] * pb[k, 2])) \
@@ -334,8 +335,6 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, a
             - (vel[a, 2] + (angvel[a, 0] * pa[k, 1] - angvel[a, 1] * pa[k, 0]))
         for q in range(3):
             twist[k, 3 + q] = angvel[b, q] - angvel[a, q]
-        iia[k] = inv_glob[a]
-        iib[k] = inv_glob[b]
     fd, md, om = law.damping_wrenches_warm(n, area, pj, kn, kt, xi, ~slipping, pa, pb, inv_mass[ia], inv_mass[ib],
                                            iia, iib, twist, fn, fs, mu, lever, basis, warm)
     F = np.zeros((nb, 3))
