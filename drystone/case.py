@@ -10,11 +10,12 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
+import re
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
-from drystone import collapse
+from drystone import collapse, inputfiles
 from drystone.geometry.blockfile import CONTACT_PROPERTIES, MATERIAL_PROPERTIES
 from drystone.units import GRAVITY
 
@@ -53,7 +54,8 @@ CONTACT_OVERRIDE = {k: dataclasses.replace(_PROPERTY[k], meaning=f"override {_EV
 
 SECTIONS: dict[str, dict[str, Key]] = {
     "case": {
-        "name": Key(None, "-", "case name; results go to results/<name>/ (default: file stem)", str),
+        "name": Key(None, "-", "case name, one folder name (letters, digits, _ . + -, at most 100 characters, "
+                    "no '/'); results go to results/<name>/ (default: file stem)", str),
         "description": Key("", "-", "free text", str),
         "geometry": Key(REQUIRED, "-", "block file (path relative to the case file) or a table "
                         "{generator = NAME, ...parameters}", (str, dict)),
@@ -148,11 +150,13 @@ FORCE = {"block": Key(REQUIRED, "-", "id of the free block the force acts on (at
          "end": Key(None, "s", "time it is switched off (default: never)", float, positive=True)}
 
 
-def _parse_value(text: str):
+def _parse_value(text: str, where: str, item: str):
     try:
-        return tomllib.loads(f"v = {text}")["v"]
-    except tomllib.TOMLDecodeError:
+        value = tomllib.loads(f"v = {text}")["v"]
+    except (ValueError, RecursionError):  # not a TOML value (TOMLDecodeError is a ValueError)
         return text  # a bare string
+    inputfiles.check_values(value, f"{where}: override {item!r}", CaseError)
+    return value
 
 
 def _index(node: list, part: str, dotted: str, bad) -> int:
@@ -182,6 +186,8 @@ def apply_overrides(data: dict, overrides: list[str], where: str) -> dict:
     stage's. A path into a scalar, past the end of an array, or replacing a table by a
     scalar raises CaseError naming the override."""
     data = copy.deepcopy(data)
+    if isinstance(overrides, str) or not all(isinstance(o, str) for o in overrides):
+        raise CaseError(f"{where}: overrides must be a list of 'key=value' strings, got {overrides!r}")
     for item in overrides:
         if "=" not in item:
             raise CaseError(f"{where}: override {item!r} is not of the form key=value")
@@ -193,7 +199,7 @@ def apply_overrides(data: dict, overrides: list[str], where: str) -> dict:
 
         if not all(parts):
             raise bad("empty key (expected a dotted path such as time.step or stages.1.duration)")
-        value = _parse_value(text.strip())
+        value = _parse_value(text.strip(), where, item)
         node = data
         for depth, part in enumerate(parts):
             dotted = ".".join(parts[:depth])
@@ -221,21 +227,17 @@ def apply_overrides(data: dict, overrides: list[str], where: str) -> dict:
     return data
 
 
-def load(path, overrides: list[str] | None = None) -> dict:
+def load(path, overrides: list[str] | None = None, sweep_run: bool = False) -> dict:
     """Read, override, validate and complete a case file. Returns a plain dict with every
-    section filled (``stages`` a list of dicts with a ``type``)."""
+    section filled (``stages`` a list of dicts with a ``type``). ``sweep_run``: the name
+    may be ``<sweep>/<run>`` (drystone/sweep.py names its runs so; ``check_name``)."""
     p = Path(path)
-    if not p.is_file():
-        raise CaseError(f"{p}: case file not found")
-    try:
-        raw = tomllib.loads(p.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise CaseError(f"{p}: not valid TOML: {exc}") from None
+    raw = inputfiles.load_toml(p, CaseError, "case file")
     raw = apply_overrides(raw, overrides or [], str(p))
-    return validate(raw, str(p), p.parent, p.stem)
+    return validate(raw, str(p), p.parent, p.stem, sweep_run)
 
 
-def validate(raw: dict, where: str, base_dir: Path, stem: str = "case") -> dict:
+def validate(raw: dict, where: str, base_dir: Path, stem: str = "case", sweep_run: bool = False) -> dict:
     allowed = set(SECTIONS) | {"stages", "materials", "forces"}
     unknown = sorted(set(raw) - allowed)
     if unknown:
@@ -243,7 +245,7 @@ def validate(raw: dict, where: str, base_dir: Path, stem: str = "case") -> dict:
     case = {name: _fill(f"{where} [{name}]", raw.get(name, {}), keys) for name, keys in SECTIONS.items()}
     if case["case"]["name"] is None:
         case["case"]["name"] = stem
-    _check_name(where, case["case"]["name"])
+    check_name(f"{where}: [case] 'name'", case["case"]["name"], nested=sweep_run)
     if case["time"]["safety"] > 1:
         raise CaseError(f"{where}: [time] 'safety' must be in (0, 1] (the step is safety x the critical step; "
                         f"above 1 the integration is unstable), got {case['time']['safety']!r}")
@@ -340,13 +342,22 @@ def _is_number(x) -> bool:
     return isinstance(x, (int, float)) and not isinstance(x, bool)
 
 
-def _check_name(where: str, name: str):
-    """Results go to results/<name>/: the name must stay inside results/ (a relative path of
-    plain folder names; sweeps use <sweep>/<run>)."""
-    parts = name.split("/")
-    if not name.strip() or "\\" in name or any(q.strip() in ("", ".", "..") for q in parts):
-        raise CaseError(f"{where}: [case] 'name' = {name!r}: results go to results/<name>/, so the name must be "
-                        "a relative folder name (not empty or absolute, no '\\', no empty, '.' or '..' parts)")
+#: names that become folder names (case, sweep and sweep run names): letters, digits and
+#: ``_ . + -``, starting with a letter, digit or ``_``, at most 100 characters (the staging
+#: folder ``.<name>.partial`` must fit a file system's 255), so a name is never a path, a
+#: hidden folder or a string a shell or a file system treats specially
+NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.+-]{0,99}")
+NAME_RULE = "letters, digits and _ . + - (not first: . + -), at most 100 characters, no '/'"
+
+
+def check_name(where: str, name, nested: bool = False) -> None:
+    """Results go to results/<name>/: refuse a name that is not one plain folder name
+    (``NAME``); ``nested``: a sweep's run, ``<sweep>/<run>``, each part such a name."""
+    parts = name.split("/") if isinstance(name, str) and nested else [name]
+    if not all(isinstance(q, str) and NAME.fullmatch(q) and q != ".." for q in parts) or len(parts) > 2:
+        shown = repr(name) if len(repr(name)) <= 60 else f"{repr(name)[:50]}... ({len(name)} characters)"
+        raise CaseError(f"{where} = {shown}: results go to results/<name>/, so the name must be one folder name: "
+                        f"{NAME_RULE}")
 
 
 def describe() -> str:

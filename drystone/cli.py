@@ -101,5 +101,8 @@ def main(argv=None) -> int:
         if isinstance(exc, (RunError, GeometryError)):
             print(f"error: {exc}", file=sys.stderr)
             return 2
+        if isinstance(exc, OSError):  # a disk full, a read-only or missing folder: the system's words
+            print(f"error: {exc.filename or ''}{': ' if exc.filename else ''}{exc.strerror or exc}", file=sys.stderr)
+            return 2
         raise
     return 0

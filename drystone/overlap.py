@@ -85,6 +85,23 @@ class Shapes:
                              f"polygon buffer ({MAXV}); simplify the blocks")
 
 
+def too_large(vertices) -> str | None:
+    """Why a convex block (its corners, m) does not fit the kernel's polygon buffer (its
+    largest face's corners plus its faces above ``MAXV // 2``: ``Shapes``), or None. By
+    Euler's formula a block of V corners with a k-gon face has at most 2V - 1 - k faces,
+    so blocks of up to MAXV // 4 corners always fit and are not looked at (a box: 8)."""
+    if 2 * len(vertices) - 1 <= MAXV // 2:
+        return None
+    from drystone.geometry import polyhedron as ph
+
+    g = ph.faces(np.asarray(vertices, float))
+    k, nf = max(len(p) for p in g.polygons), len(g.normals)
+    if k + nf <= MAXV // 2:
+        return None
+    return (f"{nf} faces and a {k}-gon face exceed the contact kernel's polygon buffer ({MAXV}: faces + the "
+            f"largest face's corners <= {MAXV // 2}); give the block fewer corners")
+
+
 @njit(cache=True)
 def _twice_area_vector(P, k):
     """Twice the area vector (m^2) of the planar polygon P[:k] (counter-clockwise about it)."""

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from drystone import case as casemod
-from drystone import contact
+from drystone import contact, inputfiles, overlap
 from drystone import timestep
 from drystone.geometry import blockfile as bf
 from drystone.geometry import generators
@@ -28,8 +28,8 @@ from drystone.stages import AXES, REGISTRY, TOWARDS, ResolveContext, initial_rel
 def _geometry(case: dict, where: str, out: Path, check_overlaps: bool = True) -> tuple[bf.BlockSet, dict]:
     geo = case["case"]["geometry"]
     if isinstance(geo, str):
-        data = json.loads(Path(geo).read_text()) if Path(geo).is_file() else None
-        bs = bf.load(geo, check_overlaps)
+        data = inputfiles.load_json(geo, bf.GeometryError, "block file")
+        bs = bf.parse(data, geo, check_overlaps)
         source = {"file": geo, "sha256": hashlib.sha256(Path(geo).read_bytes()).hexdigest()}
     else:
         try:
@@ -38,6 +38,10 @@ def _geometry(case: dict, where: str, out: Path, check_overlaps: bool = True) ->
             raise casemod.CaseError(f"{where}: [case] geometry: {exc}") from None
         bs = bf.parse(data, f"{where}: generated geometry {geo['generator']!r}", check_overlaps)
         source = {"generator": geo}
+    for b in bs.blocks:  # what the contact kernel cannot hold fails here, not inside YADE
+        why = overlap.too_large(b.vertices)
+        if why:
+            raise bf.GeometryError(f"{geo if isinstance(geo, str) else where}: block {b.id}: {why}")
     bf.write(data, out / "geometry.json")
     return bs, source
 

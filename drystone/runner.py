@@ -15,14 +15,14 @@ from pathlib import Path
 from drystone import case as casemod
 from drystone import paths, provenance
 from drystone.resolve import AXES, TOWARDS, fingerprint, initial_relative_velocity, resolve  # noqa: F401
-from drystone.simulate import FolderLock, RunError, commit, simulate, staging_folder  # noqa: F401
+from drystone.simulate import FolderLock, RunError, check_replaceable, commit, simulate, staging_folder  # noqa: F401
 from drystone.postprocess import plots
 from drystone.postprocess import summary as summ
 from drystone.tomlio import to_toml
 
 
 def run(case_path, overrides=None, out_dir=None, threads=1, quiet=False, check_overlaps=True,
-        engine="compiled") -> dict:
+        engine="compiled", sweep_run=False) -> dict:
     """Validate, simulate and summarise one case; returns the summary dict.
 
     Nothing in the results folder changes until the new run is complete: the case, its
@@ -32,17 +32,26 @@ def run(case_path, overrides=None, out_dir=None, threads=1, quiet=False, check_o
     the last file written. The folder is locked for the run (``FolderLock``).
     ``check_overlaps=False`` skips the geometry's pairwise overlap test (sweeps have run
     it once for all their runs). ``engine``: ``compiled`` (default) or ``python``, the
-    step engine of the project's law (``drystone.simulate.ENGINES``)."""
-    case_path = Path(case_path)
-    case = casemod.load(case_path, overrides or [])
+    step engine of the project's law (``drystone.simulate.ENGINES``). ``out_dir`` (default
+    results/<case name>) is refused unless it is new, empty or a run of this package
+    (``simulate.check_replaceable``): a run never deletes what the package did not write.
+    ``sweep_run``: the case name may be ``<sweep>/<run>`` (drystone/sweep.py)."""
+    case_path = Path(case_path).expanduser().resolve()  # YADE runs in the repository root
+    case = casemod.load(case_path, overrides or [], sweep_run=sweep_run)
     where = str(case_path)
-    out = Path(out_dir) if out_dir else paths.RESULTS / case["case"]["name"]
+    out = Path(out_dir).expanduser().resolve() if out_dir else paths.RESULTS / case["case"]["name"]
+    check_replaceable(out, where)  # before anything is written
     with FolderLock(out):
+        check_replaceable(out, where)  # what another run may have done meanwhile
         stage = staging_folder(out)
         shutil.rmtree(stage, ignore_errors=True)
         stage.mkdir(parents=True)
         t0 = time.time()
-        spec = resolve(case, where, stage, check_overlaps=check_overlaps)
+        try:
+            spec = resolve(case, where, stage, check_overlaps=check_overlaps)
+        except BaseException:  # a refusal leaves nothing behind
+            shutil.rmtree(stage, ignore_errors=True)
+            raise
         # a Spec is frozen: a new one with where the run will live (YADE writes beside its
         # spec.json) and how it was made
         spec = spec.replace(out_dir=str(out), provenance=provenance.collect(case_path, case, overrides or []))
@@ -50,15 +59,19 @@ def run(case_path, overrides=None, out_dir=None, threads=1, quiet=False, check_o
             print(f"[{spec['name']}] dt = {spec['dt']:.3g} s (critical {spec['dt_critical']:.3g} s), "
                   f"{len(spec['blocks'])} blocks, {spec['stages'][-1]['end']:.2f} s simulated, law {spec['law']}, "
                   f"{spec['stages'][-1]['end'] / spec['dt']:.0f} steps", flush=True)
-        simulate(spec, stage, threads, quiet, where, engine)
-        summary = summ.build(spec, stage)
-        summary["wall_time_total_s"] = time.time() - t0
-        figures = plots.standard(stage, summary)
         try:
-            summ.write(summary, stage)  # last: the marker of a complete run
-        except ValueError as exc:
-            raise RunError(f"{where}: {exc}; {out} is unchanged") from None
-        commit(stage, out)
+            simulate(spec, stage, threads, quiet, where, engine)
+            summary = summ.build(spec, stage)
+            summary["wall_time_total_s"] = time.time() - t0
+            figures = plots.standard(stage, summary)
+            try:
+                summ.write(summary, stage)  # last: the marker of a complete run
+            except ValueError as exc:
+                raise RunError(f"{where}: {exc}; {out} is unchanged") from None
+            commit(stage, out)
+        except OSError as exc:  # disk full, a read-only results folder
+            raise RunError(f"{where}: could not write the run ({exc.strerror or exc}: {exc.filename or stage}); "
+                           f"{out} is unchanged") from None
     if not quiet:
         print(f"[{spec['name']}] results in {out}: summary.json, histories.npz, "
               + ", ".join(f.name for f in figures), flush=True)

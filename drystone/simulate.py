@@ -35,7 +35,9 @@ NOISE = ("Welcome to Yade", "TCP python prompt", "XMLRPC info provider", "Runnin
 class FolderLock:
     """Exclusive lock on a results folder for the length of a run (``fcntl.flock`` on a
     hidden file beside it, released by the kernel if the process dies). A second run into
-    the same folder is refused with RunError naming the holder's pid."""
+    the same folder is refused with RunError naming the holder's pid. The lock file is
+    removed when the lock is released (a lock taken on a file that another holder has
+    just removed is taken again on a new one)."""
 
     def __init__(self, out: Path):
         self.path = out.parent / f".{out.name}.lock"
@@ -45,21 +47,76 @@ class FolderLock:
         import fcntl
 
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            holder = os.read(fd, 64).decode(errors="replace").strip() or "?"
-            os.close(fd)
-            raise RunError(f"{self.path.parent / self.path.name[1:-5]}: another run (pid {holder}) is writing "
-                           f"this results folder; wait for it or use another --out") from None
+        while True:
+            fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                holder = os.read(fd, 64).decode(errors="replace").strip() or "?"
+                os.close(fd)
+                raise RunError(f"{self.path.parent / self.path.name[1:-5]}: another run (pid {holder}) is writing "
+                               f"this results folder; wait for it or use another --out") from None
+            try:
+                same = os.fstat(fd).st_ino == os.stat(self.path).st_ino
+            except FileNotFoundError:
+                same = False
+            if same:
+                break
+            os.close(fd)  # the previous holder removed the file we locked: lock the new one
         os.ftruncate(fd, 0)
         os.write(fd, str(os.getpid()).encode())
         self.fd = fd
         return self
 
     def __exit__(self, *exc):
-        os.close(self.fd)  # releases the lock; the (empty) lock file stays, harmlessly
+        try:
+            self.path.unlink()  # still holding the lock: no other process holds this file
+        except FileNotFoundError:
+            pass
+        os.close(self.fd)
+
+
+#: the names a run's folder is recognised by: spec.json with the spec's format tag
+#: (drystone/spec.py; version-1 specs had none: then run_info.json beside it), or a
+#: sweep's note of a failed run alone
+RUN_MARKER, FAILED_NOTE = "spec.json", "FAILED.txt"
+
+
+def is_run_folder(folder: Path) -> bool:
+    """True when ``folder`` holds a run this package wrote (``RUN_MARKER``)."""
+    from drystone.spec import SPEC_FORMAT
+
+    folder = Path(folder)
+    try:
+        spec = json.loads((folder / RUN_MARKER).read_text())
+    except (OSError, ValueError, RecursionError):
+        return False
+    if not isinstance(spec, dict):
+        return False
+    return spec.get("format") == SPEC_FORMAT or ("format" not in spec and (folder / "run_info.json").is_file())
+
+
+def check_replaceable(out: Path, where: str = "") -> None:
+    """Refuse (RunError naming the folder) to write a run into ``out`` unless the package
+    may replace what is there: nothing, an empty folder, a run of its own
+    (``is_run_folder``) or only a sweep's ``FAILED.txt``. Anything else, a user's folder,
+    a sweep's folder, a file, is never deleted."""
+    out = Path(out)
+    prefix = f"{where}: " if where else ""
+    if not out.exists() and not out.is_symlink():
+        return
+    if not out.is_dir() or out.is_symlink():
+        raise RunError(f"{prefix}{out} exists and is not a folder; choose another --out (or case name)")
+    try:
+        entries = sorted(p.name for p in out.iterdir())
+    except OSError as exc:
+        raise RunError(f"{prefix}{out}: cannot read the folder: {exc.strerror or exc}") from None
+    if not entries or entries == [FAILED_NOTE] or is_run_folder(out):
+        return
+    what = ("a sweep's folder (sweep.json)" if "sweep.json" in entries
+            else "a folder this package did not write (" + ", ".join(entries[:3]) + (", ..." if len(entries) > 3 else "") + ")")
+    raise RunError(f"{prefix}{out} is {what}: a run replaces its results folder whole, so it writes only into a new "
+                   f"or empty folder or one of its own runs; choose another --out (or case name)")
 
 
 def staging_folder(out: Path) -> Path:
@@ -78,15 +135,38 @@ def commit(stage: Path, out: Path) -> None:
     shutil.rmtree(old, ignore_errors=True)
 
 
+def _prctl():
+    """libc's prctl, or None where there is none (looked up before any fork: a child of a
+    threaded process must not load libraries)."""
+    import ctypes
+
+    try:
+        return ctypes.CDLL(None, use_errno=True).prctl
+    except (OSError, AttributeError):
+        return None
+
+
+_PRCTL = _prctl()
+
+
+def die_with_parent(sig: int = 9) -> None:
+    """Ask the kernel (Linux ``prctl(PR_SET_PDEATHSIG)``) to send ``sig`` to this process
+    when its parent dies, even by kill -9, so that no YADE process or sweep worker outlives
+    the process that started it. A no-op where the call is not available."""
+    if _PRCTL is not None:
+        _PRCTL(1, int(sig), 0, 0, 0)  # PR_SET_PDEATHSIG = 1
+
+
 def _simulate(spec_path: Path, threads: int, quiet: bool, engine: str = "compiled") -> int:
     """Run YADE on ``spec_path`` (its log to log.txt beside it); returns YADE's exit code.
     YADE runs in its own session, so a Ctrl-C reaches only this process, which then
-    kills YADE (no orphan) and re-raises."""
+    kills YADE (no orphan) and re-raises; if this process is killed outright (kill -9),
+    the kernel kills YADE (``die_with_parent``)."""
     env = dict(os.environ, PYTHONUNBUFFERED="1")  # YADE runs this interpreter: drystone is installed
     with open(spec_path.parent / "log.txt", "w") as log:
         proc = subprocess.Popen(_yade_command(spec_path, threads, engine), stdout=subprocess.PIPE,
                                 stderr=subprocess.STDOUT, text=True, env=env, cwd=paths.ROOT,
-                                start_new_session=True)
+                                start_new_session=True, preexec_fn=die_with_parent)
         try:
             for line in proc.stdout:
                 log.write(line)

@@ -46,7 +46,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from drystone import case as casemod
-from drystone import paths, tomlio
+from drystone import inputfiles, paths, tomlio
+from drystone.simulate import is_run_folder
 
 SWEEP_KEYS = {"name", "case", "set"}
 RUN_KEYS = {"name", "set", "out"}
@@ -69,34 +70,64 @@ def _run_name(params: dict) -> str:
     return re.sub(r"[^A-Za-z0-9_.+-]", "", "-".join(parts)) or "run"
 
 
+def _overrides(value, where: str) -> list[str]:
+    """A ``set`` list: strings of the form key=value."""
+    if not isinstance(value, list) or not all(isinstance(x, str) for x in value):
+        raise casemod.CaseError(f"{where}: 'set' must be a list of \"key=value\" strings, got {value!r}")
+    bad = [x for x in value if "=" not in x]
+    if bad:
+        raise casemod.CaseError(f"{where}: override {bad[0]!r} in 'set' is not of the form key=value")
+    return list(value)
+
+
+def _check_outputs(where: str, root: Path, jobs: list[Job]) -> None:
+    """Every run writes its own folder: no two runs share one, and no run's folder holds,
+    or lies inside, another run's folder or the sweep's own (``results/<sweep>``, where
+    sweep.json lives); otherwise each resume would overwrite or delete the other."""
+    folders = [(f"run {j.name!r}", Path(j.out_dir)) for j in jobs]
+    for k, (who, d) in enumerate(folders):
+        if d == root or d in root.parents:
+            raise casemod.CaseError(f"{where}: {who} would write into {d}, which is or holds the sweep's own "
+                                    f"folder {root} (sweep.json): give it another 'out'")
+        for other, e in folders[k + 1:]:
+            if d == e:
+                raise casemod.CaseError(f"{where}: {who} and {other} would both write into {d}: give each its "
+                                        "own 'out'")
+            if d in e.parents or e in d.parents:
+                (inner, a), (outer, b) = ((other, e), (who, d)) if d in e.parents else ((who, d), (other, e))
+                raise casemod.CaseError(f"{where}: the folder of {inner} ({a}) lies inside that of {outer} ({b}): "
+                                        "a run replaces its folder whole; give them separate 'out' folders")
+
+
 def load(path, results: Path | None = None, threads: int = 1) -> tuple[str, list[Job]]:
     """Read a sweep file; returns (sweep name, jobs). Raises CaseError naming the file and
-    key for unknown keys, a missing base case, duplicate run names or an empty sweep."""
+    key for unknown keys, a missing base case, bad names, duplicate run names, runs whose
+    folders collide or an empty sweep."""
     p = Path(path)
     where = str(p)
-    if not p.is_file():
-        raise casemod.CaseError(f"{where}: sweep file not found")
-    try:
-        raw = tomllib.loads(p.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise casemod.CaseError(f"{where}: not valid TOML: {exc}") from None
+    raw = inputfiles.load_toml(p, casemod.CaseError, "sweep file")
     unknown = sorted(set(raw) - {"sweep", "grid", "runs"})
     if unknown:
         raise casemod.CaseError(f"{where}: unknown table(s) {unknown}; allowed: sweep, grid, runs")
-    sw = raw.get("sweep", {})
+    sw, grid, given = raw.get("sweep", {}), raw.get("grid", {}), raw.get("runs", [])
+    for key, value, kind in (("[sweep]", sw, dict), ("[grid]", grid, dict), ("[[runs]]", given, list)):
+        if not isinstance(value, kind):
+            raise casemod.CaseError(f"{where}: {key} must be a {'table' if kind is dict else 'list of tables'}, "
+                                    f"got {value!r}")
     bad = sorted(set(sw) - SWEEP_KEYS)
     if bad:
         raise casemod.CaseError(f"{where}: [sweep]: unknown key(s) {bad}; allowed: {sorted(SWEEP_KEYS)}")
-    if "case" not in sw:
-        raise casemod.CaseError(f"{where}: [sweep]: missing required key 'case'")
+    if not isinstance(sw.get("case"), str):
+        raise casemod.CaseError(f"{where}: [sweep]: 'case' (the base case file, relative to this file) is required "
+                                f"and must be a string, got {sw.get('case')!r}")
     base = (p.parent / sw["case"]).resolve()
     if not base.is_file():
         raise casemod.CaseError(f"{where}: [sweep] 'case': base case {base} not found")
     name = sw.get("name", p.stem)
-    common = list(sw.get("set", []))
-    root = (results or paths.RESULTS) / name
+    casemod.check_name(f"{where}: [sweep] 'name'", name)
+    common = _overrides(sw.get("set", []), f"{where}: [sweep]")
+    root = (results or paths.RESULTS).resolve() / name
     runs: list[tuple[str, list[str], dict]] = []
-    grid = raw.get("grid", {})
     for key, values in grid.items():
         if not isinstance(values, list) or not values:
             raise casemod.CaseError(f"{where}: [grid] '{key}' must be a non-empty list of values")
@@ -105,20 +136,24 @@ def load(path, results: Path | None = None, threads: int = 1) -> tuple[str, list
         for combo in itertools.product(*(grid[k] for k in keys)):
             params = dict(zip(keys, combo))
             runs.append((_run_name(params), [f"{k}={tomlio.value(v)}" for k, v in params.items()], params, None))
-    for k, r in enumerate(raw.get("runs", [])):
-        bad = sorted(set(r) - RUN_KEYS)
-        if bad or "name" not in r:
+    for k, r in enumerate(given):
+        bad = sorted(set(r) - RUN_KEYS) if isinstance(r, dict) else None
+        if bad is None or bad or "name" not in r:
             raise casemod.CaseError(f"{where}: [[runs]] #{k + 1}: keys must be 'name' and optional 'set', 'out' "
-                                    f"(got {sorted(r)})")
+                                    f"(got {sorted(r) if isinstance(r, dict) else r!r})")
+        casemod.check_name(f"{where}: [[runs]] #{k + 1} 'name'", r["name"])
         out = r.get("out")
         if out is not None and not (isinstance(out, str) and out.strip() and not Path(out).is_absolute()
                                     and ".." not in Path(out).parts):
             raise casemod.CaseError(f"{where}: [[runs]] #{k + 1}: 'out' must be a folder relative to the results "
                                     f"folder (no '..'), got {out!r}")
-        params = dict(item.split("=", 1) for item in r.get("set", []))
-        runs.append((r["name"], list(r.get("set", [])), params, out))
+        sets = _overrides(r.get("set", []), f"{where}: [[runs]] #{k + 1}")
+        params = dict(item.split("=", 1) for item in sets)
+        runs.append((r["name"], sets, params, out))
     if not runs:
         raise casemod.CaseError(f"{where}: the sweep has no runs (add [grid] or [[runs]])")
+    for n, *_ in runs:  # generated from [grid]: the same rule
+        casemod.check_name(f"{where}: run name", n)
     names = [r[0] for r in runs]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
@@ -126,6 +161,7 @@ def load(path, results: Path | None = None, threads: int = 1) -> tuple[str, list
     jobs = [Job(n, str(base), common + over + ([] if out else [f"case.name={name}/{n}"]),
                 str(root.parent / out if out else root / n), threads, params)
             for n, over, params, out in runs]
+    _check_outputs(where, root, jobs)
     return name, jobs
 
 
@@ -144,11 +180,12 @@ def validate(jobs: list[Job]) -> dict[str, str]:
     with tempfile.TemporaryDirectory() as tmp:
         for j in jobs:
             try:
-                case = casemod.load(j.case, j.overrides)
+                case = casemod.load(j.case, j.overrides, sweep_run=True)
                 geo = json.dumps(case["case"]["geometry"], sort_keys=True)
                 spec = runner.resolve(case, j.case, Path(tmp), check_overlaps=geo not in checked)
                 checked.add(geo)
-            except (casemod.CaseError, GeometryError) as exc:
+                runner.check_replaceable(Path(j.out_dir))
+            except (casemod.CaseError, GeometryError, runner.RunError) as exc:
                 raise casemod.CaseError(f"run {j.name!r}: {exc}") from None
             prints[j.name] = runner.fingerprint(spec)
     return prints
@@ -207,12 +244,15 @@ def run_job(job: Job) -> dict:
     global _IN_RUN
     from drystone import runner
 
+    if _PARENT_PID is not None and os.getppid() != _PARENT_PID:  # the sweep is gone: start nothing
+        os._exit(143)
     out = Path(job.out_dir)
     t0 = time.time()
     _IN_RUN = True
     try:
         # the geometry's overlap test ran once for the whole sweep (validate)
-        s = runner.run(job.case, job.overrides, out_dir=out, threads=job.threads, quiet=True, check_overlaps=False)
+        s = runner.run(job.case, job.overrides, out_dir=out, threads=job.threads, quiet=True, check_overlaps=False,
+                       sweep_run=True)
         (out / "FAILED.txt").unlink(missing_ok=True)  # an earlier failure of this run
         return {"name": job.name, "status": "done", "wall_s": time.time() - t0,
                 "collapse_angle_deg": s.get("collapse_angle_deg")}
@@ -272,8 +312,11 @@ def run(path, workers: int | None = None, backend: str = "local", dask_address: 
         if missing:
             raise casemod.CaseError(f"{path}: no run(s) named {missing}; runs: {[j.name for j in jobs]}")
         jobs = [j for j in jobs if j.name in only]
+    root = (results or paths.RESULTS).resolve() / name
+    if is_run_folder(root):
+        raise casemod.CaseError(f"{path}: {root} is the folder of a run (a case named {name!r}), not of a sweep: "
+                                "give the sweep another [sweep] 'name' (a case and a sweep must not share a name)")
     prints = validate(jobs)
-    root = (results or paths.RESULTS) / name
     root.mkdir(parents=True, exist_ok=True)
     status = {j.name: {"name": j.name, "status": "pending", "params": j.params, "out_dir": j.out_dir} for j in jobs}
     todo = []
@@ -283,6 +326,7 @@ def run(path, workers: int | None = None, backend: str = "local", dask_address: 
             _resummarise(j, status[j.name])
         else:
             todo.append(j)
+    _write_status(root, name, path, status)  # the folder is a sweep's from now on (a case may not replace it)
     workers = max(1, min(workers or os.cpu_count() or 1, len(todo) or 1))
     print(f"[{name}] {len(jobs)} runs: {len(jobs) - len(todo)} finished earlier, {len(todo)} to run on "
           f"{workers} {'Dask' if backend == 'dask' else 'local'} worker(s); results in {root}", flush=True)
@@ -339,7 +383,7 @@ def _execute(jobs: list[Job], workers: int, backend: str, address: str | None):
     if not jobs:
         return
     if backend == "local":
-        ex = ProcessPoolExecutor(max_workers=workers, initializer=_worker_init)
+        ex = ProcessPoolExecutor(max_workers=workers, initializer=_worker_init, initargs=(os.getpid(),))
         futures = [ex.submit(run_job, j) for j in jobs]
         complete = False
         try:
@@ -361,14 +405,21 @@ def _execute(jobs: list[Job], workers: int, backend: str, address: str | None):
 
 
 _IN_RUN = False  # a pool worker is inside run_job
+_PARENT_PID = None  # a pool worker: the sweep's process (_worker_init)
 _MAIN_PID = os.getpid()  # the process that imported this module first (pool workers fork or spawn later)
 
 
-def _worker_init():
+def _worker_init(parent: int | None = None):
     """Pool workers leave Ctrl-C to the sweep's main process. SIGTERM ends a worker: inside
     a run it raises SystemExit, so the run kills its YADE process on the way out (and
-    run_job then ends the worker); between runs it exits at once."""
+    run_job then ends the worker); between runs it exits at once. A worker gets SIGTERM
+    when the sweep's process dies, even by kill -9 (``simulate.die_with_parent``), and
+    takes no further run once its parent is gone (``run_job``)."""
     import signal
+
+    from drystone.simulate import die_with_parent
+
+    global _PARENT_PID
 
     def _exit(signum, frame):
         if _IN_RUN:
@@ -377,6 +428,10 @@ def _worker_init():
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, _exit)
+    _PARENT_PID = parent
+    die_with_parent(signal.SIGTERM)
+    if parent is not None and os.getppid() != parent:  # the sweep died before the line above
+        os._exit(128 + signal.SIGTERM)
 
 
 def _execute_dask(jobs: list[Job], workers: int, address: str | None):

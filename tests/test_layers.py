@@ -13,7 +13,7 @@ import pytest
 from conftest import requires_yade
 from drystone import paths
 
-LEAVES = {"drystone", "drystone.paths", "drystone.units", "drystone.libm"}
+LEAVES = {"drystone", "drystone.paths", "drystone.units", "drystone.libm", "drystone.inputfiles"}
 CORE = {"drystone.case", "drystone.resolve", "drystone.contact", "drystone.overlap", "drystone.loading",
         "drystone.collapse", "drystone.timestep", "drystone.stability", "drystone.modal", "drystone.rotations",
         "drystone.provenance", "drystone.simulate", "drystone.tomlio", "drystone.analytic", "drystone.spec",

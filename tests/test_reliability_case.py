@@ -134,10 +134,19 @@ def test_case_name_outside_results_refused(tmp_path, name):
     assert repr(name) in msg
 
 
-@pytest.mark.parametrize("name", ["wall", "wall-1.5", "sweep/run_1", "a..b"])
-def test_plain_and_sweep_names_accepted(tmp_path, name):
-    """Sweeps name their runs <sweep>/<run> (drystone/sweep.py)."""
+@pytest.mark.parametrize("name", ["wall", "wall-1.5", "a..b", "_x", "A" * 100])
+def test_plain_names_accepted(tmp_path, name):
     assert casemod.load(write(tmp_path, GOOD), [f"case.name={json.dumps(name)}"])["case"]["name"] == name
+
+
+def test_only_sweeps_name_their_runs_sweep_slash_run(tmp_path):
+    """Sweeps name their runs <sweep>/<run> (drystone/sweep.py); a user's name does not nest
+    (a run named rx would replace results/rx/, deleting a run named rx/inner)."""
+    p = write(tmp_path, GOOD)
+    assert casemod.load(p, ["case.name=\"sweep/run_1\""], sweep_run=True)["case"]["name"] == "sweep/run_1"
+    refused(p, ["case.name=\"rx/inner\""], "[case] 'name'", "no '/'")
+    with pytest.raises(casemod.CaseError, match="one folder name"):
+        casemod.load(p, ["case.name=\"a/b/c\""], sweep_run=True)
 
 
 def _record_case(record):

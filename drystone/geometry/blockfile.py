@@ -41,6 +41,10 @@ corners on the hull's faces), or repeating another vertex, is refused (``not_con
 tolerance ``CORNER_REL_TOL`` x the block's size). Repeated vertices are refused, not
 merged: a file lists each corner once, so that it is the block that runs.
 
+Size: a block has at most ``MAX_VERTICES_PER_BLOCK`` vertices (80): no convex block with
+more fits the contact kernel (``drystone/overlap.py``). A block above it is refused
+before its hull is built; the checks of a block take memory linear in its vertices.
+
 Numbers: every coordinate, position and material value a finite JSON number (not a
 string, not true/false); ids integers; ``density`` within ``DENSITY_RANGE``.
 
@@ -56,6 +60,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from scipy.spatial import cKDTree
+
+from drystone import inputfiles
 
 from . import polyhedron as ph
 
@@ -66,6 +73,21 @@ ROLES = ("free", "fixed", "platform")
 #: size (the diagonal of its bounding box) is not a corner (far above round-off, far below
 #: any real stone's corner)
 CORNER_REL_TOL = 1e-9
+#: most vertices a block may have. The contact kernel (drystone/overlap.py, ``Shapes``)
+#: clips each face of one block against the face planes of the other in a polygon buffer
+#: of overlap.MAXV = 96 points: it refuses blocks whose faces plus the corners of their
+#: largest face exceed MAXV / 2 = 48. A convex block of V corners has F >= V/2 + 2 faces
+#: (every corner joins >= 3 edges; Euler) and, if its largest face has k corners,
+#: F >= (2V - 4)/(k - 2): F + k <= 48 needs k <= 5 and V <= 66, or k = 6 and V <= 80
+#: (the 80-corner fullerene's shape: 12 pentagons and 30 hexagons), or k >= 7 and V <= 78.
+#: So no block above 80 can ever run; a scanned stone's hull must be simplified to fewer
+#: corners anyway (a triangulated hull fits up to 24: F = 2V - 4, k = 3; an extruded
+#: outline up to 46: F = V/2 + 2, k = V/2). The per-pair cost of the kernel, each face of
+#: one block against each face of the other, stays below 48^2 clips with this bound. The
+#: limit also bounds the validation's cost: the convexity check compares every vertex
+#: with every other (80^2 products); a 10 000-vertex block took 16-30 s and 6.3 GB.
+#: tests/test_reliability_vertices.py rederives 80 from overlap.MAXV.
+MAX_VERTICES_PER_BLOCK = 80
 #: accepted material densities (kg/m^3): from below the lightest solids a block could be
 #: made of (pumice, timber, aerated concrete: 300-900) to above the densest metal (osmium,
 #: 22590). Outside it is a unit mistake (2.3 for g/cm^3, 2.3e6 for kg/dm^3 read as kg/m^3)
@@ -247,6 +269,10 @@ def _vertices(where: str, value) -> np.ndarray:
     """The (n, 3) vertex array of a block (m), or GeometryError naming the vertex."""
     if not isinstance(value, (list, tuple, np.ndarray)):
         raise GeometryError(f"{where}: 'vertices' must be a list of [x, y, z] numbers, got {value!r}")
+    if len(value) > MAX_VERTICES_PER_BLOCK:  # before any work on them (hull, convexity)
+        raise GeometryError(f"{where}: {len(value)} vertices, more than {MAX_VERTICES_PER_BLOCK} vertices "
+                            "(drystone.geometry.blockfile.MAX_VERTICES_PER_BLOCK: no convex block with more corners "
+                            "fits the contact kernel); give the stone's hull fewer corners")
     for i, p in enumerate(value):
         if not isinstance(p, (list, tuple, np.ndarray)) or len(p) != 3:
             raise GeometryError(f"{where}: 'vertices': vertex {i} must be [x, y, z] (three numbers, m), got {p!r}")
@@ -262,10 +288,12 @@ def not_convex(verts: np.ndarray, h=None) -> str | None:
     v = np.asarray(verts, dtype=float)
     h = ph.hull(v) if h is None else h
     tol = CORNER_REL_TOL * float(np.linalg.norm(np.ptp(v, axis=0)))
-    dist = np.linalg.norm(v[:, None, :] - v[None, :, :], axis=2)
-    i, j = np.nonzero(np.triu(dist <= tol, k=1))
-    if len(i):
-        return (f"vertices {i[0]} and {j[0]} coincide at ({_xyz(v[i[0]])}) m: list each corner once "
+    # pairs (i < j) at most tol apart, from a k-d tree (no n x n distance matrix); the
+    # first in file order
+    pairs = cKDTree(v).query_pairs(tol, output_type="ndarray")
+    if len(pairs):
+        i, j = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))[0]]
+        return (f"vertices {i} and {j} coincide at ({_xyz(v[i])}) m: list each corner once "
                 "(repeated vertices are refused, not merged)")
     bad = np.flatnonzero(~(ph.corner_gaps(v, h) > tol))
     if len(bad):
@@ -444,13 +472,7 @@ def check_no_overlaps(bs: BlockSet, where: str = "<blocks>", tol: float = OVERLA
 def load(path, check_overlaps: bool = True) -> BlockSet:
     """Read and validate a block file; errors name the file."""
     p = Path(path)
-    if not p.is_file():
-        raise GeometryError(f"{p}: block file not found")
-    try:
-        data = json.loads(p.read_text())
-    except json.JSONDecodeError as exc:
-        raise GeometryError(f"{p}: not valid JSON: line {exc.lineno}, column {exc.colno}: {exc.msg}") from None
-    return parse(data, str(p), check_overlaps)
+    return parse(inputfiles.load_json(p, GeometryError, "block file"), str(p), check_overlaps)
 
 
 def write(bs: BlockSet | dict, path) -> Path:
