@@ -63,6 +63,11 @@ def main(argv=None) -> int:
             s = runner.run(a.case, a.set, a.out, a.threads, a.quiet, engine=a.engine)
             keys = [k for k in s if k.startswith(("penetration", "slip", "collapse_angle"))]
             print(json.dumps({k: s[k] for k in keys}, indent=1))
+            left = (s.get("run") or {}).get("left_model") or {}
+            if left.get("count"):
+                print(f"warning: {left['count']} of {left['free_blocks']} free block(s) left the model "
+                      f"({', '.join(str(b['block']) for b in left['blocks'][:10])}): their motion is unbounded "
+                      "and has no residual (summary.json run.left_model)", file=sys.stderr)
         elif a.cmd == "keys":
             if a.update_readme:
                 from drystone import paths

@@ -5,7 +5,10 @@ platform; SI units; rotations as rotation vectors (axis x angle, rad) of each bl
 relative to its initial orientation. A block has *collapsed* when its displacement
 exceeds its collapse threshold (case key ``output.collapse_displacement``, by default half
 its smallest dimension) or it ends up lower than its initial position by more than its
-height (it fell).
+height (it fell). A block that left the model (drystone/stability.py ``ModelRegion``: below
+the supports' underside, or thrown farther than their size plus the fall height) has
+collapsed and its motion is ``unbounded``: no residual, maximum or rotation is given for it
+(from the sample it left on, its numbers describe nothing the model holds).
 """
 from __future__ import annotations
 
@@ -15,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drystone import collapse, rotations
+from drystone import collapse, rotations, stability
 from drystone.spec import spec_dict, stage_type
 
 
@@ -36,19 +39,50 @@ def load_histories(out: Path) -> dict:
     return h
 
 
-def block_table(spec: dict, h: dict) -> dict:
-    """Per block id: residual and maximum displacement, rotation, collapsed."""
+def left_model(spec: dict, h: dict) -> dict[int, dict]:
+    """The free blocks that left the model (drystone/stability.py ``ModelRegion``, from the
+    blocks at t = 0): block id -> {"sample": first sample outside, "time_s", "where"}. The
+    YADE driver applies the same rule to the same samples (run_info.json ``left_model``)."""
+    if "blocks" not in spec or not len(h["t"]):
+        return {}
+    region = stability.ModelRegion.from_blocks(spec["blocks"])
+    out = {}
+    for j, k in enumerate(region.first_exits(h["t"], h["pos"])):
+        if k is not None:
+            out[int(h["block_ids"][j])] = {"sample": k, "time_s": float(h["t"][k]),
+                                           "where": region.where(h["pos"][k, j])}
+    return out
+
+
+def block_table(spec: dict, h: dict, left: dict | None = None) -> dict:
+    """Per block id: residual and maximum displacement, rotation, collapsed; ``motion``
+    "bounded", or "unbounded" for a block that left the model (``left``, default
+    ``left_model``): collapsed, its residuals and maxima None, when and where it left."""
+    left = left_model(spec, h) if left is None else left
     ids = [int(i) for i in h["block_ids"]]
     disp = h["pos"] - h["pos0"][None]
     rot = rotations.relative_rotation_vectors(h["quat"], h["quat0"][None])
     heights = {b["id"]: float(np.ptp(np.asarray(b["vertices"])[:, 2])) for b in spec["blocks"]}
     out = {}
     for j, bid in enumerate(ids):
+        thr = spec["collapse_threshold"][str(bid)]
+        if bid in left:
+            gone = left[bid]
+            out[str(bid)] = {
+                "motion": "unbounded",
+                "left_model": {"time_s": gone["time_s"], "where": gone["where"]},
+                "residual_displacement_m": None, "residual_displacement_norm_m": None,
+                "max_displacement_norm_m": None, "residual_rotation_rad": None, "residual_rotation_angle_rad": None,
+                "collapse_threshold_m": thr,
+                "fell": gone["where"].startswith("below"),
+                "collapsed": True,
+            }
+            continue
         d = disp[:, j]
         nrm = np.linalg.norm(d, axis=1)
-        thr = spec["collapse_threshold"][str(bid)]
         fell = bool(d[-1, 2] < -heights[bid])
         out[str(bid)] = {
+            "motion": "bounded",
             "residual_displacement_m": d[-1].tolist(),
             "residual_displacement_norm_m": float(nrm[-1]),
             "max_displacement_norm_m": float(nrm.max()),
@@ -61,28 +95,38 @@ def block_table(spec: dict, h: dict) -> dict:
     return out
 
 
-def stage_residuals(spec: dict, h: dict) -> list[dict]:
+def stage_residuals(spec: dict, h: dict, left: dict | None = None) -> list[dict]:
     """Displacement (m) of every free block at the end of each stage, relative to the
-    platform: the residuals after each run of a repeated excitation."""
+    platform: the residuals after each run of a repeated excitation; None for a block that
+    had left the model by then (``left_model``)."""
+    left = left_model(spec, h) if left is None else left
     disp = h["pos"] - h["pos0"][None]
-    ids = [str(int(i)) for i in h["block_ids"]]
+    ids = [int(i) for i in h["block_ids"]]
     out = []
     for k, st in enumerate(spec["stages"]):
         i = int(np.searchsorted(h["t"], st["end"] + 1e-9) - 1)
         i = max(0, min(i, len(h["t"]) - 1))
         # summary.json (version 1) names a stage's type "kind"
         out.append({"stage": k + 1, "kind": stage_type(st), "end_s": st["end"], "sample_time_s": float(h["t"][i]),
-                    "displacement_m": {b: disp[i, j].tolist() for j, b in enumerate(ids)}})
+                    "displacement_m": {str(b): None if b in left and left[b]["sample"] <= i else disp[i, j].tolist()
+                                       for j, b in enumerate(ids)}})
     return out
 
 
-def control_point_table(h: dict) -> dict:
-    """Per control point: max |relative displacement| per axis and in norm, and residual."""
+def control_point_table(h: dict, spec: dict | None = None, left: dict | None = None) -> dict:
+    """Per control point: max |relative displacement| per axis and in norm, and residual;
+    None for a point on a block that left the model (``left``; ``spec`` gives each point's
+    block)."""
     out = {}
     if h["cp"].size == 0:
         return out
+    on = {c["name"]: c["block"] for c in (spec or {}).get("control_points", [])}
     rel = h["cp"] - h["cp0"][None]
     for j, name in enumerate(h["cp_names"]):
+        if on.get(str(name)) in (left or {}):
+            out[str(name)] = {"max_abs_relative_displacement_m": None, "max_relative_displacement_norm_m": None,
+                              "residual_relative_displacement_m": None, "motion": "unbounded"}
+            continue
         r = rel[:, j]
         nrm = np.linalg.norm(r, axis=1)
         out[str(name)] = {"max_abs_relative_displacement_m": np.abs(r).max(axis=0).tolist(),
@@ -185,6 +229,7 @@ def build(spec, out: Path) -> dict:
     h = load_histories(out)
     info = json.loads((out / "run_info.json").read_text())
     case = json.loads(json.dumps(spec["provenance"]))
+    left = left_model(spec, h)
     s = {
         "format": SUMMARY_FORMAT, "version": SUMMARY_VERSION,
         "name": spec["name"],
@@ -194,9 +239,9 @@ def build(spec, out: Path) -> dict:
         "run": {k: info[k] for k in ("steps", "simulated_time_s", "wall_time_s", "us_per_step",
                                      "python_us_per_step", "dt_s",
                                      "threads", "max_contacts", "final_contacts", "stopped_early", "yade_version")},
-        "blocks": block_table(spec, h),
-        "control_points": control_point_table(h),
-        "stage_residuals": stage_residuals(spec, h),
+        "blocks": block_table(spec, h, left),
+        "control_points": control_point_table(h, spec, left),
+        "stage_residuals": stage_residuals(spec, h, left),
         "collapse_angle_deg": None,
         "inputs": {"geometry": spec["geometry_source"], "materials": spec["materials"],
                    "joint_overrides": spec["joint_overrides"], "stages": spec["stages"],
@@ -208,7 +253,9 @@ def build(spec, out: Path) -> dict:
     # a last rest stage run until the kinetic energy settled: threshold, reached or not (None:
     # no such stage); velocity jumps of sines started as Eq. 9's displacement
     s["run"].update(settle=info.get("settle"), velocity_jumps=info.get("velocity_jumps", []))
-    s["run"]["contact_stability"] = contact_stability(spec, info)
+    s["run"]["left_model"] = left_model_report(spec, h, left, info)
+    s["run"]["motion"] = "unbounded" if left else "bounded"
+    s["run"]["contact_stability"] = contact_stability(spec, info, len(left))
     if any(st["type"] == "tilt" for st in spec["stages"]):
         s["collapse"] = tilt_collapse(spec, h, info.get("collapse"))
         s["collapse_angle_deg"] = s["collapse"]["angle_deg"] if s["collapse"] else None
@@ -223,19 +270,38 @@ def build(spec, out: Path) -> dict:
     return s
 
 
-def contact_stability(spec: dict, info: dict) -> dict | None:
+def left_model_report(spec: dict, h: dict, left: dict, info: dict) -> dict:
+    """summary.json's ``run.left_model``: how many of the free blocks left the model, which
+    and when (``left_model``), the region and its rule (drystone/stability.py), and when the
+    run stopped because every free block had left (run_info's ``all_left_model_s``)."""
+    region = stability.ModelRegion.from_blocks(spec["blocks"]) if "blocks" in spec else None
+    return {"count": len(left), "free_blocks": len(h["block_ids"]),
+            "blocks": [{"block": b, "time_s": r["time_s"], "where": r["where"]}
+                       for b, r in sorted(left.items(), key=lambda x: (x[1]["time_s"], x[0]))],
+            "stopped_all_left_s": info.get("all_left_model_s"),
+            "region": region.as_dict() if region is not None else None, "rule": stability.REGION_RULE}
+
+
+def contact_stability(spec: dict, info: dict, blocks_left_model: int = 0) -> dict | None:
     """The largest omega dt any contact mode reached in the run (run_info's
     ``max_contact_omega_dt``, omega the contact's highest modal frequency from the damping
     kernel, drystone/contact.py) against the central-difference limit 2 (sqrt(1 + xi^2) - xi)
     for the largest damping xi of the run's materials: a check of the automatic step, which
-    is estimated from block masses before the run (drystone/timestep.py). None for runs
-    without it (older runs, the stock law)."""
+    is estimated from block masses before the run (drystone/timestep.py). ``within`` says
+    the contacts were integrated stably, not that the motion is bounded: with
+    ``blocks_left_model`` > 0 a ``note`` says so (run.left_model). None for runs without it
+    (older runs, the stock law)."""
     w = info.get("max_contact_omega_dt")
     if w is None or not spec.get("materials"):
         return None
     xi = max(float(m.get("damping", 0.0)) for m in spec["materials"].values())
     limit = 2.0 * (np.sqrt(1.0 + xi * xi) - xi)
-    return {"max_omega_dt": float(w), "limit": float(limit), "within": bool(w < limit)}
+    out = {"max_omega_dt": float(w), "limit": float(limit), "within": bool(w < limit),
+           "blocks_left_model": int(blocks_left_model)}
+    if blocks_left_model:
+        out["note"] = (f"{blocks_left_model} free block(s) left the model: 'within' covers the contacts only; "
+                       "their motion is unbounded and has no residual (run.left_model)")
+    return out
 
 
 def vertical_reaction(spec: dict, h: dict) -> np.ndarray:

@@ -128,6 +128,16 @@ class Driver:
         # blow-up checks at every recorded sample (drystone/stability.py)
         self.energy = stability.EnergyWatch(self.w_free)
         self.failure = None
+        # the speed bound: integral of |g_eff| dt over the steps taken (m/s), velocity jumps so
+        # far, the energy at the first sample (stability.speed_budget)
+        self.g_integral = 0.0
+        self.jump_dvs = []
+        self.e0 = None
+        # free blocks that left the model (stability.ModelRegion): summary marks them unbounded;
+        # once every free block has, the run stops (the rest would be meaningless)
+        self.region = stability.ModelRegion.from_blocks(spec["blocks"])
+        self.left = {}  # YADE id -> {"block", "time_s", "where", "position_m", "speed_m_s"}
+        self.all_left_s = None
         sizes = {b["id"]: float(ph.extent(np.asarray(b["vertices"])).min()) for b in spec["blocks"]}
         self.size = np.array([sizes[self.bid[i]] for i in range(nb)])
 
@@ -217,6 +227,7 @@ class Driver:
             self.iter, self.t = O.iter, O.time
         t = self.t
         g = self.prog.body_acceleration(t)
+        self.g_integral += float(np.linalg.norm(g)) * O.dt  # the speed bound (stability.speed_budget)
         k = self.prog.stage_index(t)
         if k != self.stage:
             self._enter_stage(k)
@@ -336,6 +347,7 @@ class Driver:
             cs.integrate(dt, g[done], F, T, self.mass_int, self.inertia_int, self.lin_free, self.rot_free,
                          self.aspherical, self.pos, self.vel, self.angvel, self.angmom, self.quat, self.rot)
             done += 1
+        self.g_integral += float(np.sum(np.linalg.norm(g[:done], axis=1))) * dt  # the speed bound
         self.iter += done
         last = ts[done - 1]  # the time of the last step taken
         self.t = last + dt
@@ -361,6 +373,7 @@ class Driver:
                 self._set_velocity(int(i), v0 + dv * free)
                 self.energy.inject(0.5 * self.mass[i] * (np.sum((v0 + dv * free) ** 2) - np.sum(v0 ** 2)))
             self.jumps.append({"stage": k + 1, "time_s": float(self.t), "relative_velocity_m_s": dv.tolist()})
+            self.jump_dvs.append(np.asarray(dv, float))
             print(f"[{self.spec['name']}] stage {k + 1}: base velocity jump, free blocks get {dv.tolist()} m/s "
                   "relative to the platform", flush=True)
         cfg = self.prog.settle(k, self.w_free)
@@ -406,6 +419,7 @@ class Driver:
         h["potential"].append(-float(np.sum(m * (x_half @ g))))
         h["elastic"].append(0.5 * sum(self.engine.elastic) if self.law_name == "penalty_coulomb" else np.nan)
         self._check_stable(t, ke, h["elastic"][-1], g, st)
+        self._check_left(t)
         for name, ya, yb in self.named:
             hc = self.hc[name]
             row = np.flatnonzero(((st.id1 == ya) & (st.id2 == yb)) | ((st.id1 == yb) & (st.id2 == ya))) if len(st.fn) else []
@@ -457,21 +471,57 @@ class Driver:
                       if a <= t < b and y in d]
             p = stability.load_power(self.mass[d], self.vel[d], g, forces)
             msg = self.energy.update(t, ke, 0.0 if np.isnan(elastic) else elastic, p)
+        if msg is None and len(d):
+            if self.e0 is None:
+                self.e0 = ke + (0.0 if np.isnan(elastic) else elastic)
+            impulses = [(float(np.linalg.norm(tuple(f))) * max(0.0, min(t, b) - a), self.mass[y])
+                        for y, f, a, b in self.forces if y in d]
+            budget = stability.speed_budget(float(np.sum(self.mass[d])), self.e0, self.g_integral, impulses,
+                                            self.jump_dvs)
+            msg = stability.speed_check(t, self.mass[d], self.vel[d], ke, budget, self.w_free,
+                                        [int(self.bid[int(i)]) for i in d])
         if msg is None and len(st.fn):
             names = [f"{self.bid[int(a)]}-{self.bid[int(b)]}" for a, b in zip(st.id1, st.id2)]
             msg = stability.tunnelling(st.volume, st.area, self.size[st.id1], self.size[st.id2], names)
         if msg is not None:
             self._fail(msg)
 
+    def _check_left(self, t):
+        """Record each free block when it first leaves the model (stability.ModelRegion:
+        fallen below the supports' underside, or thrown beyond the supports' size plus the
+        fall height); once every free block has, stop the run at this sample: what follows
+        is the motion of nothing the model holds (run_info.json ``left_model``)."""
+        if self.failure is not None or not len(self.dyn):
+            return
+        out = self.region.outside(self.pos[self.dyn])
+        for i in self.dyn[out]:
+            i = int(i)
+            if i in self.left:
+                continue
+            p = self.pos[i]
+            self.left[i] = {"block": int(self.bid[i]), "time_s": float(t), "where": self.region.where(p),
+                            "position_m": p.tolist(), "speed_m_s": float(np.linalg.norm(self.vel[i]))}
+            print(f"[{self.spec['name']}] block {self.bid[i]} left the model at t = {t:.3f} s "
+                  f"({self.left[i]['where']}): its motion from there has no meaning (summary: unbounded, "
+                  "no residual)", flush=True)
+        if self.all_left_s is None and len(self.left) == len(self.dyn):
+            self.all_left_s = float(t)
+            print(f"[{self.spec['name']}] every free block has left the model: stopping at t = {t:.3f} s",
+                  flush=True)
+            if self.stop_at is None or self.stop_at > t:
+                self.stop_at = t
+
     def _check_settled(self, t, ke_b):
         """A last rest stage with ``until_kinetic_below(_per_weight)``: stop the run once the
         kinetic energy of the free blocks (J, at the recorded samples; blocks fallen off the
-        platform left out) has stayed below the threshold for ``settle_window`` s;
+        platform or otherwise out of the model left out) has stayed below the threshold for
+        ``settle_window`` s;
         run_info.json says whether and when."""
         cfg = self.settle
         if cfg is None or cfg["reached"] or t < self.prog.stages[cfg["stage"] - 1].start:
             return
-        fallen = self.pos[self.dyn, 2] < self.z_floor
+        # fallen off the platform, or left the model in any other way (stability.ModelRegion)
+        fallen = (self.pos[self.dyn, 2] < self.z_floor) | self.region.outside(self.pos[self.dyn])
         ke = float(ke_b[~fallen].sum())
         cfg["final_kinetic_J"] = ke
         cfg["fallen_excluded"] = [int(self.bid[int(i)]) for i in self.dyn[fallen]]
@@ -556,6 +606,8 @@ class Driver:
                 "max_contacts": int(self.max_contacts), "final_contacts": int(self.h["n_contacts"][-1]),
                 "stopped_early": bool(self.done), "collapse": self.collapse,
                 "velocity_jumps": self.jumps, "settle": self.settle,
+                "left_model": sorted(self.left.values(), key=lambda r: (r["time_s"], r["block"])),
+                "all_left_model_s": self.all_left_s, "model_region": self.region.as_dict(),
                 "max_contact_omega_dt": float(self.engine.max_omega_dt),
                 "yade_version": yade.config.version if hasattr(yade, "config") else "unknown",
                 "engine": self.engine_name,

@@ -157,8 +157,8 @@ def reference_runs(root: Path | None = None) -> list[dict]:
         info = _read_json(p) or {}
         spec = _read_json(p.parent / "spec.json") or {}
         ex = [s for s in spec.get("stages", []) if s.get("type", s.get("kind")) == "excitation"]
-        if not info.get("simulated_time_s") or not ex:
-            continue
+        if not info.get("simulated_time_s") or not ex or info.get("all_left_model_s") is not None:
+            continue  # stopped early: every stone had left the model (no rest to measure)
         out.append({"name": p.parent.name, "simulated_s": info["simulated_time_s"], "steps": info.get("steps"),
                     "yade_wall_s": info.get("wall_time_s"), "rest_s": info["simulated_time_s"] - ex[-1]["end"]})
     return out

@@ -212,7 +212,7 @@ def run_residuals(folder: Path) -> list[dict]:
         for b in range(1, 6):
             lx, hz = dims[b]
             d = st["displacement_m"][str(b)]
-            fell = d[2] < -0.5 * hz
+            fell = d is None or d[2] < -0.5 * hz  # None: it had left the model (summary.stage_residuals)
             a = float(rot[ids.index(b)])
             res.append(None if fell else 1e3 * d[0])
             angle.append(a)

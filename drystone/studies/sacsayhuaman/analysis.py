@@ -98,7 +98,10 @@ def residuals(out: Path) -> dict:
     (max |u_y|) and ``stones`` (the stones within 10 % of it, as the paper lists several);
     the 3D measure ``norm_m`` (|u|), ``max_norm_m``, ``norm_stones``; ``moved`` (|u_y| >
     MOVED_M); ``collapsed`` by the paper's reading (``COLLAPSE``), ``all_collapsed``, and
-    ``collapsed_summary`` (summary.json's 3D rule, for comparison); ``settled``, ``settle``
+    ``collapsed_summary`` (summary.json's 3D rule, for comparison); ``left_model``: the stones
+    that left the model (summary.json's ``motion`` "unbounded", drystone/stability.py
+    ModelRegion: fallen off the platform or thrown away): collapsed, their residuals None and
+    left out of the maxima (0 when no stone is left on the model); ``settled``, ``settle``
     (run_info's record) and ``end_time_s``."""
     spec, s, h = _load(out)
     grav = [st for st in spec["stages"] if stage_type(st) == "gravity"]
@@ -109,21 +112,29 @@ def residuals(out: Path) -> dict:
     depth = np.array([np.ptp(verts[b][:, 1]) for b in ids])
     height = np.array([np.ptp(verts[b][:, 2]) for b in ids])
     uy, nrm = u[:, 1], np.linalg.norm(u, axis=1)
-    fallen = (np.abs(uy) > 0.5 * depth) | (u[:, 2] < -height)
+    gone = np.array([s["blocks"].get(str(b), {}).get("motion") == "unbounded" for b in ids], bool)
+    fallen = gone | (np.abs(uy) > 0.5 * depth) | (u[:, 2] < -height)
     collapsed = sorted(ids[j] for j in np.flatnonzero(fallen))
 
     def largest(x):
-        top = float(x.max())
+        x = np.where(gone, 0.0, x)  # a stone that left the model has no residual
+        top = float(x.max()) if len(x) else 0.0
         return top, (sorted(ids[j] for j in np.flatnonzero(x >= 0.9 * top)) if top > 0 else [])
 
     top, stones = largest(np.abs(uy))
     top3, stones3 = largest(nrm)
     settle = s.get("run", {}).get("settle")
-    return {"out_of_plane_m": {str(b): float(x) for b, x in zip(ids, uy)}, "max_out_of_plane_m": top,
-            "stones": stones, "norm_m": {str(b): float(x) for b, x in zip(ids, nrm)}, "max_norm_m": top3,
-            "norm_stones": stones3, "moved": sorted(ids[j] for j in np.flatnonzero(np.abs(uy) > MOVED_M)),
+
+    def per_stone(x):
+        return {str(b): None if g else float(v) for b, v, g in zip(ids, x, gone)}
+
+    return {"out_of_plane_m": per_stone(uy), "max_out_of_plane_m": top,
+            "stones": stones, "norm_m": per_stone(nrm), "max_norm_m": top3,
+            "norm_stones": stones3,
+            "moved": sorted(ids[j] for j in np.flatnonzero(gone | (np.abs(uy) > MOVED_M))),
             "collapsed": collapsed, "all_collapsed": len(collapsed) == len(ids),
             "collapsed_summary": sorted(int(b) for b, r in s["blocks"].items() if r["collapsed"]),
+            "left_model": sorted(ids[j] for j in np.flatnonzero(gone)),
             "settled": None if settle is None else bool(settle["reached"]), "settle": settle,
             "end_time_s": float(h["t"][-1])}
 

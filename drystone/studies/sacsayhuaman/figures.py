@@ -110,7 +110,7 @@ def final_states(rows: list[dict], key: str, path: Path) -> Path:
         for bid, v in verts.items():
             if roles[bid] == "platform":
                 continue
-            mm = 1e3 * abs(res["out_of_plane_m"].get(str(bid), 0.0))
+            mm = 1e3 * abs(res["out_of_plane_m"].get(str(bid)) or 0.0)  # None: left the model (collapsed)
             colour = "0.75" if roles[bid] == "fixed" else ("tab:red" if bid in res["collapsed"] else
                                                            cmap(norm(max(mm, 0.1))))
             ax.add_patch(Polygon(_front(v), closed=True, facecolor=colour, edgecolor="k", lw=0.4))
