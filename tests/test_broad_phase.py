@@ -4,6 +4,7 @@ bit for bit; and the touching rule (pairs touching within TOL are no contact).""
 import numpy as np
 import pytest
 
+import tolerances as tol
 from drystone import overlap as ov
 
 
@@ -166,7 +167,7 @@ def test_touching_stones_are_no_contact():
     args = (s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, np.array(POS), np.array(ROT),
             np.array([True, True]), ov.TOL)
     ref = ov._contacts_all_pairs(*args)
-    assert len(ref[0]) == 1 and ref[2][0] < 1e-15 and ref[2][0] / ref[5][0] > 0.1
+    assert len(ref[0]) == 1 and ref[2][0] < tol.TOUCHING_VOLUME_M3 and ref[2][0] / ref[5][0] > 0.1
     assert len(ov.contacts_with_patches(*args)[0]) == 0
 
 

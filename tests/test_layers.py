@@ -80,9 +80,10 @@ def _target(name: str) -> str | None:
     return ".".join(parts) or None
 
 
-def test_every_import_goes_down_the_layers():
+def upward_imports(modules) -> list[str]:
+    """The imports of the (module name, path) pairs that go up the layers, one line each."""
     bad = []
-    for mod, path in _modules():
+    for mod, path in modules:
         here = _layer(mod)
         for name in _imports(mod, path):
             t = _target(name)
@@ -90,13 +91,67 @@ def test_every_import_goes_down_the_layers():
                 continue
             if _layer(t) > here:
                 bad.append(f"{mod} (layer {here}) imports {t} (layer {_layer(t)})")
+    return bad
+
+
+def _imports_yade(mod: str, path: Path) -> bool:
+    """Whether the module imports yade (``import yade``, ``import yade.x``, ``from yade
+    import ...``), wherever in the module."""
+    return any(name == "yade" or name.startswith("yade.") for name in _imports(mod, path))
+
+
+def yade_importers(modules) -> list[str]:
+    """The modules of the (module name, path) pairs outside drystone.yade_scripts that
+    import yade."""
+    return [mod for mod, path in modules if not mod.startswith("drystone.yade_scripts") and _imports_yade(mod, path)]
+
+
+def test_every_import_goes_down_the_layers():
+    bad = upward_imports(_modules())
     assert not bad, "\n".join(bad)
 
 
 def test_the_layer_rule_catches_an_upward_import(tmp_path):
-    """The check itself can fail: a geometry module importing the runner is caught."""
+    """The check itself can fail: a geometry module importing postprocess (at the top, by
+    a relative import and inside a function) or the runner is caught, each import once,
+    and the same module importing only downwards passes."""
     assert _layer("drystone.geometry.blockfile") < _layer("drystone.runner")
     assert _target("drystone.runner.run") == "drystone.runner"
+    up = tmp_path / "upward.py"
+    up.write_text("import numpy as np\n"
+                  "from drystone import paths\n"
+                  "from drystone.postprocess import summary\n"
+                  "from ..postprocess import vtk\n"
+                  "def f():\n"
+                  "    import drystone.runner\n"
+                  "    return drystone.runner\n")
+    bad = upward_imports([("drystone.geometry.upward", up)])
+    assert bad == ["drystone.geometry.upward (layer 1) imports drystone.postprocess.summary (layer 4)",
+                   "drystone.geometry.upward (layer 1) imports drystone.postprocess.vtk (layer 4)",
+                   "drystone.geometry.upward (layer 1) imports drystone.runner (layer 5)"]
+    down = tmp_path / "downward.py"
+    down.write_text("from drystone import paths, units\nfrom . import blockfile\nimport drystone.motions.record\n")
+    assert upward_imports([("drystone.geometry.downward", down)]) == []
+    # the same upward imports are allowed to a module above them
+    assert upward_imports([("drystone.studies.upward", up)]) == []
+
+
+def test_only_the_yade_scripts_import_yade():
+    """YADE is imported only inside YADE's interpreter, by drystone/yade_scripts: every
+    other module imports without it (the package's pure parts run under plain Python)."""
+    modules = list(_modules())
+    assert yade_importers(modules) == []
+    assert "drystone.yade_scripts.run_case" in [m for m, p in modules if _imports_yade(m, p)]  # the scan sees yade
+
+
+def test_the_yade_rule_catches_a_yade_import(tmp_path):
+    checks = {"import yade\n": True, "from yade import utils\n": True, "import yade.utils as u\n": True,
+              "def f():\n    from yade import O\n": True, "import yadex\nfrom drystone import paths\n": False}
+    for k, (text, caught) in enumerate(checks.items()):
+        f = tmp_path / f"m{k}.py"
+        f.write_text(text)
+        assert yade_importers([("drystone.postprocess.m", f)]) == (["drystone.postprocess.m"] if caught else []), text
+        assert yade_importers([("drystone.yade_scripts.m", f)]) == []
 
 
 @requires_yade

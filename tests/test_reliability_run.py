@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import tolerances as tol
 from conftest import requires_yade
 from drystone import case as casemod
 from drystone import paths, runner, stability, sweep
@@ -267,7 +268,7 @@ def test_energy_bound_ratio_of_a_free_fall_is_one_half():
     vel[:, 0, 2] = -g * t
     ke = 0.5 * m[0] * (g * t) ** 2
     r = stability.energy_bound_ratio(t, m, vel, np.tile([0.0, 0.0, -g], (len(t), 1)), ke, np.zeros_like(t), g)
-    assert 0.49 < r < 0.5
+    assert tol.FREE_FALL_RATIO_MIN < r < 0.5
 
 
 def test_a_geometry_without_platform_is_refused(tmp_path):

@@ -115,7 +115,7 @@ def test_varying_depth_keeps_face_weight_and_bounds(flush):
     d = _depths(var)
     assert d.max() / d.min() <= (1 + spread) / (1 - spread) + tol.SLACK_TIGHT
     assert (1 - tol.DEPTH_MEAN_REL) * t < np.mean(d) < (1 + tol.DEPTH_MEAN_REL) * t
-    assert d.std() > 0.1 * t  # uniform on +-1/3: sd = t / (3 sqrt 3) = 0.19 t
+    assert d.std() > tol.DEPTH_SD_MIN_REL * t  # uniform on +-1/3: sd = t / (3 sqrt 3) = 0.19 t
     ys = np.array([[np.min(np.asarray(b["vertices"])[:, 1]), np.max(np.asarray(b["vertices"])[:, 1])]
                    for b in stones(var)])
     if flush is None:

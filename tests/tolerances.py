@@ -428,3 +428,128 @@ REGRESSION_REL = 1e-5
 #: change of a depth changes the force by a relative 1e-12) over a few thousand steps;
 #: histories measured to differ by < 1e-10 m over 2 s of gravity4; 1e-9 m
 ENGINE_AGREEMENT_M = 1e-9
+
+# ---------------------------------------------------------------------------------------
+# Issue 24, item 6: tolerances that were bare numbers in their tests (test_bench.py,
+# test_broad_phase.py, test_crosscheck.py, test_fragility.py, test_compiled_step.py,
+# test_motions_processing.py, test_reliability_run.py, test_walls.py, test_yade_compiled.py)
+# ---------------------------------------------------------------------------------------
+
+#: golden value: the 40-block running-bond wall's time step (test_bench.py). Its smallest
+#: free block, a half stone 0.54 x 0.8 x 0.8 m (794.88 kg at 2300 kg/m^3), pressed on its
+#: 0.64 m^2 face: k = 4 K_n A = 5.12e8 N/m, omega = sqrt(k / m) = 802.57 rad/s; with damping
+#: 0.8, dt_crit = (2 / omega)(sqrt(1.64) - 0.8) = 1.19771e-3 s, times the safety 0.5
+#: (the closed form gives it to 2e-16); compared at EXACT_REL
+BENCH_WALL_DT_S = 5.988554740864951e-4
+#: irregular walls fill each course with stone lengths uniform on 0.45-0.75 m (mean 0.6 m,
+#: coefficient of variation 0.14): a renewal count, variance 0.02 per stone, so the wall's
+#: count scatters by 0.14 sqrt(N) (0.9 stones at N = 40, 6.5 at 2000) and each course's last
+#: stone takes what is left; within 5 % of N plus 2 stones (4.4 sd at 40; seed 0: 42, 498,
+#: 2012)
+IRREGULAR_COUNT_REL = 0.05
+IRREGULAR_COUNT_STONES = 2
+#: touching stones (coordinates of order 1 m, faces up to 0.6 x 0.5 m): the clip's
+#: round-off "overlap" is of order eps x face area x coordinate, ~3e-17 m^3 (1e-17
+#: measured); 1e-15 m^3 is far below any real overlap (1e-5 m deep on 0.1 m^2: 1e-6 m^3)
+TOUCHING_VOLUME_M3 = 1e-15
+#: first-order convergence (Fincham's orientation drift): halving dt halves the error, a
+#: ratio of 2; the next order's share moves it by up to a quarter: 1.5-2.5
+FIRST_ORDER_RATIO_MIN = 1.5
+FIRST_ORDER_RATIO_MAX = 2.5
+
+#: tests/reference.py's explicit sliding block (step 1e-5 s) against the half-sine closed
+#: form: at worst one step's slide at the start and at the stop, v dt with v up to
+#: 0.5 m/s: 5e-6 m (1e-10 m measured)
+REFERENCE_SLIDE_M = 5e-6
+#: closed_forms.rigid_plastic_slide (midpoint rule, stops located within the step, step
+#: 1e-5 s) on the continuous pulse: O(dt^2) = 1e-10 m (7e-11 measured): 1e-8 m
+RIGID_PLASTIC_SLIDE_M = 1e-8
+#: the rigid rocking equation (step 5e-4 s, sampled every 0.01 s at 0.5 deg/s, 0.005 deg
+#: per sample): samples more than two sampling intervals, 0.01 deg, below atan(b/h) are
+#: certainly before the limit; the package's onset rule dates the run-away after the limit
+#: by the time it takes to reach 5 mm/deg, ~0.25 s at 0.5 deg/s (0.11 deg measured): 0.2 deg
+ROCKING_STILL_MARGIN_DEG = 0.01
+ROCKING_RULE_LAG_DEG = 0.2
+#: LMGC90 at rest under gravity: the platform carries the weight to the Gauss-Seidel
+#: tolerance compas_lmgc90 fixes, 1.666e-4 (relative, quadratic mean): 1e-3
+LMGC90_REACTION_REL = 1e-3
+#: a resting stone's drift over 0.2 s (200 steps of 1e-3 s): each step leaves a velocity
+#: error of about the solver tolerance times g dt, 1.6e-6 m/s; summed over the run at most
+#: 3e-7 m (rigid contacts: no elastic settlement): 1e-6 m
+LMGC90_AT_REST_M = 1e-6
+#: LMGC90's collapse angle against the rigid rocking equation's, both read with the onset
+#: rule: two samples of the rule (0.01 s at 0.5 deg/s: 0.005 deg each); LMGC90's own step
+#: (1e-3 s: 5e-4 deg of tilt) is far below one sample
+LMGC90_ONSET_DEG = 0.01
+#: golden value: the continuous half-sine (0.6 g, 0.5 s, mu 0.4) slides 0.34 mm more than
+#: its 64-per-period samples linearly interpolated (the chords lie inside the sine): 3.38e-4
+#: m computed with closed_forms (80.44 against 80.10 mm); quoted to two digits, within two
+#: units of the last, 2e-5 m (the sampled slide's integration error is 1e-10 m)
+PULSE_SAMPLING_DEFICIT_M = 3.4e-4
+PULSE_SAMPLING_DEFICIT_ABS = 0.2e-4
+#: after the pulse the block rides with the base (no acceleration left, rigid contacts, no
+#: elastic rebound): its position over the last 20 samples changes by round-off only
+#: (positions of order 1 m over 40 steps, ~1e-14 m): 1e-9 m
+LMGC90_RIDING_M = 1e-9
+
+#: fragility (test_fragility.py). Fisher standard errors of the synthetic study (theta =
+#: 0.45 g, beta = 0.40, ten stripes 0.1-1.0 g, 1000 runs each): SE(ln theta) = 0.0073, SE(beta)
+#: = 0.0071 by the formula of the test's comment; the bracket 0.005-0.01 catches a wrong
+#: information (a missing p (1 - p), a factor of n: anything off by a factor 1.5 or more)
+FISHER_SE_MIN = 0.005
+FISHER_SE_MAX = 0.01
+#: estimates within this many standard errors of the truth: a correct estimator exceeds 4 SE
+#: with probability 6e-5 per parameter (normal tail); 4 SE is 3 % in theta and 7 % in beta,
+#: so an estimator 10 % off in beta is caught
+SE_MULTIPLE = 4
+#: the likelihood's maximum found by Nelder-Mead from six starts converges to 1e-10 in the
+#: log parameters: 1e-6 relative leaves margin for flat likelihoods (stripes at 0 and 100 %)
+NELDER_MEAD_REL = 1e-6
+#: the sample SD of R = 300 replicate estimates has relative standard error 1 / sqrt(2 (R -
+#: 1)) = 4.1 %: 20 % is 5 of those, leaving 1-2 % for the asymptotic approximation at 50
+#: runs per stripe
+REPLICATE_SD_REL = 0.2
+#: the O(1/n) small-sample bias of beta's maximum-likelihood estimate, about -beta / (2 sum
+#: n_j w_j) ~ 1 % of beta at 50 runs per stripe: 0.005 on top of SE_MULTIPLE x SE / sqrt(R)
+ML_BETA_BIAS = 0.005
+#: the bootstrap's 95 % interval has half-width 1.96 SE asymptotically; with 400 replicates
+#: its percentile ends carry ~10 % error: within 30 %
+BOOTSTRAP_HALF_WIDTH_REL = 0.3
+#: the pointwise 95 % bootstrap band holds the fitted curve; a percentile band can sit off
+#: centre by the bootstrap bias of P, a fraction of its half-width (0.04 at most here, 200
+#: runs per stripe): 0.02 in probability (contained with 2e-8 to spare measured)
+BOOTSTRAP_BAND_SLACK = 0.02
+#: K_n drawn and rounded to 4 significant digits: within half a unit of the 4th digit,
+#: relative 5e-4 at most (leading digit 1); K_t = K_n / 2 rounded again: 1e-3
+FOUR_DIGITS_REL = 5e-4
+KT_ROUNDING_REL = 1e-3
+#: Kolmogorov-Smirnov of the 220 seeded draws: a fixed check, passed by a correct sampler
+#: with probability 99 % before the seed was fixed; a wrong distribution (beta off by a
+#: factor 2) gives p < 1e-6
+KS_P_MIN = 0.01
+#: runs.csv holds 1e3 x the residual in m written by repr (17 digits: exact), the residual
+#: recomputed by the same code from the same histories: exact; 1e-9 would still admit a
+#: value written with 10 significant digits
+CSV_READBACK_REL = 1e-9
+#: the excitation stage cut to 1 s (the duration key): the spec's stage bounds are times of
+#: the run, within two samples of record 1a (0.01 s): 0.02 s
+RECORD_CUT_S = 0.02
+
+#: white noise (seed 7, default peak_displacement 0.9 mm): the displacement integrated
+#: twice by the trapezoid rule from rest peaks at 0.9 mm plus the integration's difference
+#: (below WHITE_NOISE_DISPLACEMENT_M, 5e-8 m measured): below 1 mm
+WHITE_NOISE_PEAK_M = 1e-3
+#: free fall replayed by stability.energy_bound_ratio: (E - E_0) / (2 W + E_tol) tends to
+#: 1/2 from below; at the end (2 s, W = 577 J, E_tol = 1e-3 m x 29.4 N) it is 1/2 - 1.3e-5,
+#: the trapezoid work being exact (power linear in t): 0.49 admits a 2 % error of the work
+FREE_FALL_RATIO_MIN = 0.49
+#: stones of depth uniform on T (1 +- 1/3): sd T / (3 sqrt 3) = 0.19 T; over ~30 stones the
+#: sample sd scatters by sqrt((kurtosis - 1) / 4n) = 8 % of itself (0.016 T): above 0.1 T
+#: (6 sd below), which a depth that does not vary fails
+DEPTH_SD_MIN_REL = 0.1
+#: the Sacsayhuaman wall in both engines (test_yade_compiled.py): a round-off perturbation
+#: saturates at a divergence set by the dynamics (measured 4e-4 m between the engines,
+#: 2e-4 m for a 1e-12 change of the density): the engines within 4 x the model's own
+#: sensitivity (twice the measured ratio) and within 5 % of the motion (above 1 cm)
+ENGINE_SENSITIVITY_FACTOR = 4
+ENGINE_DIVERGENCE_OF_MOTION = 0.05

@@ -1,47 +1,39 @@
 """Read acceleration records into ``Record`` objects (m/s^2, s), whatever the file format.
 
 ``read(path, format=None, component=None, dt=None, units=None)`` returns one component;
-``read_all`` returns every component in the file. Formats (``format=``; guessed from the
-extension and the first lines by ``detect_format`` when not given):
+``read_all`` returns every component in the file.
 
-* ``"peer"``  PEER NGA ``.AT2``: 4 header lines (title; "event, date, station, component";
-  "... UNITS OF G"; "NPTS= n, DT= dt SEC" or the older "n dt NPTS, DT"), then values.
-* ``"jma"``   Japan Meteorological Agency strong-motion CSV: ``KEY= value`` header lines
-  (``SITE CODE``, ``LAT.``, ``LON.``, ``SAMPLING RATE= 100Hz``, ``UNIT = gal``,
-  ``INITIAL TIME``), a label line (``NS, EW, UD``), then three comma-separated columns.
-* ``"cismid"`` Peruvian CISMID/REDACIS text: free header lines of which these are
-  understood (accents and case ignored; ``:`` or ``=`` separators): ``ESTACION`` /
-  ``NOMBRE DE LA ESTACION`` (station), ``CODIGO`` (station code), ``FECHA`` / ``HORA`` /
-  ``EVENTO`` / ``SISMO`` (event), ``NUMERO DE MUESTRAS`` / ``NRO. DE MUESTRAS`` / ``NPTS``
-  (sample count, checked), ``FRECUENCIA DE MUESTREO`` (Hz) or ``INTERVALO DE MUESTREO`` /
-  ``DT`` (s), ``UNIDADES`` (gal by default, as REDACIS publishes); then an optional label
-  line (``N-S E-W U-D`` in any order, optionally led by ``T``/``TIEMPO``) and 3 columns
-  (4 with time). Without a label line the columns are taken as N-S, E-W, U-D.
-* ``"plain"`` text with one column (acceleration; needs ``dt``) or two (time,
-  acceleration; the step must be uniform within 1 % of dt). ``#`` comment lines may
-  declare ``# dt = 0.01``, ``# units = gal``, ``# event = ...``, ``# station = ...``,
-  ``# component = ...``.
-* ``"obspy"`` anything ``obspy.read`` opens (MiniSEED, SAC, GSE2, ...). Units must be given
-  (``units=``) unless a SAC header declares acceleration (IDEP = IACC, nm/s^2); raw counts
-  need instrument correction first, which is not done here.
+Each record format is one ``RecordFormat`` entry of ``REGISTRY`` (its name, its
+description, how to recognise a file of it, how to read it; ObsPy's ``_is_fmt`` /
+``_read_fmt`` pairs are the model). ``FORMATS`` (the names ``format=`` takes),
+``detect_format`` and ``read_all``'s dispatch all come from the registry, and so does the
+list of formats at the end of this docstring: adding a format is adding one entry.
+``detect_format`` (used when ``format=`` is not given) gives a file to the entry that
+claims its extension, else to the first entry, in the registry's order, whose ``sniff``
+accepts it (the extension and the first 60 lines; ``plain`` accepts anything).
 
 Units are converted to m/s^2 from what the file declares (an explicit ``units=``
 overrides only files that declare nothing, and contradicting a declaration is an error).
 Multi-component files default to the first horizontal component in the order NS, EW
 (Ogawa et al. used the JMA NS component). A malformed file raises ``RecordFormatError``
 naming the file and line; a record is never truncated, padded or resampled here.
+
+Formats (``format=``), in the order they are sniffed:
 """
 from __future__ import annotations
 
 import re
+import textwrap
 import unicodedata
+from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
 from drystone.motions.record import Record, unit_factor
 
-FORMATS = ("peer", "jma", "cismid", "plain", "obspy")
 TEXT_EXT = {".txt", ".dat", ".asc", ".acc", ".csv", ".at2", ""}
 #: relative tolerance on the uniformity of a time column and on dt agreements
 DT_TOL = 0.01
@@ -446,34 +438,132 @@ def _resolve_obspy_units(path, declared, given):
     return given, unit_factor(given)
 
 
-# --- dispatch ----------------------------------------------------------------------------------
+# --- the registry ------------------------------------------------------------------------------
+class Probe:
+    """What the sniffers look at, read once and only when asked: the extension, whether the
+    first 4 kB hold a NUL byte, the first 60 lines (``head``) and their text upper-cased
+    without accents (``text``)."""
+
+    def __init__(self, path):
+        self.path = Path(path)
+        self.ext = self.path.suffix.lower()
+
+    @cached_property
+    def binary(self) -> bool:
+        try:
+            return b"\x00" in self.path.read_bytes()[:4096]
+        except OSError as exc:
+            raise RecordFormatError(self.path, None, str(exc)) from None
+
+    @cached_property
+    def head(self) -> list[str]:
+        return _lines(self.path)[:60]
+
+    @cached_property
+    def text(self) -> str:
+        return _plain_ascii("\n".join(self.head))
+
+
+@dataclass(frozen=True)
+class RecordFormat:
+    """One record format: ``name`` (what ``format=`` takes), ``description`` (the module's
+    documentation of the format), ``sniff(probe) -> bool`` (whether a file is of it),
+    ``read(path, dt=, units=) -> list[Record]`` (every component), and ``extensions`` that
+    are this format whatever the content (checked before any sniffing)."""
+
+    name: str
+    description: str
+    sniff: Callable[[Probe], bool]
+    read: Callable[..., list[Record]]
+    extensions: tuple[str, ...] = ()
+
+
+def _sniff_obspy(p: Probe) -> bool:
+    return p.ext not in TEXT_EXT or p.binary
+
+
+def _sniff_jma(p: Probe) -> bool:
+    if p.ext == ".csv" and ("SITE CODE" in p.text or "SAMPLING RATE" in p.text):
+        return True
+    return "SITE CODE" in p.text and "SAMPLING RATE" in p.text
+
+
+def _sniff_peer(p: Probe) -> bool:
+    return len(p.head) > 3 and "NPTS" in p.text and "DT" in p.text and "UNITS OF" in p.text
+
+
+def _sniff_cismid(p: Probe) -> bool:
+    return re.search(r"CISMID|REDACIS|ESTACION|MUESTREO|N-S", p.text) is not None
+
+
+#: every record format, in the order ``detect_format`` sniffs them (binary files first,
+#: then the text formats from the most specific header to ``plain``, which takes the rest)
+REGISTRY: tuple[RecordFormat, ...] = (
+    RecordFormat(
+        "obspy",
+        "anything ``obspy.read`` opens (MiniSEED, SAC, GSE2, ...): a file whose extension is not "
+        "a text one or whose first 4 kB hold a NUL byte. Units must be given (``units=``) unless a "
+        "SAC header declares acceleration (IDEP = IACC, nm/s^2); raw counts need instrument "
+        "correction first, which is not done here.",
+        _sniff_obspy, read_obspy),
+    RecordFormat(
+        "jma",
+        "Japan Meteorological Agency strong-motion CSV: ``KEY= value`` header lines (``SITE CODE``, "
+        "``LAT.``, ``LON.``, ``SAMPLING RATE= 100Hz``, ``UNIT = gal``, ``INITIAL TIME``), a label "
+        "line (``NS, EW, UD``), then three comma-separated columns.",
+        _sniff_jma, read_jma),
+    RecordFormat(
+        "peer",
+        "PEER NGA ``.AT2``: 4 header lines (title; \"event, date, station, component\"; \"... UNITS "
+        "OF G\"; \"NPTS= n, DT= dt SEC\" or the older \"n dt NPTS, DT\"), then values.",
+        _sniff_peer, read_peer, extensions=(".at2",)),
+    RecordFormat(
+        "cismid",
+        "Peruvian CISMID/REDACIS text: free header lines of which these are understood (accents "
+        "and case ignored; ``:`` or ``=`` separators): ``ESTACION`` / ``NOMBRE DE LA ESTACION`` "
+        "(station), ``CODIGO`` (station code), ``FECHA`` / ``HORA`` / ``EVENTO`` / ``SISMO`` "
+        "(event), ``NUMERO DE MUESTRAS`` / ``NRO. DE MUESTRAS`` / ``NPTS`` (sample count, "
+        "checked), ``FRECUENCIA DE MUESTREO`` (Hz) or ``INTERVALO DE MUESTREO`` / ``DT`` (s), "
+        "``UNIDADES`` (gal by default, as REDACIS publishes); then an optional label line (``N-S "
+        "E-W U-D`` in any order, optionally led by ``T``/``TIEMPO``) and 3 columns (4 with time). "
+        "Without a label line the columns are taken as N-S, E-W, U-D.",
+        _sniff_cismid, read_cismid),
+    RecordFormat(
+        "plain",
+        "text with one column (acceleration; needs ``dt``) or two (time, acceleration; the step "
+        "must be uniform within 1 % of dt). ``#`` comment lines may declare ``# dt = 0.01``, "
+        "``# units = gal``, ``# event = ...``, ``# station = ...``, ``# component = ...``.",
+        lambda p: True, read_plain),
+)
+
+#: the names ``format=`` takes, in sniffing order
+FORMATS = tuple(f.name for f in REGISTRY)
+
+if __doc__:  # the format list of the module's documentation, from the registry
+    __doc__ += "".join("\n" + textwrap.fill(f'* ``"{f.name}"`` {f.description}', 90, subsequent_indent="  ")
+                       + "\n" for f in REGISTRY)
+
+
+def record_format(name: str) -> RecordFormat:
+    """The registry's entry named ``name``."""
+    for f in REGISTRY:
+        if f.name == name:
+            return f
+    raise ValueError(f"unknown record format {name!r} (known: {', '.join(f.name for f in REGISTRY)})")
+
+
 def detect_format(path) -> str:
-    """Guess the format from the extension and the first lines."""
-    p = Path(path)
-    ext = p.suffix.lower()
-    if ext == ".at2":
-        return "peer"
-    if ext not in TEXT_EXT:
-        return "obspy"
-    try:
-        if b"\x00" in p.read_bytes()[:4096]:
-            return "obspy"
-    except OSError as exc:
-        raise RecordFormatError(path, None, str(exc)) from None
-    head = _lines(p)[:60]
-    text = _plain_ascii("\n".join(head))
-    if ext == ".csv" and ("SITE CODE" in text or "SAMPLING RATE" in text):
-        return "jma"
-    if "SITE CODE" in text and "SAMPLING RATE" in text:
-        return "jma"
-    if len(head) > 3 and "NPTS" in text and "DT" in text and "UNITS OF" in text:
-        return "peer"
-    if re.search(r"CISMID|REDACIS|ESTACION|MUESTREO|N-S", text):
-        return "cismid"
-    return "plain"
-
-
-_READERS = {"peer": read_peer, "jma": read_jma, "cismid": read_cismid, "plain": read_plain, "obspy": read_obspy}
+    """Guess the format: the entry claiming the extension, else the first whose sniff
+    accepts the file (the extension and the first lines)."""
+    probe = Probe(path)
+    for f in REGISTRY:
+        if probe.ext in f.extensions:
+            return f.name
+    for f in REGISTRY:
+        if f.sniff(probe):
+            return f.name
+    raise RecordFormatError(path, None, "no record format recognises it (known: "
+                            f"{', '.join(f.name for f in REGISTRY)})")
 
 
 def read_all(path, format: str | None = None, dt: float | None = None, units: str | None = None,
@@ -483,10 +573,7 @@ def read_all(path, format: str | None = None, dt: float | None = None, units: st
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"{p}: no such record file")
-    fmt = format or detect_format(p)
-    if fmt not in _READERS:
-        raise ValueError(f"unknown record format {fmt!r} (known: {', '.join(FORMATS)})")
-    recs = _READERS[fmt](p, dt=dt, units=units)
+    recs = record_format(format or detect_format(p)).read(p, dt=dt, units=units)
     for r in recs:
         if event and r.event == "unknown":
             r.event = event
