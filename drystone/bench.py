@@ -47,7 +47,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drystone import paths, runner
+from drystone import laws, paths, runner
 
 SECTIONS = ("running_bond", "scale", "threads", "sacsayhuaman")
 
@@ -198,7 +198,7 @@ def goal(rows: list[dict]) -> dict | None:
     ratio to this run's numpy step (``python`` engine, one thread). ``text`` says it in one
     sentence (printed here, and the README's Speed block reads it)."""
     one = {r.get("engine_used"): r for r in rows
-           if r["law"] == "penalty_coulomb" and r["detection"] == "native" and r["threads"] == 1}
+           if laws.get(r["law"]).engine("compiled", r["detection"]) == "compiled" and r["threads"] == 1}
     c, p = one.get("compiled"), one.get("python")
     if c is None:
         return None
@@ -237,7 +237,7 @@ def running_bond_section(workdir: Path) -> list[dict]:
     rows = []
     for law, detection in VARIANTS:
         # the compiled step is the native geometry's; on YADE's, our law has the Python one
-        yade_engine = "python" if engines != (None,) and law == "penalty_coulomb" else None
+        yade_engine = "python" if engines != (None,) and "python" in laws.get(law).engines else None
         for engine in (engines if detection == "native" else (yade_engine,)):
             for threads in (1, 2):
                 rep = REPEATS if (engine == "compiled" and threads == 1) else 1

@@ -15,7 +15,7 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
-from drystone import collapse, inputfiles
+from drystone import collapse, inputfiles, laws
 from drystone.geometry.blockfile import CONTACT_PROPERTIES, MATERIAL_PROPERTIES
 from drystone.units import GRAVITY
 
@@ -61,9 +61,8 @@ SECTIONS: dict[str, dict[str, Key]] = {
                         "{generator = NAME, ...parameters}", (str, dict)),
     },
     "contact": {
-        "law": Key("penalty_coulomb", "-", "penalty_coulomb (the paper's law, per-contact shear and "
-                   "damping) or stock_volumetric (YADE's law: shared shear, no damping)", str,
-                   ("penalty_coulomb", "stock_volumetric")),
+        "law": Key(laws.DEFAULT, "-", " or ".join(f"{n} ({law.meaning})" for n, law in laws.REGISTRY.items())
+                   + " (drystone/laws.py)", str, tuple(laws.REGISTRY)),
         "detection": Key("auto", "-", "contact geometry: native (drystone/overlap.py: exact overlap volume, "
                          "normal and area from its gradient, compiled; penalty_coulomb only), yade (YADE's "
                          "polyhedra intersection, CGAL) or auto (native with penalty_coulomb, yade with the "

@@ -53,12 +53,6 @@ MIN_DEPTH = 1e-18
 DETECTIONS = ("native", "yade")
 
 
-def default_detection(law: str) -> str:
-    """The contact geometry of a case with detection = "auto": native with the project's
-    law (penalty_coulomb), YADE's own with YADE's stock law (it runs on nothing else)."""
-    return "native" if law == "penalty_coulomb" else "yade"
-
-
 def cross(a, b) -> np.ndarray:
     """Row-wise cross product of (m, 3) arrays (faster than np.cross for small m)."""
     out = np.empty(np.broadcast(a, b).shape)

@@ -169,6 +169,11 @@ class LoadProgramme:
         s = self.stages[k]
         return s.behaviour.settle(s, weight)
 
+    def monitor(self, k: int, run):
+        """The monitor stage k adds from its start (``StageType.monitor``), or None."""
+        s = self.stages[k]
+        return s.behaviour.monitor(s, k, run)
+
     def imposed_velocities(self, t: float) -> dict[int, np.ndarray]:
         """Velocities (m/s) imposed on non-moving blocks at t, by block id."""
         out = {}

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from drystone import case as casemod
-from drystone import contact, inputfiles, overlap
+from drystone import inputfiles, laws, overlap
 from drystone import timestep
 from drystone.geometry import blockfile as bf
 from drystone.geometry import generators
@@ -102,12 +102,13 @@ def _check_references(case: dict, bs: bf.BlockSet, mats: dict, where: str) -> No
 
 def _detection(case: dict, where: str) -> str:
     """The contact geometry: native or yade ('auto' follows the law)."""
-    detection = case["contact"]["detection"]
-    if detection == "native" and case["contact"]["law"] != "penalty_coulomb":
-        raise casemod.CaseError(f"{where}: [contact] 'detection' = 'native' needs law = 'penalty_coulomb' "
-                                f"(the stock law runs on YADE's own contact geometry)")
+    detection, law = case["contact"]["detection"], laws.get(case["contact"]["law"])
     if detection == "auto":
-        detection = contact.default_detection(case["contact"]["law"])
+        return law.default_detection
+    if detection not in law.detections:
+        runs_on = [f"law = {n!r}" for n, other in laws.REGISTRY.items() if detection in other.detections]
+        raise casemod.CaseError(f"{where}: [contact] 'detection' = {detection!r} needs {' or '.join(runs_on)} "
+                                f"(law {law.name!r} runs on {', '.join(law.detections)} contact geometry only)")
     return detection
 
 

@@ -146,7 +146,7 @@ class Spec(_ReadOnlyMapping):
 
     name: str
     out_dir: str  # the run's folder (runner: where it will live; excitation samples lie there)
-    law: str  # penalty_coulomb or stock_volumetric
+    law: str  # a contact law of drystone.laws.REGISTRY
     detection: str  # native or yade
     dt: float  # s
     dt_critical: float  # s

@@ -18,7 +18,9 @@ from typing import ClassVar
 
 import numpy as np
 
+from drystone import monitors
 from drystone.case import REQUIRED, CaseError, Key
+from drystone.monitors import Monitor
 from drystone.units import G_STANDARD
 
 Z = np.array([0.0, 0.0, 1.0])
@@ -104,6 +106,11 @@ class StageType:
     def moving_blocks(self, st) -> list[int]:
         """Ids of the non-moving blocks whose velocity this stage imposes."""
         return []
+
+    def monitor(self, st, k: int, run) -> Monitor | None:
+        """The job this stage (number ``k`` from 0) adds to every recorded sample from its
+        start (drystone/monitors.py; ``run``: the driver), or None."""
+        return None
 
     def load_samples(self, st, folder: Path) -> None:
         """Load the files the stage needs from the run ``folder`` into ``st.params``."""
@@ -211,6 +218,9 @@ class Tilt(StageType):
 
     def tilt_increment(self, st, t):
         return np.where(t <= st.start, 0.0, st.params["rate_deg_s"] * (np.minimum(t, st.end) - st.start))
+
+    def monitor(self, st, k, run):
+        return monitors.Collapse(k, st.params) if st.params.get("until_collapse") else None
 
     def towards(self, st):
         return np.asarray(st.params["towards"], float)
@@ -392,3 +402,7 @@ class Rest(StageType):
         else:
             return None
         return {"threshold_J": thr, "window_s": float(p.get("settle_window", 0.0))}
+
+    def monitor(self, st, k, run):
+        cfg = self.settle(st, run.w_free)
+        return None if cfg is None else monitors.Settle(k, cfg, st.start, st.end, run.z_floor, run.region)

@@ -17,7 +17,7 @@ LEAVES = {"drystone", "drystone.paths", "drystone.units", "drystone.libm", "drys
 CORE = {"drystone.case", "drystone.resolve", "drystone.contact", "drystone.overlap", "drystone.loading",
         "drystone.collapse", "drystone.timestep", "drystone.stability", "drystone.modal", "drystone.rotations",
         "drystone.provenance", "drystone.simulate", "drystone.tomlio", "drystone.analytic", "drystone.spec",
-        "drystone.stages", "drystone.contact_step"}
+        "drystone.stages", "drystone.contact_step", "drystone.laws", "drystone.monitors"}
 TOP = {"drystone.runner", "drystone.sweep", "drystone.cli", "drystone.bench", "drystone.free_decay",
        "drystone.__main__"}
 

@@ -1,0 +1,360 @@
+"""Step engines: one class per way of stepping a run's scene (inside YADE only), as YADE
+composes ``O.engines``. The driver (run_case.py) builds the scene and the state arrays,
+then one engine (``ENGINES``, chosen by the case's contact law: ``ContactLaw.engine`` in
+drystone/laws.py) steps it:
+
+* ``compiled``: the project's law and the leapfrog integration of the bodies in numba over
+  arrays (drystone.contact_step.CompiledStep), its own time loop; YADE keeps the scene
+  and gets the final state written back;
+* ``python``: the project's law in numpy (contact_engine.PenaltyCoulomb, YADE's or the
+  native contact geometry), YADE's NewtonIntegrator moving the bodies, ``O.run``;
+* ``yade``: YADE's stock volumetric law and integrator, ``O.run``.
+
+The interface, the same for each: ``loop`` (advance to the run's end, calling the
+driver's ``step`` at every step that needs Python: a recorded sample, a stage's start, an
+applied force switched), and inside a step ``forces`` (this step's contact and applied
+forces), ``before_sample`` (the state arrays made current), ``finish_step`` (the motion,
+where the engine integrates it); ``contacts`` and ``elastic_energy`` for recording,
+``set_velocity`` / ``velocity`` for the stages, ``finish`` (the state written back or
+read). A new engine is one class here and a name in ``ENGINES``.
+"""
+from __future__ import annotations
+
+import builtins
+import time
+
+import numpy as np
+import yade
+
+from drystone import contact as law
+from drystone import contact_step as cs
+from drystone import monitors, rotations, stability
+from drystone.yade_scripts import contact_engine as ce
+
+
+def _state_row(s) -> tuple:
+    """(pos, vel, angVel, ori as x y z w) of one YADE State. Indexing the vectors is about
+    7x faster than unpacking them (``*s.pos`` iterates through IndexError), which made
+    this read a quarter of the step on the 40-stone wall."""
+    p, v, w, q = s.pos, s.vel, s.angVel, s.ori
+    return (p[0], p[1], p[2], v[0], v[1], v[2], w[0], w[1], w[2], q[0], q[1], q[2], q[3])
+
+
+def pair_properties(run, ya, yb) -> dict:
+    """kn, kt, mu, damping of the contact between bodies ``ya`` and ``yb`` (materials and
+    joint overrides of the run's spec)."""
+    a, b = run.blocks[run.bid[ya]], run.blocks[run.bid[yb]]
+    mats = run.spec.materials
+    joint = run.spec.joint_overrides.get(f"{min(a['id'], b['id'])}-{max(a['id'], b['id'])}")
+    return law.pair_properties(mats[a["material"]], mats[b["material"]], joint)
+
+
+class Engine:
+    """Base of the step engines (module docstring); ``run`` is the driver."""
+
+    name = ""
+    #: YADE's NewtonIntegrator moves the bodies (else the engine integrates them itself)
+    yade_integrates = True
+
+    def __init__(self, run):
+        self.run = run
+        self.step = None  # the contact law's step, where this engine has one of its own
+
+    @property
+    def max_omega_dt(self) -> float:
+        """Largest omega dt of any contact mode so far (run_info.json; 0 without a step of its own)."""
+        return 0.0 if self.step is None else self.step.max_omega_dt
+
+    # -- the time loop ---------------------------------------------------------------
+    def loop(self) -> None:
+        """YADE's: ``O.run`` with a PyRunner calling the driver's step every iteration."""
+        run = self.run
+        builtins._drystone_step = run.step
+        run.O.run(run.steps_total, True)
+        run.iter, run.t = run.O.iter, run.O.time
+
+    def clock(self) -> None:
+        """The step being taken (YADE's iteration and time)."""
+        self.run.iter, self.run.t = self.run.O.iter, self.run.O.time
+
+    def stop(self) -> None:
+        self.run.O.pause()
+
+    def finish(self) -> None:
+        """After the loop: the state after the last integration into the arrays."""
+        if self.run.failure is None:
+            self.read(np.concatenate([self.run.dyn, np.array(self.run.moving_static, int)]))
+
+    # -- inside a step ---------------------------------------------------------------
+    def forces(self, t: float, g: np.ndarray) -> None:
+        raise NotImplementedError
+
+    def before_sample(self) -> None:
+        """Bring the state arrays up to date for a recorded sample."""
+
+    def finish_step(self, g: np.ndarray) -> None:
+        """What remains of the step after a sample (an engine that integrates: the motion)."""
+
+    def _applied(self, t: float) -> None:
+        for y, f, start, end in self.run.forces:
+            if start <= t < end:
+                self.run.O.forces.addF(y, f)
+
+    # -- state -----------------------------------------------------------------------
+    def read(self, ids) -> None:
+        """Positions, velocities, angular velocities, orientations of bodies ``ids`` from YADE."""
+        run = self.run
+        rows = np.array([_state_row(run.states[i]) for i in ids], float).reshape(-1, 13)
+        run.pos[ids], run.vel[ids], run.angvel[ids], run.quat[ids] = rows[:, :3], rows[:, 3:6], rows[:, 6:9], rows[:, 9:]
+        run.rot[ids] = rotations.to_matrix(run.quat[ids])
+
+    def set_velocity(self, i: int, v) -> None:
+        """Set body i's velocity (m/s) where the motion lives."""
+        self.run.states[i].vel = yade.Vector3(*v)
+
+    def velocity(self, i: int) -> np.ndarray:
+        return np.array(tuple(self.run.states[i].vel))
+
+    def contacts(self) -> cs.ContactState:
+        raise NotImplementedError
+
+    def elastic_energy(self) -> float:
+        """Elastic energy stored in the contacts (J) at the half step; NaN where the law keeps none."""
+        return np.nan
+
+    def check_depth(self) -> None:
+        """Stop the run on a contact deeper than stability.TUNNEL_FRACTION x the smaller
+        block's smallest dimension (every step: a tunnelling block can pass through in
+        less than a sample)."""
+        run, st = self.run, self.contacts()
+        if run.failure is None and len(st.fn):
+            with np.errstate(divide="ignore", invalid="ignore"):
+                deep = st.volume > stability.TUNNEL_FRACTION * st.area * np.minimum(run.size[st.id1], run.size[st.id2])
+            if deep.any():
+                run.fail(monitors.tunnelling(run, st, run.size))
+
+
+class StockEngine(Engine):
+    """YADE's stock volumetric law and integrator: YADE does everything; the contacts are
+    read back for recording."""
+
+    name = "yade"
+
+    def forces(self, t, g):
+        self.run.newton.gravity = yade.Vector3(*g)
+        self._applied(t)
+
+    def before_sample(self):
+        self.read(self.run.moving)
+
+    def contacts(self):
+        return ce.stock_contacts(self.run.O)
+
+
+class NumpyEngine(Engine):
+    """The project's law in numpy (the reference) on YADE's or the native contact geometry;
+    YADE's NewtonIntegrator moves the bodies."""
+
+    name = "python"
+
+    def __init__(self, run):
+        super().__init__(run)
+        self.step = ce.PenaltyCoulomb(lambda a, b: pair_properties(run, a, b), run.mass, run.local_v,
+                                      run.spec.detection, run.inertia)
+
+    def forces(self, t, g):
+        run = self.run
+        run.newton.gravity = yade.Vector3(*g)
+        self.read(run.moving)
+        self.step.step(run.O, (run.pos, run.vel, run.angvel, run.rot))
+        self.check_depth()
+        self._applied(t)
+
+    def contacts(self):
+        return self.step.state
+
+    def elastic_energy(self):
+        return 0.5 * sum(self.step.elastic)
+
+
+class CompiledEngine(Engine):
+    """The project's law on the native geometry and the integration in numba, in its own
+    time loop in place of YADE's (drystone.contact_step); the scene is written back at the end."""
+
+    name = "compiled"
+    yade_integrates = False
+
+    def __init__(self, run):
+        super().__init__(run)
+        nb = len(run.mass)
+        spec, mats = run.spec, run.spec.materials
+        names = sorted(mats)
+        keys = ("kn", "kt", "mu", "damping")
+        table = np.array([[[law.pair_properties(mats[a], mats[b])[k] for k in keys] for b in names] for a in names])
+        material = [names.index(run.blocks[run.bid[i]]["material"]) for i in range(nb)]
+        joints = {}
+        for key in spec.joint_overrides:
+            a, b = (int(x) for x in key.split("-"))
+            p = pair_properties(run, run.yid[a], run.yid[b])
+            joints[(run.yid[a], run.yid[b])] = [p[k] for k in keys]
+        free = [cs.free_directions(run.states[i].blockedDOFs or "", bool(np.isfinite(run.mass[i]))) for i in range(nb)]
+        self.lin_free = np.array([f[0] for f in free])
+        self.rot_free = np.array([f[1] for f in free])
+        # YADE's exactAsphericalRot: aspherical bodies free to rotate about every axis
+        self.aspherical = np.array([bool(np.isfinite(run.mass[i])) and run.O.bodies[i].aspherical
+                                    and self.rot_free[i].all() for i in range(nb)])
+        self.angmom = np.zeros((nb, 3))
+        self.mass_int = np.where(np.isfinite(run.mass), run.mass, 1.0)  # never divided for non-moving bodies
+        self.inertia_int = np.where(np.isfinite(run.mass)[:, None], run.inertia, 1.0)
+        self.step = ce.Compiled(run.mass, run.inertia, run.local_v, material, table, joints,
+                                run.size * stability.TUNNEL_FRACTION)
+        self.F = self.T = None
+        self._normalise_orientations()
+
+    def _normalise_orientations(self):
+        """YADE's first step (PyRunner does not run at step 0, NewtonIntegrator does)
+        normalises the orientation of every body the driver reads; this engine does the
+        same, with Eigen's arithmetic, so that both engines start from the same state
+        (contacts across exactly touching faces are sensitive to its round-off)."""
+        run = self.run
+        for i in run.dyn.tolist() + list(run.moving_static):
+            q = run.states[i].ori
+            q.normalize()
+            run.states[i].ori = q
+            run.quat[i] = (q[0], q[1], q[2], q[3])
+        run.rot = rotations.to_matrix(run.quat)
+
+    def _motion(self):
+        """What ``integrate`` needs beside the state (mass, inertia, free directions, angular momentum)."""
+        return (self.mass_int, self.inertia_int, self.lin_free, self.rot_free, self.aspherical, self.angmom)
+
+    # -- the time loop ---------------------------------------------------------------
+    def loop(self):
+        """What ``O.run`` with the PyRunner did, step for step and bit for bit: YADE's
+        iteration 0 moves nothing (the PyRunner does not run at iteration 0 and there is no
+        integrator), each later iteration is one step. A step that needs Python goes
+        through the driver's ``step``; the steps between them run in one compiled call
+        (``CompiledStep.advance``): one Python call per recorded sample."""
+        run = self.run
+        t_py = time.perf_counter()
+        dt = run.O.dt
+        run.iter, run.t = 1, 0.0 + dt
+        while run.iter < run.steps_total and not run.done and run.failure is None:
+            run.step()
+            run.iter += 1
+            run.t += dt
+            if run.done or run.failure is not None:
+                break
+            self._advance_quietly(dt)
+        run.python_time += time.perf_counter() - t_py
+
+    def clock(self):
+        pass  # this engine keeps YADE's iteration and time itself (loop)
+
+    def stop(self):
+        pass
+
+    def _quiet_steps(self, dt) -> np.ndarray:
+        """Times (s) of the steps from ``run.iter`` on that need no Python: up to the next
+        recorded sample, stage start or switch of an applied force, and to the step after
+        which the run stops (``stop_at``), at most the run's end."""
+        run = self.run
+        i = run.iter
+        nxt = min((i // run.rec_every + 1) * run.rec_every if i % run.rec_every else i, run.steps_total)
+        if nxt <= i:
+            return np.zeros(0)
+        ts = np.add.accumulate(np.concatenate([[run.t], np.full(nxt - i - 1, dt)]))  # as YADE adds dt
+        ends = np.array([st.end for st in run.prog.stages])
+        k = np.minimum(np.searchsorted(ends, ts, side="right"), len(ends) - 1)  # prog.stage_index
+        cut = len(ts) if np.all(k == k[0]) else int(np.argmax(k != k[0]))
+        for _, _, start, end in run.forces:
+            on = (start <= ts) & (ts < end)
+            if not np.all(on == on[0]):
+                cut = min(cut, int(np.argmax(on != on[0])))
+        if k[0] != run.stage:  # step() enters a stage
+            cut = 0
+        if run.stop_at is not None:
+            past = np.flatnonzero(ts[:cut] >= run.stop_at)
+            if len(past):
+                cut = int(past[0]) + 1  # the run stops after that step
+        return ts[:cut]
+
+    def _advance_quietly(self, dt):
+        """The steps of ``_quiet_steps`` in one compiled call (the depth check stops it,
+        ``CompiledStep.advance``)."""
+        run = self.run
+        ts = self._quiet_steps(dt)
+        if len(ts) == 0:
+            return
+        g = run.prog.body_acceleration_at(ts)  # bit for bit the per-step values
+        F_ext = np.zeros_like(run.pos)
+        for y, f, start, end in run.forces:
+            if start <= ts[0] < end:
+                F_ext[y] += tuple(f)
+        t_k = time.perf_counter()
+        done, F, T, integrated = self.step.advance(run.pos, run.rot, run.vel, run.angvel, dt, g, F_ext,
+                                                   self._motion() + (run.quat,))
+        run.kernel_time += time.perf_counter() - t_k
+        if not integrated:  # stopped on the depth check before integrating step ts[done]
+            self.check_depth()
+            if run.failure is not None:
+                return
+            self._integrate(dt, g[done], F, T)
+            done += 1
+        run.g_integral += float(np.sum(np.linalg.norm(g[:done], axis=1))) * dt  # the speed bound
+        run.iter += done
+        last = ts[done - 1]  # the time of the last step taken
+        run.t = last + dt
+        if run.stop_at is not None and last >= run.stop_at:
+            run.done = True
+        run.progress.on_step(run, run.t, run.stage)
+
+    def _integrate(self, dt, g, F, T):
+        run = self.run
+        cs.integrate(dt, g, F, T, self.mass_int, self.inertia_int, self.lin_free, self.rot_free, self.aspherical,
+                     run.pos, run.vel, run.angvel, self.angmom, run.quat, run.rot)
+
+    # -- inside a step ---------------------------------------------------------------
+    def forces(self, t, g):
+        run = self.run
+        t_k = time.perf_counter()
+        self.F, self.T = self.step.step(run.O, (run.pos, run.vel, run.angvel, run.rot), apply_forces=False)
+        run.kernel_time += time.perf_counter() - t_k
+        if self.step.depth_ratio > 1.0:  # deeper than TUNNEL_FRACTION x the smaller block
+            self.check_depth()
+        for y, f, start, end in run.forces:
+            if start <= t < end:
+                self.F[y] += tuple(f)
+
+    def finish_step(self, g):
+        t_k = time.perf_counter()
+        self._integrate(self.run.O.dt, g, self.F, self.T)
+        self.run.kernel_time += time.perf_counter() - t_k
+
+    def finish(self):
+        """Write the arrays' state into YADE's bodies."""
+        run = self.run
+        for i in np.flatnonzero(np.isfinite(run.mass) | np.any(run.vel != 0, axis=1)).tolist():
+            st = run.states[i]
+            st.pos = yade.Vector3(*run.pos[i])
+            st.vel = yade.Vector3(*run.vel[i])
+            st.angVel = yade.Vector3(*run.angvel[i])
+            x, y, z, w = run.quat[i]
+            st.ori = yade.Quaternion(w, x, y, z)
+
+    # -- state -----------------------------------------------------------------------
+    def set_velocity(self, i, v):
+        self.run.vel[i] = v
+
+    def velocity(self, i):
+        return self.run.vel[i].copy()
+
+    def contacts(self):
+        return self.step.state
+
+    def elastic_energy(self):
+        return 0.5 * sum(self.step.elastic)
+
+
+#: the step engines by name (``ContactLaw.engines`` in drystone/laws.py names them)
+ENGINES = {e.name: e for e in (CompiledEngine, NumpyEngine, StockEngine)}
