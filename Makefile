@@ -149,7 +149,7 @@ fragility-report: setup
 	$(PY) -m drystone.studies.fragility report --config full
 
 crosscheck: setup
-	$(PY) -m drystone.crosscheck $(or $(XC),small)
+	$(PY) -m drystone.studies.crosscheck $(or $(XC),small)
 
 clean:
 	rm -rf results .numba_cache

@@ -10,7 +10,8 @@ from pathlib import Path as _Path
 __version__ = "0.1.0"
 
 #: the modules with numba kernels (``@njit(cache=True)``)
-_KERNEL_SOURCES = ("overlap.py", "contact.py", "contact_step.py")
+_KERNEL_SOURCES = ("mechanics/overlap.py", "mechanics/contact.py", "mechanics/contact_step.py",
+                   "mechanics/integration.py")
 
 
 def _numba_cache_dir() -> None:

@@ -13,7 +13,7 @@
                   gravity for a few hundred steps (our law, native geometry, one thread): ms
                   per step, contacts, us per contact-step, the growth exponent of the cost
                   with the number of stones (least-squares slope of log ms/step on log N),
-                  and the contact search (``drystone.overlap.contacts_with_patches``) timed
+                  and the contact search (``drystone.mechanics.overlap.contacts_with_patches``) timed
                   alone on the settled positions: its broad phase and its exact clip.
 ``threads``       the 40-block wall on 1 and 2 threads, alone and with a second identical
                   run going in a background process (two jobs on the machine, as in a
@@ -47,7 +47,9 @@ from pathlib import Path
 
 import numpy as np
 
-from drystone import laws, paths, runner
+from drystone.mechanics import laws
+
+from drystone import paths, runner
 
 SECTIONS = ("running_bond", "scale", "threads", "sacsayhuaman")
 
@@ -294,10 +296,10 @@ def stone_count(data: dict) -> int:
 
 def time_step(data: dict, safety: float | None = None) -> float:
     """The runner's time step for a block-file dict: safety x the critical step
-    (``drystone.timestep``, damping the largest of the materials'), safety the case
+    (``drystone.model.timestep``, damping the largest of the materials'), safety the case
     default."""
-    from drystone import case as casemod
-    from drystone import timestep
+    from drystone.model import case as casemod
+    from drystone.model import timestep
 
     if safety is None:
         safety = casemod.SECTIONS["time"]["safety"].default
@@ -335,8 +337,8 @@ def settled_configuration(run_dir: Path):
     """(Shapes, pos, rot, moving) of a finished run's last recorded state, as
     ``contacts_with_patches`` takes them: free blocks where the run left them, the others
     where they were."""
-    from drystone import overlap as ov
-    from drystone import rotations
+    from drystone.mechanics import overlap as ov
+    from drystone.mechanics import rotations
     from drystone.geometry import polyhedron as ph
 
     spec = json.loads((run_dir / "spec.json").read_text())
@@ -380,7 +382,7 @@ def contact_search_times(run_dir: Path, budget_s: float = 1.0) -> dict:
     """ms per call of the contact search on a run's settled positions, outside YADE:
     total, global geometry, broad phase (sort and sweep), exact clip of the candidates,
     and the former all-pairs search."""
-    from drystone import overlap as ov
+    from drystone.mechanics import overlap as ov
 
     s, pos, rot, moving = settled_configuration(run_dir)
     args = (s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, pos, rot, moving, ov.TOL)
@@ -402,11 +404,12 @@ def step_times(run_dir: Path, budget_s: float = 1.0) -> dict:
     """ms per call, outside YADE, on a run's settled positions (``settled_configuration``),
     of the compiled step's two halves: the contact forces (``CompiledStep.forces``: search,
     law and damping, each contact's history from the call before) and the integration of
-    every body (``contact_step.integrate``, Fincham's scheme for the free blocks). Masses
+    every body (``integration.integrate``, Fincham's scheme for the free blocks). Masses
     are the run's (histories.npz); principal moments those of each block's box in its body
     frame, materials the spec's first (the cost does not depend on their values)."""
-    from drystone import contact as law
-    from drystone import contact_step as cs
+    from drystone.mechanics import contact as law
+    from drystone.mechanics import contact_step as cs
+    from drystone.mechanics import integration
 
     s, pos, rot, moving = settled_configuration(run_dir)
     spec = json.loads((run_dir / "spec.json").read_text())
@@ -428,7 +431,7 @@ def step_times(run_dir: Path, budget_s: float = 1.0) -> dict:
     state = [pos.copy(), vel.copy(), w.copy(), np.zeros((nb, 3)), np.tile([0.0, 0.0, 0.0, 1.0], (nb, 1)), rot.copy()]
     return {"contacts": int(len(step.keys)),
             "forces_ms": _best_ms(lambda: step.forces(pos, rot, vel, w, dt), budget_s),
-            "integrate_ms": _best_ms(lambda: cs.integrate(dt, np.zeros(3), F, T, m_int, inertia, free, free,
+            "integrate_ms": _best_ms(lambda: integration.integrate(dt, np.zeros(3), F, T, m_int, inertia, free, free,
                                                           moving.copy(), *state), budget_s / 2)}
 
 

@@ -1,4 +1,4 @@
-"""Command line: python -m drystone {run, sweep, keys, compare, bench, free-decay}."""
+"""Command line: python -m drystone {run, sweep, keys, layout, compare, bench, free-decay}."""
 from __future__ import annotations
 
 import argparse
@@ -7,7 +7,7 @@ import os
 import signal
 import sys
 
-from drystone import case as casemod
+from drystone.model import case as casemod
 
 
 def interrupt_on_sigterm() -> None:
@@ -34,6 +34,8 @@ def main(argv=None) -> int:
     r.add_argument("-q", "--quiet", action="store_true")
     k = sub.add_parser("keys", help="print the table of case-file keys (Markdown)")
     k.add_argument("--update-readme", action="store_true", help="write the table into README.md")
+    lay = sub.add_parser("layout", help="print the table of the package's layers (Markdown)")
+    lay.add_argument("--update-readme", action="store_true", help="write the table into README.md")
     c = sub.add_parser("compare", help="compare finished verification runs with the paper")
     c.add_argument("folders", nargs="+")
     b = sub.add_parser("bench", help="speed figures: 40-block wall, 500/2000-stone walls, threads, Sacsayhuaman")
@@ -76,6 +78,15 @@ def main(argv=None) -> int:
                 print(f"updated {p}")
             else:
                 print(casemod.describe())
+        elif a.cmd == "layout":
+            from drystone import layers
+            if a.update_readme:
+                from drystone import paths
+                p = paths.ROOT / "README.md"
+                p.write_text(layers.readme_with_layout(p.read_text()))
+                print(f"updated {p}")
+            else:
+                print(layers.readme_block())
         elif a.cmd == "compare":
             from drystone.postprocess import compare
             print(compare.report(a.folders))

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drystone.contact import DETECTIONS
+from drystone.mechanics.contact import DETECTIONS
 from drystone.units import GRAVITY as G  # the runs' gravity (the case default), m/s^2
 B, D, H, RHO, KN, KT, MU = 0.2, 0.2, 0.4, 2300.0, 2e8, 1e8, 0.7
 MASS = RHO * B * D * H

@@ -1,7 +1,7 @@
 """Run a case: validate, simulate, summarise (the layer above core and postprocess).
 
 ``run(case_path, overrides, out_dir=None, threads=1)`` is what ``python -m drystone run``,
-``make run CASE=...`` and sweeps call: ``drystone.resolve`` checks everything and writes the
+``make run CASE=...`` and sweeps call: ``drystone.model.resolve`` checks everything and writes the
 run specification, ``drystone.simulate`` runs YADE in a staging folder, and
 ``drystone.postprocess`` writes the summary and figures; the run is then swapped in.
 """
@@ -12,9 +12,9 @@ import shutil
 import time
 from pathlib import Path
 
-from drystone import case as casemod
+from drystone.model import case as casemod
 from drystone import paths, provenance
-from drystone.resolve import AXES, TOWARDS, fingerprint, initial_relative_velocity, resolve  # noqa: F401
+from drystone.model.resolve import AXES, TOWARDS, fingerprint, initial_relative_velocity, resolve  # noqa: F401
 from drystone.simulate import FolderLock, RunError, check_replaceable, commit, simulate, staging_folder  # noqa: F401
 from drystone.postprocess import plots
 from drystone.postprocess import summary as summ

@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 
 from drystone import paths
-from drystone.spec import spec_dict
+from drystone.model.spec import spec_dict
 
 
 class RunError(RuntimeError):
@@ -77,14 +77,14 @@ class FolderLock:
 
 
 #: the names a run's folder is recognised by: spec.json with the spec's format tag
-#: (drystone/spec.py; version-1 specs had none: then run_info.json beside it), or a
+#: (drystone/model/spec.py; version-1 specs had none: then run_info.json beside it), or a
 #: sweep's note of a failed run alone
 RUN_MARKER, FAILED_NOTE = "spec.json", "FAILED.txt"
 
 
 def is_run_folder(folder: Path) -> bool:
     """True when ``folder`` holds a run this package wrote (``RUN_MARKER``)."""
-    from drystone.spec import SPEC_FORMAT
+    from drystone.model.spec import SPEC_FORMAT
 
     folder = Path(folder)
     try:
@@ -182,7 +182,7 @@ def _simulate(spec_path: Path, threads: int, quiet: bool, engine: str = "compile
 
 def simulate(spec, stage: Path, threads: int = 1, quiet: bool = False, where: str = "",
              engine: str = "compiled") -> None:
-    """Write ``spec`` (a drystone.spec.Spec or a spec dict) to ``stage``/spec.json and run
+    """Write ``spec`` (a drystone.model.spec.Spec or a spec dict) to ``stage``/spec.json and run
     YADE on it; raises RunError (naming ``where``, the stability check that stopped it or
     the log's tail) unless histories.npz and run_info.json were written. ``spec['out_dir']`` is where the run will live.
     ``engine``: the step engine of the project's law (``ENGINES``; not physics: both give
@@ -194,7 +194,7 @@ def simulate(spec, stage: Path, threads: int = 1, quiet: bool = False, where: st
     spec_path.write_text(json.dumps(spec_dict(spec), indent=1))
     out = spec["out_dir"]
     rc = _simulate(spec_path, threads, quiet, engine)
-    if (stage / "failure.txt").is_file():  # stopped by a stability check (drystone/stability.py)
+    if (stage / "failure.txt").is_file():  # stopped by a stability check (drystone/mechanics/stability.py)
         raise RunError(f"{where}: the simulation was stopped: {(stage / 'failure.txt').read_text().strip()}; "
                        f"{out} is unchanged; log {stage / 'log.txt'}")
     if rc != 0 or not (stage / "histories.npz").is_file():

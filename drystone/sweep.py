@@ -45,7 +45,7 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from drystone import case as casemod
+from drystone.model import case as casemod
 from drystone import inputfiles, paths, tomlio
 from drystone.simulate import is_run_folder
 

@@ -1,10 +1,10 @@
-"""The closed forms themselves (drystone/analytic.py)."""
+"""The closed forms themselves (drystone/mechanics/analytic.py)."""
 import math
 
 import pytest
 
 import tolerances as tol
-from drystone import analytic
+from drystone.mechanics import analytic
 
 
 def test_toppling_tends_to_rigid_limit():

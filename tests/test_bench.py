@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 
 import tolerances as tol
-from drystone import bench, rotations
-from drystone import overlap as ov
+from drystone import bench
+from drystone.mechanics import rotations
+from drystone.mechanics import overlap as ov
 
 
 def test_growth_exponent_is_the_log_log_slope():

@@ -1,11 +1,11 @@
-"""The contact search's broad phase (drystone/overlap.py: sort and sweep on the bounding
+"""The contact search's broad phase (drystone/mechanics/overlap.py: sort and sweep on the bounding
 boxes) against the all-pairs search it replaced: the same candidates, the same contacts
 bit for bit; and the touching rule (pairs touching within TOL are no contact)."""
 import numpy as np
 import pytest
 
 import tolerances as tol
-from drystone import overlap as ov
+from drystone.mechanics import overlap as ov
 
 
 def _rotation(rng, angle):

@@ -2,7 +2,7 @@
 import pytest
 
 import tolerances as tol
-from drystone import case as casemod
+from drystone.model import case as casemod
 from drystone import runner
 
 GOOD = """
@@ -73,9 +73,9 @@ def test_overrides_apply(tmp_path):
 
 def test_auto_step_is_safety_times_critical(tmp_path):
     """Critical step of a 0.2 m cube on its face: (2/omega)(sqrt(1+xi^2)-xi),
-    omega^2 = 4 K_n A / m (drystone/timestep.py)."""
+    omega^2 = 4 K_n A / m (drystone/model/timestep.py)."""
     import math
-    from drystone import timestep
+    from drystone.model import timestep
     c = casemod.load(write(tmp_path, GOOD))
     spec = runner.resolve(c, "t", tmp_path)
     m = 2300 * 0.2 ** 3
@@ -93,10 +93,10 @@ def test_readme_documents_every_key():
 
 
 def test_stage_keys_live_with_the_stage_types(tmp_path):
-    """One home for a stage's keys and checks: drystone/stages.py's REGISTRY (issue 13)."""
+    """One home for a stage's keys and checks: drystone/model/stages.py's REGISTRY (issue 13)."""
     import re
 
-    from drystone.stages import REGISTRY
+    from drystone.model.stages import REGISTRY
 
     assert not hasattr(casemod, "STAGES")
     text = GOOD.replace('type = "gravity"', 'type = "spin"')

@@ -4,7 +4,7 @@ from pathlib import Path
 
 import pytest
 
-from drystone import case as casemod
+from drystone.model import case as casemod
 from drystone import paths, runner, sweep
 
 SWEEPS = sorted((paths.CASES / "sweeps").glob("*.toml"))

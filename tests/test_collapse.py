@@ -1,4 +1,4 @@
-"""Collapse onset of a tilt run (drystone/collapse.py), on synthetic histories of a wall
+"""Collapse onset of a tilt run (drystone/mechanics/collapse.py), on synthetic histories of a wall
 that loses equilibrium at a limit point THETA_C: before it, the quasi-static lean softens
 like a fold, u(theta) = B (sqrt(5) - sqrt(THETA_C - theta)) (so du/dtheta = B / (2 sqrt(THETA_C
 - theta)) grows without bound and depends on the tilt only, not on its rate); from 0.01 deg
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import tolerances as tol
-from drystone import collapse
+from drystone.mechanics import collapse
 
 THETA_C = 15.0  # deg
 B = 2 * collapse.RATE_M_PER_DEG * np.sqrt(0.1)  # m/deg^0.5: du/dtheta = 5 mm/deg at 0.1 deg before THETA_C
@@ -127,7 +127,7 @@ def test_summary_reaction_is_along_the_true_vertical():
     down (world frame) at any tilt, so its vertical reaction stays W (along the platform's
     normal it would be W cos(tilt): 0.95 W at 18.2 deg, a false collapse); blocks that
     fall from 14.3 deg unload it. The reaction-drop angle is found within one sample."""
-    from drystone.loading import LoadProgramme, Stage
+    from drystone.model.loading import LoadProgramme, Stage
     from drystone.postprocess import summary as summ
 
     stages = [{"kind": "gravity", "start": 0.0, "end": 1.0, "params": {"ramp": 0.5}},

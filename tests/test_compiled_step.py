@@ -1,4 +1,4 @@
-"""The compiled contact step (drystone/contact_step.py) against the numpy law it replaces,
+"""The compiled contact step (drystone/mechanics/contact_step.py) against the numpy law it replaces,
 and its leapfrog integrator against closed forms (no YADE).
 
 A 3-course running-bond wall is pressed into its joints, given small random rotations and
@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 import tolerances as tol
-from drystone import contact as law
-from drystone import contact_step as cs
-from drystone import rotations
+from drystone.mechanics import contact as law
+from drystone.mechanics import contact_step as cs
+from drystone.mechanics import integration, rotations
 from drystone.geometry import polyhedron as ph
 from drystone.geometry import running_bond
 
@@ -87,7 +87,7 @@ def test_compiled_forces_equal_numpy_law(seed):
 
 
 def _one(mass, inertia, blocked="", moving=True):
-    lin, rot_ = cs.free_directions(blocked, moving)
+    lin, rot_ = integration.free_directions(blocked, moving)
     aspherical = np.array([moving and not any(c in blocked for c in "XYZ")])
     return (np.array([mass]), np.array([inertia], float), lin[None], rot_[None], aspherical,
             np.zeros((1, 3)), np.zeros((1, 3)), np.zeros((1, 3)), np.zeros((1, 3)),
@@ -100,7 +100,7 @@ def test_integrate_uniform_acceleration_is_leapfrog_exact():
     F = np.array([[4.0, 4.0, 0.0]])
     dt, n = 1e-3, 500
     for _ in range(n):
-        cs.integrate(dt, g, F, np.zeros((1, 3)), m, I, lin, rf, asph, pos, vel, angvel, angmom, quat, rot)
+        integration.integrate(dt, g, F, np.zeros((1, 3)), m, I, lin, rf, asph, pos, vel, angvel, angmom, quat, rot)
     # leapfrog from rest: v = n a dt, x = a dt^2 n (n + 1) / 2 (exact for a constant force)
     a = np.array([2.0, 0.0, -9.81])  # y blocked
     np.testing.assert_allclose(vel[0], n * a * dt, rtol=tol.EXACT_REL)
@@ -114,7 +114,7 @@ def _spin(dt, t_end=2.5):
     angmom[0] = L0
     e0 = 0.5 * np.sum(L0 * L0 / I[0])
     for _ in range(int(round(t_end / dt))):
-        cs.integrate(dt, np.zeros(3), np.zeros((1, 3)), np.zeros((1, 3)), m, I, lin, rf, asph, pos, vel, angvel,
+        integration.integrate(dt, np.zeros(3), np.zeros((1, 3)), np.zeros((1, 3)), m, I, lin, rf, asph, pos, vel, angvel,
                      angmom, quat, rot)
     assert abs(np.linalg.norm(quat[0]) - 1) < 10 * tol.FEW_ULP_REL
     wl = rot[0].T @ angvel[0]  # body-frame angular velocity at the last half step
@@ -141,7 +141,7 @@ def test_integrate_blocked_rotation_spins_about_the_free_axis():
     T = np.array([[1.0, 5.0, 5.0]])
     dt, n = 1e-3, 1000
     for _ in range(n):
-        cs.integrate(dt, np.zeros(3), np.zeros((1, 3)), T, m, I, lin, rf, asph, pos, vel, angvel, angmom, quat, rot)
+        integration.integrate(dt, np.zeros(3), np.zeros((1, 3)), T, m, I, lin, rf, asph, pos, vel, angvel, angmom, quat, rot)
     assert angvel[0, 1] == 0 and angvel[0, 2] == 0
     np.testing.assert_allclose(angvel[0, 0], n * dt * 0.5, rtol=tol.EXACT_REL)
     angle = 0.5 * dt * dt * n * (n + 1) / 2  # sum of w_k dt
@@ -153,7 +153,7 @@ def test_non_moving_body_moves_with_its_velocity():
     m, I, lin, rf, asph, pos, vel, angvel, angmom, quat, rot = _one(np.inf, [1.0, 1.0, 1.0], moving=False)
     vel[0] = [0.0, 0.0, -0.01]
     for _ in range(100):
-        cs.integrate(1e-3, np.array([0.0, 0.0, -9.81]), np.ones((1, 3)), np.ones((1, 3)), m, I, lin, rf, asph, pos,
+        integration.integrate(1e-3, np.array([0.0, 0.0, -9.81]), np.ones((1, 3)), np.ones((1, 3)), m, I, lin, rf, asph, pos,
                      vel, angvel, angmom, quat, rot)
     np.testing.assert_allclose(vel[0], [0.0, 0.0, -0.01])
     np.testing.assert_allclose(pos[0], [0.0, 0.0, -1e-3], rtol=tol.EXACT_REL)

@@ -1,9 +1,9 @@
-"""The contact law's numpy kernels (drystone/contact.py) against closed forms."""
+"""The contact law's numpy kernels (drystone/mechanics/contact.py) against closed forms."""
 import numpy as np
 import pytest
 
 import tolerances as tol
-from drystone import contact as law
+from drystone.mechanics import contact as law
 
 N = np.array([[0.0, 0.0, 1.0]])
 

@@ -1,4 +1,4 @@
-"""The LMGC90 cross-check (issue 15, item 2; drystone/crosscheck/).
+"""The LMGC90 cross-check (issue 15, item 2; drystone/studies/crosscheck/).
 
 Without YADE and without LMGC90: the translator (block file -> LMGC90 model) keeps every
 block's volume, mass, centroid and inertia and winds its triangles outwards; it refuses
@@ -17,7 +17,7 @@ import pytest
 
 import tolerances as tol
 from reference import sliding_block
-from drystone.crosscheck import cases, closed_forms as cf, lmgc90_status, translate
+from drystone.studies.crosscheck import cases, closed_forms as cf, lmgc90_status, translate
 from drystone.geometry import blockfile as bf
 from drystone.geometry import polyhedron as ph
 from drystone.geometry.generators import generate
@@ -116,8 +116,8 @@ def test_rigid_rocking_onset_is_atan_b_over_h_plus_the_rules_lag():
     package's onset rule: the block does not move below atan(b/h) (phi stays 0 while the
     moment holds it down), and the rule dates the onset after it, by less than 0.2 deg
     (the run-away at 0.5 deg/s reaches 5 mm/deg within ~0.25 s: 0.11 deg measured)."""
-    from drystone.crosscheck import lmgc90
-    from drystone.loading import LoadProgramme
+    from drystone.studies.crosscheck import lmgc90
+    from drystone.model.loading import LoadProgramme
     import tempfile
     from pathlib import Path
 
@@ -137,7 +137,7 @@ def test_availability_message_names_package_version_and_install(monkeypatch):
     to install it (make crosscheck prints it as its 'skipped' line)."""
     import importlib.util
 
-    import drystone.crosscheck as xc
+    import drystone.studies.crosscheck as xc
 
     real = importlib.util.find_spec
     monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == xc.PACKAGE else real(name, *a))
@@ -155,7 +155,7 @@ def test_lmgc90_builds_the_translated_masses_and_centres(tmp_path):
     round-off of LMGC90's own volume integration (1e-9 m); the weight to LMGC90's
     Gauss-Seidel tolerance, fixed at 1.666e-4 (relative, quadratic mean) inside
     compas_lmgc90: 1e-3."""
-    from drystone.crosscheck import lmgc90
+    from drystone.studies.crosscheck import lmgc90
 
     pyr = [[-0.2, -0.2, 0.0], [0.2, -0.2, 0.0], [0.2, 0.2, 0.0], [-0.2, 0.2, 0.0], [0.05, 0.0, 0.6]]
     geo = {"format": bf.FORMAT, "version": 1, "name": "pyramid", "units": {"length": "m", "mass": "kg"},
@@ -184,7 +184,7 @@ def test_lmgc90_toppling_block_matches_the_rigid_closed_form(tmp_path):
     (1e-3 s, 5e-4 deg of tilt; the run-away's rate 5.7/s is integrated to (5.7 dt)^2 ~
     3e-5 relative), far below one sample. And it is atan(b/h) = 26.565 deg plus the rule's
     lag (< 0.2 deg, test above)."""
-    from drystone.crosscheck import lmgc90
+    from drystone.studies.crosscheck import lmgc90
 
     r = lmgc90.run(cases.toppling_case(), tmp_path, dt=1e-3)
     on = lmgc90.onset_angle(r)
@@ -204,7 +204,7 @@ def test_lmgc90_half_sine_pulse_matches_the_rigid_plastic_slide(tmp_path):
     the relative acceleration times dt^2; between them the theta = 0.5 step is exact for a
     piecewise-linear base velocity. The continuous pulse's closed form is 0.34 mm longer
     (the samples' chords lie inside the sine): both are reported."""
-    from drystone.crosscheck import lmgc90
+    from drystone.studies.crosscheck import lmgc90
 
     dt = 1e-3
     r = lmgc90.run(cases.pulse_case(), tmp_path, dt=dt, base="moving")
@@ -224,7 +224,7 @@ def test_package_only_rerun_keeps_lmgc90_and_the_other_stiffnesses(tmp_path, mon
     """``run_case(lmgc90_side=False)`` adds package runs at new K_n to a case already run:
     LMGC90's entry and the package runs at the other K_n stay, sorted by K_n; without an
     LMGC90 run recorded it refuses, naming the case."""
-    from drystone.crosscheck import study
+    from drystone.studies.crosscheck import study
 
     def fake_package(cc, folder, kn, variant=None, log=print):
         return {"kn": kn, "value": 10.0 + math.log10(kn), "folder": str(folder)}
@@ -247,8 +247,8 @@ def test_base_velocity_integrates_the_programmes_base_acceleration():
     """LMGC90's moving base gets v(t) from the programme's base acceleration by the
     trapezoid rule, exact for a piecewise-linear record sampled on the grid: samples
     0, 1, 2, 2 m/s^2 every 0.5 s give v = t^2 over the first second, then 1 + 2 (t - 1)."""
-    from drystone.crosscheck.engine import base_velocity
-    from drystone.loading import LoadProgramme, Stage
+    from drystone.studies.crosscheck.engine import base_velocity
+    from drystone.model.loading import LoadProgramme, Stage
 
     prog = LoadProgramme([Stage("gravity", 0.0, 1.0, {"ramp": 0.5}),
                           Stage("excitation", 1.0, 2.5, {"acc": np.array([0.0, 1.0, 2.0, 2.0]), "dt": 0.5,

@@ -1,4 +1,4 @@
-"""Contact damping distributed over the contact patch (drystone/contact.py): each mode of
+"""Contact damping distributed over the contact patch (drystone/mechanics/contact.py): each mode of
 a contact gets the fraction of critical damping asked for.
 
 Without YADE: the damping matrix of one block on a rigid base gives every mode of the
@@ -18,9 +18,9 @@ import pytest
 
 import tolerances as tol
 from conftest import requires_yade, run_case
-from drystone import contact as law
+from drystone.mechanics import contact as law
 from drystone import free_decay as fd
-from drystone import overlap as ov
+from drystone.mechanics import overlap as ov
 
 
 

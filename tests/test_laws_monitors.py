@@ -1,5 +1,5 @@
-"""Issue 24: the contact-law registry (drystone/laws.py), the step engines' registry
-(drystone/yade_scripts/engines.py) and the monitors (drystone/monitors.py) that any engine
+"""Issue 24: the contact-law registry (drystone/mechanics/laws.py), the step engines' registry
+(drystone/yade_scripts/engines.py) and the monitors (drystone/mechanics/monitors.py) that any engine
 runs, with the stage types adding theirs. Plain Python: the monitors are driven with a
 stand-in for the driver; the engines' histories are held bit for bit by test_regression.py
 and test_yade_compiled.py."""
@@ -13,9 +13,10 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from drystone import case as casemod
-from drystone import laws, monitors, paths, stability
-from drystone.loading import LoadProgramme, Stage
+from drystone.model import case as casemod
+from drystone.mechanics import laws, monitors, stability
+from drystone import paths
+from drystone.model.loading import LoadProgramme, Stage
 
 MAT = {"density": 2300.0, "kn": 2e8, "kt": 1e8, "mu": 0.6, "damping": 0.8}
 

@@ -12,32 +12,14 @@ import pytest
 
 from conftest import requires_yade
 from drystone import paths
-
-LEAVES = {"drystone", "drystone.paths", "drystone.units", "drystone.libm", "drystone.inputfiles"}
-CORE = {"drystone.case", "drystone.resolve", "drystone.contact", "drystone.overlap", "drystone.loading",
-        "drystone.collapse", "drystone.timestep", "drystone.stability", "drystone.modal", "drystone.rotations",
-        "drystone.provenance", "drystone.simulate", "drystone.tomlio", "drystone.analytic", "drystone.spec",
-        "drystone.stages", "drystone.contact_step", "drystone.laws", "drystone.monitors"}
-TOP = {"drystone.runner", "drystone.sweep", "drystone.cli", "drystone.bench", "drystone.free_decay",
-       "drystone.__main__"}
-
+from drystone.layers import LAYERS, layer_of, readme_with_layout
 
 def _layer(mod: str) -> int:
-    if mod in LEAVES:
-        return 0
-    if mod.startswith(("drystone.geometry", "drystone.motions")):
-        return 1
-    if mod in CORE:
-        return 2
-    if mod.startswith("drystone.yade_scripts"):
-        return 3
-    if mod.startswith("drystone.postprocess"):
-        return 4
-    if mod in TOP:
-        return 5
-    if mod.startswith(("drystone.studies", "drystone.crosscheck")):
-        return 6
-    raise AssertionError(f"module {mod} has no layer: add it to tests/test_layers.py")
+    """The rank of a module's layer (drystone/layers.py, the one list of them)."""
+    try:
+        return layer_of(mod).rank
+    except KeyError as exc:
+        raise AssertionError(str(exc)) from None
 
 
 def _modules():
@@ -175,3 +157,13 @@ def test_the_yade_driver_imports_without_running():
 
 if __name__ == "__main__":
     sys.exit(pytest.main([__file__]))
+
+
+def test_every_module_has_a_layer_and_the_readme_shows_them():
+    """The layers are listed once, in drystone/layers.py; README's Layout table is generated
+    from that list (python -m drystone layout --update-readme)."""
+    for mod, _ in _modules():
+        layer_of(mod)
+    assert [k.rank for k in LAYERS] == list(range(len(LAYERS)))
+    readme = (paths.ROOT / "README.md").read_text()
+    assert readme_with_layout(readme) == readme, "README's Layout table is stale: python -m drystone layout --update-readme"

@@ -1,11 +1,11 @@
-"""The load programme in the platform frame (drystone/loading.py)."""
+"""The load programme in the platform frame (drystone/model/loading.py)."""
 import math
 
 import numpy as np
 import pytest
 
 import tolerances as tol
-from drystone.loading import LoadProgramme, Stage
+from drystone.model.loading import LoadProgramme, Stage
 
 G = 9.81
 
@@ -52,7 +52,7 @@ def test_base_acceleration_is_an_inertial_body_force():
 # -- Eq. 9 as a displacement (issue 11, item 2) and settling rest stages (item 4) ---------------
 
 def _case(tmp_path, excitation: dict, rest: dict | None = None) -> dict:
-    from drystone import case as casemod
+    from drystone.model import case as casemod
     from drystone import paths
 
     raw = {"case": {"geometry": str(paths.CASES / "examples" / "one_block.json")},
@@ -104,7 +104,7 @@ def test_sine_started_as_displacement_gives_every_free_block_minus_the_base_velo
 
 
 def test_start_and_settle_keys_are_checked(tmp_path):
-    from drystone.case import CaseError
+    from drystone.model.case import CaseError
 
     with pytest.raises(CaseError, match=r"#2.*'start' = 'displacement' is defined for motion 'sine' only"):
         _case(tmp_path, {"motion": "white_noise", "start": "displacement"})
@@ -116,7 +116,7 @@ def test_start_and_settle_keys_are_checked(tmp_path):
     with pytest.raises(CaseError, match="settle_window"):
         _case(tmp_path, {"frequency_hz": 1.0}, {"duration": 1.0, "until_kinetic_below": 1.0, "settle_window": 2.0})
     # only the last stage may end the run early
-    from drystone import case as casemod
+    from drystone.model import case as casemod
     from drystone import paths
     raw = {"case": {"geometry": str(paths.CASES / "examples" / "one_block.json")},
            "stages": [{"type": "rest", "duration": 1.0, "until_kinetic_below": 1.0}, {"type": "rest", "duration": 1.0}]}

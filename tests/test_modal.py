@@ -1,4 +1,4 @@
-"""Linearised modal analysis (drystone/modal.py) against closed forms for one block on a
+"""Linearised modal analysis (drystone/mechanics/modal.py) against closed forms for one block on a
 rigid base (a Winkler foundation: K_n per unit area normal, K_t tangential).
 
 Block b (x) x d (y) x H (z), mass m, on a fixed platform, sunk by the static penetration
@@ -30,7 +30,7 @@ import pytest
 from scipy import linalg
 
 import tolerances as tol
-from drystone import modal
+from drystone.mechanics import modal
 
 RHO, KN, KT = 2300.0, 2e7, 1e7
 B, D, H = 0.2, 0.3, 1.0
@@ -133,7 +133,7 @@ def test_modes_of_a_two_block_tower_match_its_free_vibration(tmp_path):
     two 0.2 x 0.2 x 0.4 m blocks stacked on the platform, lightly damped (xi = 0.02),
     pushed sideways at the top block's centroid (0.03 W, the joints stay closed) and
     released. The period of the top block's x velocity (zero crossings over the first
-    cycles, dominated by the first mode) equals the first x-mode of drystone/modal.py
+    cycles, dominated by the first mode) equals the first x-mode of drystone/mechanics/modal.py
     at the settled state within 3 % (the second mode rings at a few times the first and
     shifts single crossings; damping 0.02 lowers the frequency by 0.02 %)."""
     from conftest import have_yade, run_case

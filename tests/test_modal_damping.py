@@ -1,4 +1,4 @@
-"""The linearised model's contact damping (drystone.modal.Assembly.damping) is the dynamic
+"""The linearised model's contact damping (drystone.mechanics.modal.Assembly.damping) is the dynamic
 law's: every mode of one block on its joint gets the damping ratio asked for."""
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import tolerances as tol
-from drystone import modal
+from drystone.mechanics import modal
 from drystone.geometry import blockfile as bf
 
 RHO, KN, KT, G = 2300.0, 2e8, 1e8, 9.81

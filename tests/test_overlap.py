@@ -1,11 +1,11 @@
-"""Exact overlap of convex polyhedra (drystone/overlap.py) against closed forms, an
+"""Exact overlap of convex polyhedra (drystone/mechanics/overlap.py) against closed forms, an
 independent half-space intersection (scipy/qhull) and finite differences."""
 import numpy as np
 import pytest
 from scipy.spatial import HalfspaceIntersection
 
 import tolerances as tol
-from drystone import overlap as ov
+from drystone.mechanics import overlap as ov
 from drystone.geometry import polyhedron as ph
 
 

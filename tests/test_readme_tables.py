@@ -5,7 +5,7 @@ import pytest
 
 from drystone import paths
 from drystone.studies import readme_tables as rt
-from drystone.studies import tilt
+from drystone.studies.tilt import study as tilt
 from test_tilt_report import fake_run
 
 README = """intro

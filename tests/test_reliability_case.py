@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 import tolerances as tol
-from drystone import case as casemod
-from drystone import paths, runner, timestep
+from drystone.model import case as casemod
+from drystone import paths, runner
+from drystone.model import timestep
 from drystone.motions import excitation, generators
 
 BOX = '{generator = "boxes_on_platform", boxes = [{id = 1, center_xy = [0.0, 0.0], size = [0.2, 0.2, 0.2]}]}'

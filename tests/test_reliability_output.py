@@ -19,7 +19,7 @@ import pytest
 
 from conftest import requires_yade
 from drystone import cli, paths, runner, sweep
-from drystone import case as casemod
+from drystone.model import case as casemod
 from drystone.postprocess import summary as summ
 from drystone.tomlio import to_toml
 

@@ -16,8 +16,9 @@ import pytest
 
 import tolerances as tol
 from conftest import requires_yade
-from drystone import case as casemod
-from drystone import paths, runner, stability, sweep
+from drystone.model import case as casemod
+from drystone import paths, runner, sweep
+from drystone.mechanics import stability
 
 BOX = {"generator": "boxes_on_platform", "boxes": [{"id": 1, "center_xy": [0.0, 0.0], "size": [0.2, 0.2, 0.2]}],
        "damping": 0.5}

@@ -1,6 +1,6 @@
 """Issue 23, item 9: blow-ups and runaway blocks are not reported as results.
 
-A free block that leaves the model (drystone/stability.py ``ModelRegion``: below the
+A free block that leaves the model (drystone/mechanics/stability.py ``ModelRegion``: below the
 supports' underside, or farther from them than their horizontal size plus the fall height)
 is marked ``unbounded`` in summary.json, collapsed, with no residual; the run stops once
 every free block has left. Velocities beyond what the loads can give (``speed_check``) stop
@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from conftest import requires_yade
-from drystone import stability
+from drystone.mechanics import stability
 from drystone.geometry.simple import PLATFORM_THICKNESS, boxes_on_platform
 from drystone.postprocess import summary as summ
 

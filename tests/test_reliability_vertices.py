@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import tolerances as tol
-from drystone import overlap as ov
+from drystone.mechanics import overlap as ov
 from drystone.geometry import blockfile as bf
 from drystone.geometry import polyhedron as ph
 

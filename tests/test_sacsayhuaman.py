@@ -126,7 +126,7 @@ def test_unsettled_run_is_said_so(tmp_path):
 def test_resonance_and_settle_overrides_follow_the_record_case():
     """The resonance study runs at the paper's 0.976 Hz and at the wall's own frequency, with
     the rest-until-settled of cases/sacsayhuaman/record.toml (one threshold for every residual)."""
-    from drystone import case as casemod
+    from drystone.model import case as casemod
     from drystone import paths
     from drystone.studies.sacsayhuaman import study
     assert study.resonance_frequencies(2.0) == {"paper": 0.976, "wall": 2.0}

@@ -1,5 +1,5 @@
 """The run specification: typed and frozen, versioned, one upgrade for old spec.json
-(drystone/spec.py; issue 13, item 3)."""
+(drystone/model/spec.py; issue 13, item 3)."""
 from __future__ import annotations
 
 import dataclasses
@@ -7,10 +7,10 @@ import json
 
 import pytest
 
-from drystone import case as casemod
+from drystone.model import case as casemod
 from drystone import paths, runner
-from drystone.loading import LoadProgramme
-from drystone.spec import (SPEC_VERSION, Spec, SpecError, StageSpec, load_spec, spec_dict, stage_type, upgrade,
+from drystone.model.loading import LoadProgramme
+from drystone.model.spec import (SPEC_VERSION, Spec, SpecError, StageSpec, load_spec, spec_dict, stage_type, upgrade,
                            upgrade_stage)
 
 #: every stage type, an applied force and a recorded contact on the one-block example

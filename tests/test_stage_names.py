@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import pytest
 
-from drystone import case as casemod
+from drystone.model import case as casemod
 
 CASE = """
 [case]

@@ -1,4 +1,4 @@
-"""The stage types (drystone/stages.py; issue 13, item 3): one class per type with its keys,
+"""The stage types (drystone/model/stages.py; issue 13, item 3): one class per type with its keys,
 its checks, its resolution and what it imposes at t."""
 from __future__ import annotations
 
@@ -7,11 +7,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from drystone import case as casemod
-from drystone import stages
-from drystone.case import CaseError, Key
-from drystone.loading import LoadProgramme, Stage
-from drystone.stages import REGISTRY, ResolveContext
+from drystone.model import case as casemod
+from drystone.model import stages
+from drystone.model.case import CaseError, Key
+from drystone.model.loading import LoadProgramme, Stage
+from drystone.model.stages import REGISTRY, ResolveContext
 
 
 def test_registry_has_every_type_in_the_readme_order():
@@ -95,7 +95,7 @@ def test_types_that_impose_nothing_return_neutral_values():
 
 def test_a_new_type_needs_only_its_class(monkeypatch):
     """The programme asks the stage types, not their names: a type registered here (a
-    constant base acceleration) is applied without touching drystone/loading.py."""
+    constant base acceleration) is applied without touching drystone/model/loading.py."""
 
     class Push(stages.StageType):
         name = "push"

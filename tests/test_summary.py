@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from drystone import rotations
+from drystone.mechanics import rotations
 from drystone.postprocess import summary as summ
 
 

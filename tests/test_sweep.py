@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 
 from conftest import requires_yade
-from drystone import case as casemod
+from drystone.model import case as casemod
 from drystone import runner, sweep
 
 # one 0.2 m cube settling on a platform for 0.1 s: a run of a few seconds

@@ -2,15 +2,15 @@
 
 A 0.2 m wide block slides at atan(mu) when mu < b/h, and topples otherwise. With penalty
 contact the toppling angle is not atan(b/h) but that of a rigid block on a Winkler joint
-(drystone/analytic.py: 23.16 deg instead of 26.57 deg for b/h = 0.5 at K_n = 2e8 N/m^3), which
+(drystone/mechanics/analytic.py: 23.16 deg instead of 26.57 deg for b/h = 0.5 at K_n = 2e8 N/m^3), which
 is what the law must reproduce. Tolerance 0.3 deg: the final tilt rate is 0.5 deg/s and the
-onset of motion (5 mm per degree of tilt, drystone/collapse.py) is dated within about 0.1 deg.
+onset of motion (5 mm per degree of tilt, drystone/mechanics/collapse.py) is dated within about 0.1 deg.
 """
 import pytest
 
 import tolerances as tol
 from conftest import requires_yade, run_case
-from drystone import analytic
+from drystone.mechanics import analytic
 
 pytestmark = [requires_yade, pytest.mark.yade, pytest.mark.slow]  # each test > 30 s
 
@@ -56,7 +56,7 @@ def test_toppling_block_at_both_quasi_static_rates(outdir):
     0.2 deg/s), with xi = 0.08 it does not. Asserted: the paper's 0.2 deg/s and the
     lightly damped 1 deg/s within the 0.3 deg of the sanity checks; the damped fast run
     later, never earlier, than both. The rate limit of issue 5 (0.2 deg) is checked on the
-    wall itself (`make tilt-rate`, drystone/studies/tilt.py)."""
+    wall itself (`make tilt-rate`, drystone/studies/tilt/study.py)."""
     expected = analytic.toppling_tilt_deg(0.2, 0.4, 0.2, 2300, 2e8)
     angles = {}
     for rate, xi in ((0.2, 0.8), (1.0, 0.8), (1.0, 0.08)):

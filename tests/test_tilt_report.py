@@ -1,10 +1,10 @@
-"""Tilt-table report (drystone/studies/tilt.py) on synthetic sweep folders: statistics, the
+"""Tilt-table report (drystone/studies/tilt/study.py) on synthetic sweep folders: statistics, the
 rate check and the tables, without YADE."""
 import json
 
 import pytest
 
-from drystone.studies import tilt
+from drystone.studies.tilt import study as tilt
 
 
 def fake_run(root, name, seed, angle, rates=(2.0, 1.0), mu=0.4, kn=2e8, drop="absent"):

@@ -20,7 +20,7 @@ def fake_run(folder, dx, angle):
     (folder / "geometry.json").write_text(json.dumps({"blocks": blocks}))
     (folder / "spec.json").write_text(json.dumps({"gravity": 9.81, "stages": [
         {"kind": "gravity", "start": 0.0, "end": 1.0, "params": {"ramp": 0.5}}]}))
-    q0 = np.array([[0.0, 0.0, 0.0, 1.0]])  # (x, y, z, w) as drystone.rotations
+    q0 = np.array([[0.0, 0.0, 0.0, 1.0]])  # (x, y, z, w) as drystone.mechanics.rotations
     q1 = np.array([[0.0, 0.0, np.sin(angle / 2), np.cos(angle / 2)]])
     c0 = np.array([[0.0, 0.0, 0.5]])
     np.savez(folder / "histories.npz", t=np.array([0.0, 1.0]), tilt_deg=np.zeros(2), block_ids=np.array([1]),

@@ -103,7 +103,7 @@ TOPPLING_RIGID_LIMIT_DEG = 0.05
 #: (the 2e8 deficit, 3.4 deg, is not small): 30 % (0.0975 computed)
 TOPPLING_POWER_LAW_REL = 0.3
 #: tilt-table angles in YADE against the closed forms: the final tilt rate is 0.5 deg/s
-#: and the onset of motion (5 mm per degree, drystone/collapse.py) is dated within about
+#: and the onset of motion (5 mm per degree, drystone/mechanics/collapse.py) is dated within about
 #: 0.1 deg: 0.3 deg
 TILT_ANGLE_DEG = 0.3
 #: the reaction drops by 5 % of the weight after the onset of the run-away (0.1 deg

@@ -42,7 +42,7 @@ tolerance ``CORNER_REL_TOL`` x the block's size). Repeated vertices are refused,
 merged: a file lists each corner once, so that it is the block that runs.
 
 Size: a block has at most ``MAX_VERTICES_PER_BLOCK`` vertices (80): no convex block with
-more fits the contact kernel (``drystone/overlap.py``). A block above it is refused
+more fits the contact kernel (``drystone/mechanics/overlap.py``). A block above it is refused
 before its hull is built; the checks of a block take memory linear in its vertices.
 
 Numbers: every coordinate, position and material value a finite JSON number (not a
@@ -73,7 +73,7 @@ ROLES = ("free", "fixed", "platform")
 #: size (the diagonal of its bounding box) is not a corner (far above round-off, far below
 #: any real stone's corner)
 CORNER_REL_TOL = 1e-9
-#: most vertices a block may have. The contact kernel (drystone/overlap.py, ``Shapes``)
+#: most vertices a block may have. The contact kernel (drystone/mechanics/overlap.py, ``Shapes``)
 #: clips each face of one block against the face planes of the other in a polygon buffer
 #: of overlap.MAXV = 96 points: it refuses blocks whose faces plus the corners of their
 #: largest face exceed MAXV / 2 = 48. A convex block of V corners has F >= V/2 + 2 faces
@@ -101,7 +101,7 @@ OVERLAP_TOL = 1e-6
 #: damping (fraction of critical); the one list of them (``Material``, a case's
 #: [materials.NAME] overrides, the resolved spec.json materials)
 MATERIAL_PROPERTIES = ("density", "kn", "kt", "mu", "damping")
-#: those of a contact: a pair of materials combines them (``drystone.contact.pair_properties``)
+#: those of a contact: a pair of materials combines them (``drystone.mechanics.contact.pair_properties``)
 #: and a case's [contact] section overrides them for every material
 CONTACT_PROPERTIES = ("kn", "kt", "mu", "damping")
 #: those a joint (one pair of blocks) may override

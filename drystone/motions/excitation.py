@@ -6,7 +6,7 @@ linearly between samples, or use ``motions.processing.resample``), and ``meta`` 
 record's ``metadata()`` plus ``motion`` and ``record`` (catalogue name or file) for the
 provenance of the run. Stage keys used: ``motion`` (sine, white_noise or record),
 ``record`` (catalogue name, see ``motions.catalogue.names()``, or a file path; a case
-file's path is relative to the case file's folder, made absolute by ``drystone.case``;
+file's path is relative to the case file's folder, made absolute by ``drystone.model.case``;
 called directly, a relative path is tried in the working directory, then the repository
 root),
 ``frequency_hz``/``amplitude`` (sine), ``seed`` (white noise), ``pga_g`` (scale to this

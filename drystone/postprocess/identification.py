@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import signal
 
-from drystone.spec import stage_type
+from drystone.model.spec import stage_type
 
 #: the paper's FFT: 1000 Hz sampling (§4.2, line 440), 4096 points (inferred from the grid)
 PAPER_RATE_HZ = 1000.0
@@ -237,13 +237,13 @@ def run_histories(out, component: int = 1) -> dict:
 
 
 def wall_assembly(out, time_s: float | None = None):
-    """``drystone.modal.Assembly`` of a run's blocks at ``time_s`` (default: the end of the
+    """``drystone.mechanics.modal.Assembly`` of a run's blocks at ``time_s`` (default: the end of the
     last gravity stage, the settled state), in the platform frame, with the materials,
     roles and blocked DOFs of its spec.json; gravity along -z with the run's magnitude."""
     import json
     from pathlib import Path
 
-    from drystone import modal
+    from drystone.mechanics import modal
     from drystone.postprocess import snapshots
 
     out = Path(out)

@@ -17,7 +17,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from drystone.postprocess import summary as summ  # noqa: E402
-from drystone.spec import stage_type  # noqa: E402
+from drystone.model.spec import stage_type  # noqa: E402
 
 
 def contact_forces(spec: dict, h: dict, name: str, path: Path, slip: dict | None = None) -> Path:
@@ -70,7 +70,7 @@ def penetration_history(spec: dict, h: dict, name: str, path: Path) -> Path:
 def reaction(spec: dict, h: dict, path: Path, collapse: dict | None) -> Path:
     """Vertical (true, world) reaction of the moving blocks on the platform and fixed
     blocks against time and tilt (the paper's Figure 13)."""
-    from drystone.loading import LoadProgramme, Stage
+    from drystone.model.loading import LoadProgramme, Stage
 
     prog = LoadProgramme([Stage(stage_type(s), s["start"], s["end"], s["params"]) for s in spec["stages"]
                           if stage_type(s) != "excitation"], spec["gravity"])

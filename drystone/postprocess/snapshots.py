@@ -17,11 +17,11 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # noqa: E402
 
-from drystone import rotations  # noqa: E402
+from drystone.mechanics import rotations  # noqa: E402
 from drystone.geometry import polyhedron as ph  # noqa: E402
-from drystone.loading import LoadProgramme, Stage  # noqa: E402
+from drystone.model.loading import LoadProgramme, Stage  # noqa: E402
 from drystone.postprocess import summary as summ  # noqa: E402
-from drystone.spec import stage_type  # noqa: E402
+from drystone.model.spec import stage_type  # noqa: E402
 
 
 def block_faces(vertices: np.ndarray) -> list[np.ndarray]:

@@ -5,7 +5,7 @@ platform; SI units; rotations as rotation vectors (axis x angle, rad) of each bl
 relative to its initial orientation. A block has *collapsed* when its displacement
 exceeds its collapse threshold (case key ``output.collapse_displacement``, by default half
 its smallest dimension) or it ends up lower than its initial position by more than its
-height (it fell). A block that left the model (drystone/stability.py ``ModelRegion``: below
+height (it fell). A block that left the model (drystone/mechanics/stability.py ``ModelRegion``: below
 the supports' underside, or thrown farther than their size plus the fall height) has
 collapsed and its motion is ``unbounded``: no residual, maximum or rotation is given for it
 (from the sample it left on, its numbers describe nothing the model holds).
@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from drystone import collapse, rotations, stability
-from drystone.spec import spec_dict, stage_type
+from drystone.mechanics import collapse, rotations, stability
+from drystone.model.spec import spec_dict, stage_type
 
 
 #: summary.json's format name and version
@@ -40,7 +40,7 @@ def load_histories(out: Path) -> dict:
 
 
 def left_model(spec: dict, h: dict) -> dict[int, dict]:
-    """The free blocks that left the model (drystone/stability.py ``ModelRegion``, from the
+    """The free blocks that left the model (drystone/mechanics/stability.py ``ModelRegion``, from the
     blocks at t = 0): block id -> {"sample": first sample outside, "time_s", "where"}. The
     YADE driver applies the same rule to the same samples (run_info.json ``left_model``)."""
     if "blocks" not in spec or not len(h["t"]):
@@ -222,7 +222,7 @@ def slip(spec: dict, h: dict, name: str, tilt_block: int | None) -> dict:
 
 
 def build(spec, out: Path) -> dict:
-    """The summary of a finished run in folder ``out``; ``spec``: a drystone.spec.Spec or a
+    """The summary of a finished run in folder ``out``; ``spec``: a drystone.model.spec.Spec or a
     spec.json dict of any version."""
     spec = spec_dict(spec)
     out = Path(out)
@@ -272,7 +272,7 @@ def build(spec, out: Path) -> dict:
 
 def left_model_report(spec: dict, h: dict, left: dict, info: dict) -> dict:
     """summary.json's ``run.left_model``: how many of the free blocks left the model, which
-    and when (``left_model``), the region and its rule (drystone/stability.py), and when the
+    and when (``left_model``), the region and its rule (drystone/mechanics/stability.py), and when the
     run stopped because every free block had left (run_info's ``all_left_model_s``)."""
     region = stability.ModelRegion.from_blocks(spec["blocks"]) if "blocks" in spec else None
     return {"count": len(left), "free_blocks": len(h["block_ids"]),
@@ -285,9 +285,9 @@ def left_model_report(spec: dict, h: dict, left: dict, info: dict) -> dict:
 def contact_stability(spec: dict, info: dict, blocks_left_model: int = 0) -> dict | None:
     """The largest omega dt any contact mode reached in the run (run_info's
     ``max_contact_omega_dt``, omega the contact's highest modal frequency from the damping
-    kernel, drystone/contact.py) against the central-difference limit 2 (sqrt(1 + xi^2) - xi)
+    kernel, drystone/mechanics/contact.py) against the central-difference limit 2 (sqrt(1 + xi^2) - xi)
     for the largest damping xi of the run's materials: a check of the automatic step, which
-    is estimated from block masses before the run (drystone/timestep.py). ``within`` says
+    is estimated from block masses before the run (drystone/model/timestep.py). ``within`` says
     the contacts were integrated stably, not that the motion is bounded: with
     ``blocks_left_model`` > 0 a ``note`` says so (run.left_model). None for runs without it
     (older runs, the stock law)."""
@@ -307,7 +307,7 @@ def contact_stability(spec: dict, info: dict, blocks_left_model: int = 0) -> dic
 def vertical_reaction(spec: dict, h: dict) -> np.ndarray:
     """Vertical reaction (N) of the moving blocks on the platform and the fixed blocks at
     every sample: the recorded reaction force projected on the true (world) vertical, up."""
-    from drystone.loading import LoadProgramme
+    from drystone.model.loading import LoadProgramme
 
     prog = LoadProgramme.from_spec(spec)
     up = np.array([prog.true_vertical(t) for t in h["t"]]).reshape(-1, 3)
@@ -315,7 +315,7 @@ def vertical_reaction(spec: dict, h: dict) -> np.ndarray:
 
 
 def tilt_reaction_drop(spec: dict, h: dict) -> dict:
-    """The paper's reaction-drop collapse angle of a tilt run (drystone.collapse.reaction_drop)
+    """The paper's reaction-drop collapse angle of a tilt run (drystone.mechanics.collapse.reaction_drop)
     over the samples of its tilt stages, with the drop fraction of its until_collapse stage
     (5 % by default) and the weight of the moving blocks (histories' masses x gravity)."""
     t = np.asarray(h["t"], float)
@@ -331,7 +331,7 @@ def tilt_reaction_drop(spec: dict, h: dict) -> dict:
     out = collapse.reaction_drop(t, h["tilt_deg"], vertical_reaction(spec, h), weight, active,
                                  drop if drop is not None else collapse.REACTION_DROP)
     out["rule"] = ("first recorded sample of a tilt stage where the vertical reaction of the moving blocks "
-                   "(true vertical) is below (1 - drop) x their weight (drystone/collapse.py reaction_drop)")
+                   "(true vertical) is below (1 - drop) x their weight (drystone/mechanics/collapse.py reaction_drop)")
     return out
 
 
@@ -356,7 +356,7 @@ def assumed_inputs(spec: dict, out: Path) -> list[str]:
 def tilt_collapse(spec: dict, h: dict, detected: dict | None) -> dict | None:
     """The run's collapse detection (YADE side) with two angles: ``angle_deg`` (=
     ``onset_angle_deg``), dated back to the onset of the motion that led to it
-    (drystone/collapse.py onset; rule from the spec's onset keys), and
+    (drystone/mechanics/collapse.py onset; rule from the spec's onset keys), and
     ``reaction_drop_angle_deg``, the paper's criterion (its Figure 13: the tilt at which the
     vertical reaction first drops by the stage's ``reaction_drop`` fraction of the moving
     blocks' weight; None if it never did before the run stopped)."""

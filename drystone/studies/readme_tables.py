@@ -75,7 +75,7 @@ def verification(results: Path) -> str:
 
 
 def tilt(results: Path) -> str:
-    from drystone.studies import tilt as t
+    from drystone.studies.tilt import study as t
 
     p = results / "tilt" / "summary.json"
     s = _json(p)
@@ -87,7 +87,7 @@ def tilt(results: Path) -> str:
 
 
 def tilt_checks(results: Path) -> str:
-    from drystone.studies import tilt as t
+    from drystone.studies.tilt import study as t
 
     p = results / "tilt" / "summary.json"
     s = _json(p)

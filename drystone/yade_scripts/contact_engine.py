@@ -1,5 +1,5 @@
 """Per-contact tangential force and damping for polyhedra, run every step before
-NewtonIntegrator (inside YADE only). The law itself is ``drystone.contact``; this module
+NewtonIntegrator (inside YADE only). The law itself is ``drystone.mechanics.contact``; this module
 gathers YADE's contact geometry into arrays, calls it, and applies the forces.
 
 Why not the stock law alone: ``Law2_PolyhedraGeom_PolyhedraPhys_Volumetric`` (YADE
@@ -10,20 +10,20 @@ Its volumetric normal force (K_n V at the overlap centroid) is right and is kept
 Forces per contact: the elastic normal force K_n V at the overlap centroid c (applied by
 YADE's law with ``detection = yade``, here with ``native``), the shear spring at c, and
 the damping wrench distributed over the contact patch, at the patch centroid p
-(``drystone.contact``: force and moment).
+(``drystone.mechanics.contact``: force and moment).
 """
 from __future__ import annotations
 
 import numpy as np
 import yade
 
-from drystone import contact as law
-from drystone import contact_step as cs
-from drystone.contact_step import ContactState  # noqa: F401 (recording reads it from here)
+from drystone.mechanics import contact as law
+from drystone.mechanics import contact_step as cs
+from drystone.mechanics.contact_step import ContactState  # noqa: F401 (recording reads it from here)
 
 
 class PenaltyCoulomb(cs.NumpyStep):
-    """The project's law in numpy (``drystone.contact_step.NumpyStep``) on YADE's
+    """The project's law in numpy (``drystone.mechanics.contact_step.NumpyStep``) on YADE's
     contact geometry or the native one; forces applied body by body."""
 
     def gather(self, O):
@@ -44,7 +44,7 @@ class PenaltyCoulomb(cs.NumpyStep):
 
 
 class Compiled(cs.CompiledStep):
-    """The compiled step (``drystone.contact_step.CompiledStep``, native geometry), its
+    """The compiled step (``drystone.mechanics.contact_step.CompiledStep``, native geometry), its
     contacts exposed as a ``ContactState`` for recording."""
 
     def step(self, O, bodies_state, apply_forces=True):

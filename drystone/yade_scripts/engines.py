@@ -1,10 +1,10 @@
 """Step engines: one class per way of stepping a run's scene (inside YADE only), as YADE
 composes ``O.engines``. The driver (run_case.py) builds the scene and the state arrays,
 then one engine (``ENGINES``, chosen by the case's contact law: ``ContactLaw.engine`` in
-drystone/laws.py) steps it:
+drystone/mechanics/laws.py) steps it:
 
 * ``compiled``: the project's law and the leapfrog integration of the bodies in numba over
-  arrays (drystone.contact_step.CompiledStep), its own time loop; YADE keeps the scene
+  arrays (drystone.mechanics.contact_step.CompiledStep), its own time loop; YADE keeps the scene
   and gets the final state written back;
 * ``python``: the project's law in numpy (contact_engine.PenaltyCoulomb, YADE's or the
   native contact geometry), YADE's NewtonIntegrator moving the bodies, ``O.run``;
@@ -26,9 +26,9 @@ import time
 import numpy as np
 import yade
 
-from drystone import contact as law
-from drystone import contact_step as cs
-from drystone import monitors, rotations, stability
+from drystone.mechanics import contact as law
+from drystone.mechanics import contact_step as cs
+from drystone.mechanics import integration, monitors, rotations, stability
 from drystone.yade_scripts import contact_engine as ce
 
 
@@ -179,7 +179,7 @@ class NumpyEngine(Engine):
 
 class CompiledEngine(Engine):
     """The project's law on the native geometry and the integration in numba, in its own
-    time loop in place of YADE's (drystone.contact_step); the scene is written back at the end."""
+    time loop in place of YADE's (drystone.mechanics.contact_step); the scene is written back at the end."""
 
     name = "compiled"
     yade_integrates = False
@@ -197,7 +197,7 @@ class CompiledEngine(Engine):
             a, b = (int(x) for x in key.split("-"))
             p = pair_properties(run, run.yid[a], run.yid[b])
             joints[(run.yid[a], run.yid[b])] = [p[k] for k in keys]
-        free = [cs.free_directions(run.states[i].blockedDOFs or "", bool(np.isfinite(run.mass[i]))) for i in range(nb)]
+        free = [integration.free_directions(run.states[i].blockedDOFs or "", bool(np.isfinite(run.mass[i]))) for i in range(nb)]
         self.lin_free = np.array([f[0] for f in free])
         self.rot_free = np.array([f[1] for f in free])
         # YADE's exactAsphericalRot: aspherical bodies free to rotate about every axis
@@ -311,7 +311,7 @@ class CompiledEngine(Engine):
 
     def _integrate(self, dt, g, F, T):
         run = self.run
-        cs.integrate(dt, g, F, T, self.mass_int, self.inertia_int, self.lin_free, self.rot_free, self.aspherical,
+        integration.integrate(dt, g, F, T, self.mass_int, self.inertia_int, self.lin_free, self.rot_free, self.aspherical,
                      run.pos, run.vel, run.angvel, self.angmom, run.quat, run.rot)
 
     # -- inside a step ---------------------------------------------------------------
@@ -356,5 +356,5 @@ class CompiledEngine(Engine):
         return 0.5 * sum(self.step.elastic)
 
 
-#: the step engines by name (``ContactLaw.engines`` in drystone/laws.py names them)
+#: the step engines by name (``ContactLaw.engines`` in drystone/mechanics/laws.py names them)
 ENGINES = {e.name: e for e in (CompiledEngine, NumpyEngine, StockEngine)}

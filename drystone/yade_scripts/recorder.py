@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drystone.monitors import Sample
+from drystone.mechanics.monitors import Sample
 
 #: histories.npz's format name and version (arrays ``format`` and ``version``)
 HISTORIES_FORMAT, HISTORIES_VERSION = "drystone-histories", 1

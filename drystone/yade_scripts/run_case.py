@@ -4,12 +4,12 @@ SPEC.json is written by ``python -m drystone run CASE.toml`` (drystone/runner.py
 validates the case and the geometry first; this script only simulates and writes
 ``histories.npz`` and ``run_info.json`` into the output folder (under temporary names,
 renamed when complete). Units SI; the simulation runs in the platform frame
-(drystone/loading.py).
+(drystone/model/loading.py).
 
 The driver composes a run as YADE composes ``O.engines``: the scene (scene.py), one step
 engine (engines.py: ``compiled``, ``python`` or ``yade``, chosen by the case's contact law
-and ENGINE, drystone/laws.py), the recorder (recorder.py) and the monitors run at every
-recorded sample (drystone/monitors.py: stability, blocks leaving the model, and those the
+and ENGINE, drystone/mechanics/laws.py), the recorder (recorder.py) and the monitors run at every
+recorded sample (drystone/mechanics/monitors.py: stability, blocks leaving the model, and those the
 stages add: a tilt's collapse, a last rest's settling).
 """
 from __future__ import annotations
@@ -25,11 +25,11 @@ import yade
 from yade import log
 
 # drystone is installed in the interpreter YADE runs (make setup: pip install -e .)
-from drystone import laws, monitors, rotations, stability  # noqa: E402
+from drystone.mechanics import laws, monitors, rotations, stability  # noqa: E402
 from drystone.geometry import polyhedron as ph  # noqa: E402
-from drystone.loading import LoadProgramme  # noqa: E402
+from drystone.model.loading import LoadProgramme  # noqa: E402
 from drystone.simulate import ENGINES as REQUESTS  # noqa: E402 (what ENGINE may ask for)
-from drystone.spec import Spec, load_spec  # noqa: E402
+from drystone.model.spec import Spec, load_spec  # noqa: E402
 from drystone.yade_scripts import scene as sc  # noqa: E402
 from drystone.yade_scripts.engines import ENGINES  # noqa: E402
 from drystone.yade_scripts.recorder import Recorder  # noqa: E402
@@ -41,7 +41,7 @@ log.setLevel("Polyhedra_support.cpp", log.ERROR)
 
 class Driver:
     """One run: the scene, its state arrays (bodies in YADE's order; SI), the load
-    programme, the engine, the recorder and the monitors (drystone/monitors.py)."""
+    programme, the engine, the recorder and the monitors (drystone/mechanics/monitors.py)."""
 
     def __init__(self, spec: Spec, out: Path | None = None, engine: str = "compiled"):
         if engine not in REQUESTS:

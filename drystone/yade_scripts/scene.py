@@ -6,7 +6,7 @@ Bodies: one Polyhedra body per block, in file order. Blocks with role ``fixed`` 
 ever computed (YADE would otherwise intersect them every step).
 
 Materials: PolyhedraMat as the case's contact law maps them (``ContactLaw.yade_material``
-in drystone/laws.py): young = 2 K_n so that YADE's volumetric law gives F_n = K_n V; with
+in drystone/mechanics/laws.py): young = 2 K_n so that YADE's volumetric law gives F_n = K_n V; with
 the project's law frictionAngle = 0 (the stock law's shared shear is zeroed every step, and
 the tangential force and damping come from ``contact_engine``), with the stock law friction
 angle atan(mu), shear stiffness ks = K_t A_ref and no damping.
@@ -16,21 +16,21 @@ from __future__ import annotations
 import yade
 from yade import utils
 
-from drystone import laws
+from drystone.mechanics import laws
 
 DYNAMIC_MASK = 0b01
 STATIC_MASK = 0b11  # shares bit 0b10 with every other non-moving body
 
 
 def _material(mat: dict, law: str, stock_shear_area: float):
-    """The law's mapping of a material onto PolyhedraMat (drystone/laws.py)."""
+    """The law's mapping of a material onto PolyhedraMat (drystone/mechanics/laws.py)."""
     m = laws.get(law).yade_material(mat, stock_shear_area)
     return yade.PolyhedraMat(young=m["young"], poisson=m["poisson"], density=mat["density"],
                              frictionAngle=m["frictionAngle"], label=mat["name"])
 
 
 def build(spec, integrate: bool = True) -> dict:
-    """Create materials, bodies and engines of ``spec`` (a drystone.spec.Spec); return lookup tables. ``integrate=False``
+    """Create materials, bodies and engines of ``spec`` (a drystone.model.spec.Spec); return lookup tables. ``integrate=False``
     leaves NewtonIntegrator out of the engines (the compiled step moves the bodies).
 
     Returns dict with ``yid`` (block id -> YADE id), ``bid`` (YADE id -> block id),

@@ -36,7 +36,7 @@ Where things go (``write``):
   sources, every run's record and draws). Both paths in the sweep file are relative: the
   base case relative to the sweep file, and each record (``stages.1.record``) relative to
   the base case's folder (cases/sacsayhuaman/), as a case file's record path is
-  (drystone.stages), i.e. ``../../results/fragility/records/...``.
+  (drystone.model.stages), i.e. ``../../results/fragility/records/...``.
 
 The ``small`` config (2 records x 2 stripes = 4 runs) cuts the record to its first
 ``record_duration_s`` = 2 s (the excitation stage's ``duration`` key: small config

@@ -176,7 +176,7 @@ def cost(rows: list[dict], reference: list[dict] | None = None) -> dict:
     """Measured cost of the finished runs and the projected cost of the full plan.
 
     Model: wall = overhead + steps x (YADE s per step), steps = (gravity + record + rest) /
-    dt, dt = c / sqrt(K_n) (the critical step of drystone.timestep scales as K_n^-1/2 with
+    dt, dt = c / sqrt(K_n) (the critical step of drystone.model.timestep scales as K_n^-1/2 with
     K_t / K_n fixed). Measured: s per step = sum of YADE wall / sum of steps of the finished
     runs; c = median(dt sqrt(K_n)); overhead = median(sweep wall - YADE wall) where the
     sweep ran the run (else assumed). Rest: median of the Table 3 runs when present (full

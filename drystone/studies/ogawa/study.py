@@ -43,7 +43,7 @@ import numpy as np
 import drystone
 from drystone import paths, sweep, tomlio
 from drystone.geometry import ogawa_blocks
-from drystone.spec import stage_type
+from drystone.model.spec import stage_type
 from drystone.studies.ogawa import mrb1d
 from drystone.units import G_STANDARD
 
@@ -194,7 +194,7 @@ def run_residuals(folder: Path) -> list[dict]:
     each block, deg) and ``overturned`` (block ids whose rotation exceeds their tipping
     angle atan(length / height), the angle at which the centre of mass passes over the
     edge the block rocks on: it no longer stands on its own base, or it fell)."""
-    from drystone import rotations
+    from drystone.mechanics import rotations
     from drystone.postprocess import summary as summ
 
     folder = Path(folder)

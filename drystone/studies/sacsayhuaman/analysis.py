@@ -22,7 +22,7 @@ import numpy as np
 
 from drystone.motions import spectra
 from drystone.postprocess import summary as summ
-from drystone.spec import stage_type
+from drystone.model.spec import stage_type
 
 #: identification peaks: local maxima of the Konno-Ohmachi-smoothed spectrum (b = 100, a
 #: narrower window than the records' b = 40, to keep close modes apart) with height and
@@ -99,7 +99,7 @@ def residuals(out: Path) -> dict:
     the 3D measure ``norm_m`` (|u|), ``max_norm_m``, ``norm_stones``; ``moved`` (|u_y| >
     MOVED_M); ``collapsed`` by the paper's reading (``COLLAPSE``), ``all_collapsed``, and
     ``collapsed_summary`` (summary.json's 3D rule, for comparison); ``left_model``: the stones
-    that left the model (summary.json's ``motion`` "unbounded", drystone/stability.py
+    that left the model (summary.json's ``motion`` "unbounded", drystone/mechanics/stability.py
     ModelRegion: fallen off the platform or thrown away): collapsed, their residuals None and
     left out of the maxima (0 when no stone is left on the model); ``settled``, ``settle``
     (run_info's record) and ``end_time_s``."""
@@ -296,7 +296,7 @@ def white_noise_identification(out: Path) -> dict:
 
 
 def modal_analysis(out: Path, n_modes: int = 12) -> dict:
-    """Linearised modes of the wall on its joint springs (drystone/modal.py) at the settled
+    """Linearised modes of the wall on its joint springs (drystone/mechanics/modal.py) at the settled
     state of a run (end of gravity): the lowest ``n_modes`` frequencies (Hz), effective
     mass ratios for a base motion out of plane (y) and in plane (x), the out-of-plane
     displacement of A-D and of every free block's centroid per mode (mass-normalised)."""

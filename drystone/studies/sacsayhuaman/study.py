@@ -23,7 +23,7 @@ import numpy as np
 
 from drystone import paths, sweep, tomlio
 from drystone.postprocess import compare
-from drystone.spec import stage_type
+from drystone.model.spec import stage_type
 from drystone.studies.sacsayhuaman import analysis as an
 from drystone.studies.sacsayhuaman import figures as fig
 
@@ -177,7 +177,7 @@ def identification_report(out: Path = OUT) -> Path:
                          f"{zs or '-'} |")
     lines += ["", f"![transfer functions]({fig.transfer_functions(results, modal, out / 'identification_transfer.png').name})",
               "", "## (c) Linearised modes on the joint springs", "",
-              f"drystone/modal.py at the settled state (t = {modal['sample_time_s']:.2f} s of {st['modal_run'].name}): "
+              f"drystone/mechanics/modal.py at the settled state (t = {modal['sample_time_s']:.2f} s of {st['modal_run'].name}): "
               f"{modal['ndof']} DOFs, {modal['contacts']} contacts, K_n V normal + K_t A_c tangential springs, gravity's "
               f"geometric stiffness included. The recorded settled state is out of balance by up to "
               f"{modal['residual']:.1e} of a block's weight (the tangential forces stored during settling are not "
@@ -345,7 +345,7 @@ SETTLE_KEYS = ("duration", "until_kinetic_below", "until_kinetic_below_per_weigh
 def settle_overrides(index: int = 2) -> list[str]:
     """Overrides giving stage ``index`` of the sine case the rest-until-settled of
     cases/sacsayhuaman/record.toml (its last stage): one threshold for every residual."""
-    from drystone import case as casemod
+    from drystone.model import case as casemod
 
     rest = casemod.load(RECORD_CASE)["stages"][-1]
     return [f"stages.{index}.{k}={rest[k]!r}" for k in SETTLE_KEYS if rest.get(k) is not None]

@@ -36,7 +36,7 @@ spring plus dashpot stay within the Coulomb cap mu F_n (``cap_damping``).
 A_c, the contact area, is estimated from the overlap volume, its extent along the joint's
 face normal (``projection_direction``, from both blocks' vertices) and the depth of its
 centroid (``contact_area``): exact for uniform and for wedge-shaped overlaps. The patch's
-centroid and second moment come from the exact overlap (``drystone.overlap``).
+centroid and second moment come from the exact overlap (``drystone.mechanics.overlap``).
 """
 from __future__ import annotations
 
@@ -48,7 +48,7 @@ from drystone.geometry import blockfile as bf
 #: ignore contacts thinner than this (m) or with no volume: failed intersections in
 #: YADE leave such values behind
 MIN_DEPTH = 1e-18
-#: contact geometries: ``native`` (drystone.overlap; this law only) and ``yade`` (YADE's
+#: contact geometries: ``native`` (drystone.mechanics.overlap; this law only) and ``yade`` (YADE's
 #: polyhedra intersection, CGAL)
 DETECTIONS = ("native", "yade")
 

@@ -1,6 +1,6 @@
 """The run specification (spec.json): typed, frozen, versioned.
 
-``Spec`` and ``StageSpec`` are frozen dataclasses built by ``drystone.resolve.resolve``;
+``Spec`` and ``StageSpec`` are frozen dataclasses built by ``drystone.model.resolve.resolve``;
 their nested tables are read-only (mappings as ``MappingProxyType``, arrays as tuples).
 For the readers written against the JSON dict, both also give read-only mapping access
 (``spec["dt"]``, ``spec.get(...)``, ``"key" in spec``), which returns plain JSON data (a
@@ -120,8 +120,8 @@ class _ReadOnlyMapping(Mapping):
 
 @dataclass(frozen=True, eq=True)
 class StageSpec(_ReadOnlyMapping):
-    """One resolved stage: ``type`` (a key of drystone.stages.REGISTRY), absolute ``start``
-    and ``end`` (s), and the type's ``params`` (read-only; units in drystone/stages.py)."""
+    """One resolved stage: ``type`` (a key of drystone.model.stages.REGISTRY), absolute ``start``
+    and ``end`` (s), and the type's ``params`` (read-only; units in drystone/model/stages.py)."""
 
     type: str
     start: float
@@ -146,11 +146,11 @@ class Spec(_ReadOnlyMapping):
 
     name: str
     out_dir: str  # the run's folder (runner: where it will live; excitation samples lie there)
-    law: str  # a contact law of drystone.laws.REGISTRY
+    law: str  # a contact law of drystone.mechanics.laws.REGISTRY
     detection: str  # native or yade
     dt: float  # s
     dt_critical: float  # s
-    dt_critical_detail: Mapping  # the critical contact (drystone/timestep.py)
+    dt_critical_detail: Mapping  # the critical contact (drystone/model/timestep.py)
     gravity: float  # m/s^2
     materials: Mapping  # name -> density kg/m^3, kn kt N/m^3, mu, damping
     blocks: tuple  # {id, role, material, vertices m, blocked_dofs}

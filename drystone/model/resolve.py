@@ -1,8 +1,8 @@
-"""The run specification: a validated case (drystone/case.py) turned into what YADE
-executes (a drystone.spec.Spec, written as spec.json), in jobs: geometry (``_geometry``),
+"""The run specification: a validated case (drystone/model/case.py) turned into what YADE
+executes (a drystone.model.spec.Spec, written as spec.json), in jobs: geometry (``_geometry``),
 materials (``_materials``), checks of the blocks the case names (``_check_references``),
 contact detection, the time step (``_time_step``), the stages (``_stages``: each type's
-``resolve`` in drystone/stages.py), collapse thresholds and joints (``_collapse_threshold``,
+``resolve`` in drystone/model/stages.py), collapse thresholds and joints (``_collapse_threshold``,
 ``_joint_overrides``). ``fingerprint`` says what a spec simulates. Core layer: imports
 geometry, motions and the core, never postprocess.
 """
@@ -15,14 +15,15 @@ from pathlib import Path
 
 import numpy as np
 
-from drystone import case as casemod
-from drystone import inputfiles, laws, overlap
-from drystone import timestep
+from drystone.model import case as casemod
+from drystone import inputfiles
+from drystone.mechanics import laws, overlap
+from drystone.model import timestep
 from drystone.geometry import blockfile as bf
 from drystone.geometry import generators
 from drystone.geometry import polyhedron as ph
-from drystone.spec import SPEC_FORMAT, SPEC_VERSION, Spec, StageSpec, spec_dict  # noqa: F401
-from drystone.stages import AXES, REGISTRY, TOWARDS, ResolveContext, initial_relative_velocity  # noqa: F401
+from drystone.model.spec import SPEC_FORMAT, SPEC_VERSION, Spec, StageSpec, spec_dict  # noqa: F401
+from drystone.model.stages import AXES, REGISTRY, TOWARDS, ResolveContext, initial_relative_velocity  # noqa: F401
 
 
 def _geometry(case: dict, where: str, out: Path, check_overlaps: bool = True) -> tuple[bf.BlockSet, dict]:
@@ -69,8 +70,8 @@ def _materials(case: dict, bs: bf.BlockSet, where: str) -> dict:
 def _check_force_depth(f: dict, k: int, bs: bf.BlockSet, mats: dict, where: str) -> None:
     """Refuse an applied force the penalty contact cannot hold: pressed on its largest face,
     the block would sink F / (K_n A) into its support, more than the depth at which the run
-    stops as tunnelling (drystone/stability.py)."""
-    from drystone import stability
+    stops as tunnelling (drystone/mechanics/stability.py)."""
+    from drystone.mechanics import stability
 
     b = bs.block(f["block"])
     area = timestep.largest_face_area(b.vertices)
@@ -143,7 +144,7 @@ def _time_step(case: dict, bs: bf.BlockSet, blocks: list[dict], mats: dict, wher
 
 
 def _stages(case: dict, bs: bf.BlockSet, dt: float, where: str, out: Path) -> tuple[list[StageSpec], list[dict]]:
-    """The resolved stages, contiguous from t = 0 (each type's ``resolve``: drystone/stages.py),
+    """The resolved stages, contiguous from t = 0 (each type's ``resolve``: drystone/model/stages.py),
     and the excitations' metadata (their samples are saved into ``out``)."""
     ctx = ResolveContext(where=where, out=out, dt=dt, ids=set(bs.ids()), free=set(bs.ids("free")))
     stages, t = [], 0.0

@@ -2,13 +2,13 @@
 YADE driver, drystone/yade_scripts/run_case.py, runs them sorted by their ``order``). Each may stop
 the run at a time (``run.stop_at``), stop it with a named failure (``run.fail``: no
 histories, exit 3) and report what it found in run_info.json (``info``). Two are always
-on (``Stability``: drystone/stability.py's checks; ``LeftModel``: blocks that left the
+on (``Stability``: drystone/mechanics/stability.py's checks; ``LeftModel``: blocks that left the
 model); the stage types add their own when their stage starts (``StageType.monitor`` in
-drystone/stages.py: a tilt stage's ``Collapse``, a last rest stage's ``Settle``). ``Progress``
+drystone/model/stages.py: a tilt stage's ``Collapse``, a last rest stage's ``Settle``). ``Progress``
 runs at every step instead.
 
 No YADE import. ``run`` is the driver as the monitors see it: ``spec_name``, ``prog``
-(drystone.loading.LoadProgramme), the arrays ``pos``, ``vel`` (bodies, m, m/s) and
+(drystone.model.loading.LoadProgramme), the arrays ``pos``, ``vel`` (bodies, m, m/s) and
 ``dyn`` (the free bodies' indices), ``pos0``, ``mass`` (kg, inf for non-moving), ``bid``
 (index -> block id), ``w_free`` (the free blocks' weight, N), ``forces`` (applied forces:
 (index, force, start, end)), ``g_integral`` (integral of |g_eff| dt so far, m/s),
@@ -22,14 +22,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drystone import stability
+from drystone.mechanics import stability
 
 
 @dataclass
 class Sample:
     """What the recorder measured at one sample: time t (s), body acceleration g (3,)
     m/s^2, kinetic energy ke (J) and per free block ke_b, elastic energy (J, NaN where the
-    law stores none), the contacts (drystone.contact_step.ContactState) and the reaction R
+    law stores none), the contacts (drystone.mechanics.contact_step.ContactState) and the reaction R
     (3,) of the moving blocks on the non-moving ones (N)."""
 
     t: float
@@ -95,7 +95,7 @@ class Settle(Monitor):
 
 class Stability(Monitor):
     """Stop the run (no histories, exit 3, failure.txt) at the first sample whose numbers
-    are not physics (drystone/stability.py): non-finite state, energy grown past the loads'
+    are not physics (drystone/mechanics/stability.py): non-finite state, energy grown past the loads'
     work, speeds beyond what the loads can give, tunnelling."""
 
     order = 1
@@ -182,7 +182,7 @@ class Collapse(Monitor):
     of the moving blocks drops by ``reaction_drop`` of their weight (the paper's Figure 13)
     or a block moves more than its collapse threshold; the run stops ``after_collapse`` s
     later. The collapse angle (the onset of the motion that led to the detection) is found
-    afterwards from the histories: drystone/collapse.py, called by
+    afterwards from the histories: drystone/mechanics/collapse.py, called by
     drystone/postprocess/summary.py. Run-wide: the first detection of any tilt stage."""
 
     order = 3

@@ -15,9 +15,9 @@ angles and the vertical reaction against time and tilt for every seed (Figure 13
 Missing sweeps are reported as missing, never filled in. Angles in degrees.
 
 Two collapse angles per wall: the *onset* angle (where the motion that led to the collapse
-began, drystone/collapse.py ``onset``: ``collapse_angle_deg``) and the paper's
+began, drystone/mechanics/collapse.py ``onset``: ``collapse_angle_deg``) and the paper's
 *reaction-drop* angle (its Figure 13: the tilt at which the vertical reaction of the moving
-stones first falls 5 % below their weight, drystone/collapse.py ``reaction_drop``:
+stones first falls 5 % below their weight, drystone/mechanics/collapse.py ``reaction_drop``:
 ``reaction_drop_angle_deg``). The headline (``headline``) is the constant-section walls
 (every stone extruded through the mean thickness, as the paper's model was built: the
 like-for-like comparison), beside the varying-depth walls (our hypothesis for the real,
@@ -33,7 +33,7 @@ import numpy as np
 
 from drystone import paths
 from drystone.postprocess import compare
-from drystone.spec import stage_type
+from drystone.model.spec import stage_type
 
 OUT = paths.RESULTS / "tilt"
 RATE_TOLERANCE_DEG = 0.2  # issue 5 §2: a faster rate may not move the collapse angle more than this
@@ -202,10 +202,10 @@ def headline_md(summary: dict) -> list[str]:
     hl = summary.get("headline") or {"rows": []}
     lines = ["## Collapse angle: both definitions, both geometries", "",
              "Onset: the tilt where the motion that led to the collapse began (5 mm of block motion per degree "
-             "of tilt over 0.2 deg; drystone/collapse.py `onset`). Reaction drop: the paper's criterion (Fig. 13), "
+             "of tilt over 0.2 deg; drystone/mechanics/collapse.py `onset`). Reaction drop: the paper's criterion (Fig. 13), "
              "the tilt at which the vertical reaction of the moving stones on the platform and fixed course first "
              f"falls below {1 - summary.get('reaction_drop_fraction', 0.05):.2f} of their weight "
-             "(drystone/collapse.py `reaction_drop`). The constant-section walls are the like-for-like "
+             "(drystone/mechanics/collapse.py `reaction_drop`). The constant-section walls are the like-for-like "
              "comparison with the paper's model (its blocks were extruded from the front face).", "",
              "| walls | onset angle (deg) | reaction-drop angle (deg) | within the experiment's ±1 sd (onset; drop) |",
              "|---|---|---|---|",
@@ -312,7 +312,7 @@ def reaction_figure(rows: list[dict], path: Path) -> Path | None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from drystone.loading import LoadProgramme
+    from drystone.model.loading import LoadProgramme
     from drystone.postprocess import summary as summ
 
     done = [r for r in rows if r["finished"]]

@@ -1,12 +1,12 @@
-"""Run one LMGC90 model: ``python -m drystone.crosscheck.engine JOB.json`` (one per process).
+"""Run one LMGC90 model: ``python -m drystone.studies.crosscheck.engine JOB.json`` (one per process).
 
 LMGC90 keeps one simulation per process and a Fortran STOP ends the process, so the
-parent (``drystone.crosscheck.lmgc90``) starts this module in a subprocess for every run
+parent (``drystone.studies.crosscheck.lmgc90``) starts this module in a subprocess for every run
 and reads back what it wrote into the job's folder: ``lmgc90_histories.npz`` and
 ``lmgc90_result.json`` (written last: its presence marks a complete run).
 
-The job (JSON): ``model`` (``drystone.crosscheck.translate.to_lmgc90``), ``spec`` (path
-of the run's spec.json, whose stages give the load programme, ``drystone.loading``),
+The job (JSON): ``model`` (``drystone.studies.crosscheck.translate.to_lmgc90``), ``spec`` (path
+of the run's spec.json, whose stages give the load programme, ``drystone.model.loading``),
 ``folder`` (the run folder: excitation samples), ``dt`` (s), ``theta`` (the theta
 method's parameter, 0.5 to 1), ``base`` (``"body_force"``: a base acceleration is the
 inertial body force -a_b on every block, as this package applies it; ``"moving"``: the
@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from drystone.loading import LoadProgramme
+from drystone.model.loading import LoadProgramme
 
 HISTORIES = "lmgc90_histories.npz"
 RESULT = "lmgc90_result.json"
@@ -268,7 +268,7 @@ class Engine:
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     if len(argv) != 1:
-        print("usage: python -m drystone.crosscheck.engine JOB.json", file=sys.stderr)
+        print("usage: python -m drystone.studies.crosscheck.engine JOB.json", file=sys.stderr)
         return 2
     job = json.loads(Path(argv[0]).read_text())
     res = Engine(job).run()

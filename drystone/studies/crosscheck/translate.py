@@ -22,7 +22,7 @@ as vertices relative to the body's reference point and outward triangles. Here:
   ``damping`` (the restitution is 0 whatever the damping).
 
 ``to_lmgc90(blockset, materials=None, joint_overrides=None)`` returns a JSON-serialisable
-dict (``MODEL_FORMAT``) that ``drystone.crosscheck.engine`` runs.
+dict (``MODEL_FORMAT``) that ``drystone.studies.crosscheck.engine`` runs.
 """
 from __future__ import annotations
 

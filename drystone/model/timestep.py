@@ -13,8 +13,8 @@ import math
 
 import numpy as np
 
-from drystone import contact as law
-from drystone.case import CaseError
+from drystone.mechanics import contact as law
+from drystone.model.keys import CaseError
 from drystone.geometry import polyhedron as ph
 
 # Most steps a run may take: ~2 days of YADE at ~3 ms per step (a wall of a few dozen

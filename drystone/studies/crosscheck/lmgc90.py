@@ -1,13 +1,13 @@
 """Run a case in LMGC90 (parent side): the same case dict this package runs.
 
-``prepare`` resolves the case exactly as ``drystone.runner`` does (``drystone.resolve``:
+``prepare`` resolves the case exactly as ``drystone.runner`` does (``drystone.model.resolve``:
 geometry from the block file or generator, materials with the case's overrides, the
 stages, collapse thresholds), writes spec.json and the LMGC90 model
-(``drystone.crosscheck.translate``); ``run`` starts ``drystone.crosscheck.engine`` in a
+(``drystone.studies.crosscheck.translate``); ``run`` starts ``drystone.studies.crosscheck.engine`` in a
 subprocess on it (one LMGC90 simulation per process; a Fortran STOP ends only that
 process and is reported as ``LMGC90Error`` with the end of its log), then reads the
 histories back; ``onset_angle`` dates a tilt collapse with the package's rule
-(``drystone.collapse.onset``), so both engines are read the same way.
+(``drystone.mechanics.collapse.onset``), so both engines are read the same way.
 """
 from __future__ import annotations
 
@@ -20,12 +20,13 @@ from pathlib import Path
 
 import numpy as np
 
-from drystone import case as casemod
-from drystone import collapse, paths
-from drystone.crosscheck import engine, translate
+from drystone.model import case as casemod
+from drystone.mechanics import collapse
+from drystone import paths
+from drystone.studies.crosscheck import engine, translate
 from drystone.geometry import blockfile as bf
-from drystone.resolve import resolve
-from drystone.spec import spec_dict
+from drystone.model.resolve import resolve
+from drystone.model.spec import spec_dict
 from drystone.tomlio import to_toml
 
 
@@ -74,7 +75,7 @@ def run(case_dict: dict, folder: Path, dt: float, theta: float = 0.5, base: str 
     t0 = time.time()
     with open(log, "w") as out:
         try:
-            proc = subprocess.run([sys.executable, "-m", "drystone.crosscheck.engine", str(job_path)], cwd=folder,
+            proc = subprocess.run([sys.executable, "-m", "drystone.studies.crosscheck.engine", str(job_path)], cwd=folder,
                                   env=env, stdout=out, stderr=subprocess.STDOUT, timeout=timeout_s)
         except subprocess.TimeoutExpired:
             raise LMGC90Error(f"LMGC90 run in {folder} exceeded {timeout_s} s; its log: {log}") from None
@@ -94,7 +95,7 @@ def run(case_dict: dict, folder: Path, dt: float, theta: float = 0.5, base: str 
 
 def onset_angle(run_out: dict) -> dict | None:
     """The collapse angle of an LMGC90 tilt run by the package's rule (the onset of the
-    motion that led to the detection: ``drystone.collapse.onset`` with the case's onset
+    motion that led to the detection: ``drystone.mechanics.collapse.onset`` with the case's onset
     keys), with the detection and the paper's reaction-drop angle; None without a collapse."""
     h, spec, res = run_out["histories"], run_out["spec"], run_out["result"]
     det = res.get("collapse")

@@ -7,7 +7,7 @@ engines, with the rigid closed form where there is one.
   deg; the rigid rocking equation with the same programme, read with the package's
   collapse rule, gives what a rigid engine must report (atan(b/h) + the rule's lag); the
   package's own closed form at finite K_n is the Winkler angle
-  (``drystone.analytic.toppling_tilt_deg``), which tends to atan(b/h) as K_n^(-1/3).
+  (``drystone.mechanics.analytic.toppling_tilt_deg``), which tends to atan(b/h) as K_n^(-1/3).
 * ``pulse``: one 0.2 m cube (mu 0.4) on the platform, a half-sine base pulse along y,
   A = 0.6 g = 5.886 m/s^2, T = 0.5 s (the package's sine excitation at 1 Hz from rest, run
   for half a period, then a rest stage). Closed form: the rigid-plastic slide
@@ -46,8 +46,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from drystone import analytic, paths
-from drystone.crosscheck import closed_forms as cf
+from drystone.mechanics import analytic
+
+from drystone import paths
+from drystone.studies.crosscheck import closed_forms as cf
 
 KN0 = 2e8  # N/m^3, the papers' (Table 1, FEM column)
 G = 9.81
@@ -83,7 +85,7 @@ def toppling_case(kn: float = KN0) -> dict:
 
 
 def toppling_closed_forms(spec: dict, kns, folder=None) -> dict:
-    from drystone.loading import LoadProgramme
+    from drystone.model.loading import LoadProgramme
 
     _, b, h = TOPPLE_SIZE
     prog = LoadProgramme.from_spec(spec)
@@ -123,7 +125,7 @@ def pulse_closed_forms(spec: dict, kns, folder=None) -> dict:
     package's samples, linearly interpolated)."""
     out = {"rigid_plastic": cf.half_sine_slide(PULSE_A, PULSE_T, PULSE_MU, spec["gravity"])}
     if folder is not None:
-        from drystone.loading import LoadProgramme
+        from drystone.model.loading import LoadProgramme
 
         prog = LoadProgramme.from_spec(spec, folder)
         t0 = _stage_start(spec, 1)

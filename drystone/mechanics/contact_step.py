@@ -3,16 +3,13 @@ arrays (no YADE import). ``drystone/yade_scripts/contact_engine.py`` runs it ins
 
 One call of ``CompiledStep.forces`` does what ``contact_engine.PenaltyCoulomb.step`` does
 with numpy (the reference: ``tests/test_compiled_step.py`` checks that both give the same
-forces, shear histories and damping to 1e-9): find the overlaps (``drystone.overlap``),
+forces, shear histories and damping to 1e-9): find the overlaps (``drystone.mechanics.overlap``),
 match each contact with its shear force of the previous step (contacts are keyed by the
 pair of body indices and come out sorted, so one merge walk matches them), apply the
-penalty–Coulomb law and the patch damping (``drystone.contact``), and sum the forces and
-torques on every body. ``integrate`` then advances the bodies one leapfrog step the way
-YADE's NewtonIntegrator (2023.02a) does, so that the state can stay in arrays between
-steps: translation v += dt (F/m + g), x += v dt on the free directions; rotation with
-Fincham's (1992) angular-momentum scheme for bodies free to rotate about all three axes
-(YADE's ``exactAsphericalRot``), and with the spherical update w += dt M / I (global
-components) for bodies with a blocked rotation, as YADE does.
+penalty–Coulomb law and the patch damping (``drystone.mechanics.contact``), and sum the forces and
+torques on every body. ``drystone.mechanics.integration.integrate`` then advances the
+bodies one leapfrog step as YADE's NewtonIntegrator does; ``CompiledStep.advance`` runs
+contact steps and integration one after another in one call.
 
 Units SI; quaternions (x, y, z, w) like YADE's; body arrays indexed by YADE body id.
 """
@@ -21,9 +18,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from drystone import contact as law
-from drystone import overlap as ov
-from drystone import rotations
+from drystone.mechanics import contact as law
+from drystone.mechanics import overlap as ov
+from drystone.mechanics.integration import integrate
 from drystone.geometry import polyhedron as ph
 
 
@@ -71,11 +68,11 @@ class NumpyStep:
     ``mass`` (n_bodies,) kg with inf for non-moving bodies.
 
     Contact geometry (``detection``): ``native`` computes every overlap itself
-    (``drystone.overlap``: exact volume and centroid, normal and area from the volume's
+    (``drystone.mechanics.overlap``: exact volume and centroid, normal and area from the volume's
     gradient) and applies the normal force K_n V too, so YADE only integrates the motion;
     ``yade`` reads the overlaps of YADE's ``Ig2_Polyhedra_Polyhedra_PolyhedraGeom`` (CGAL)
     and YADE's volumetric law applies K_n V along YADE's normal, A_c being estimated from
-    the overlap's extent (``drystone.contact.contact_area``).
+    the overlap's extent (``drystone.mechanics.contact.contact_area``).
     """
 
     def __init__(self, pair_props, mass, local_vertices, detection, inertia=None):
@@ -145,7 +142,7 @@ class NumpyStep:
         return ia, ib, vol, n, c, law.contact_area(vol, hi - lo, e), pa, pc, pj
 
     def native_geometry(self, bodies_state):
-        """Overlaps computed here (drystone.overlap): (ia, ib, volume, normal, point, area,
+        """Overlaps computed here (drystone.mechanics.overlap): (ia, ib, volume, normal, point, area,
         patch area, patch centroid, patch second moment)."""
         pos, _, _, rot = bodies_state
         s = self.shapes
@@ -380,7 +377,7 @@ class CompiledStep:
     each pair of materials; ``joints`` {(ia, ib): (kn, kt, mu, damping)} overrides for
     pairs of bodies; ``size`` (nb,) each body's smallest dimension (m): ``depth_ratio``
     is the largest contact depth V/A over the smaller size of its two bodies (the
-    tunnelling check, ``drystone.stability``). ``state`` is the last step's contacts as a
+    tunnelling check, ``drystone.mechanics.stability``). ``state`` is the last step's contacts as a
     ``ContactState`` (built when asked for)."""
 
     def __init__(self, mass, inertia, local_vertices, material, table, joints=None, size=None):
@@ -459,157 +456,7 @@ class CompiledStep:
         return self._state
 
 
-# -- motion ---------------------------------------------------------------------------
-
-@njit(cache=True)
-def _quat_matrix(q, R):
-    """R = rotation matrix of the unit quaternion q (x, y, z, w), the same arithmetic as
-    ``rotations.to_matrix`` (touching faces make contacts sensitive to its round-off)."""
-    x, y, z, w = q[0], q[1], q[2], q[3]
-    R[0, 0] = 1 - 2 * (y * y + z * z)
-    R[0, 1] = 2 * (x * y - z * w)
-    R[0, 2] = 2 * (x * z + y * w)
-    R[1, 0] = 2 * (x * y + z * w)
-    R[1, 1] = 1 - 2 * (x * x + z * z)
-    R[1, 2] = 2 * (y * z - x * w)
-    R[2, 0] = 2 * (x * z - y * w)
-    R[2, 1] = 2 * (y * z + x * w)
-    R[2, 2] = 1 - 2 * (x * x + y * y)
-
-
-@njit(cache=True)
-def _eigen_matrix(q, R):
-    """R = rotation matrix of q (x, y, z, w) as Eigen computes it (YADE's ``A`` in the
-    aspherical integration)."""
-    x, y, z, w = q[0], q[1], q[2], q[3]
-    tx, ty, tz = 2.0 * x, 2.0 * y, 2.0 * z
-    twx, twy, twz = tx * w, ty * w, tz * w
-    txx, txy, txz = tx * x, ty * x, tz * x
-    tyy, tyz, tzz = ty * y, tz * y, tz * z
-    R[0, 0] = 1.0 - (tyy + tzz)
-    R[0, 1] = txy - twz
-    R[0, 2] = txz + twy
-    R[1, 0] = txy + twz
-    R[1, 1] = 1.0 - (txx + tzz)
-    R[1, 2] = tyz - twx
-    R[2, 0] = txz - twy
-    R[2, 1] = tyz + twx
-    R[2, 2] = 1.0 - (txx + tyy)
-
-
-@njit(cache=True)
-def _dot_q(w, q, out):
-    """dQ/dt into ``out`` (4,) for the body-frame angular velocity w at orientation q (x, y, z, w)."""
-    out[3] = (-q[0] * w[0] - q[1] * w[1] - q[2] * w[2]) / 2.0
-    out[0] = (q[3] * w[0] - q[2] * w[1] + q[1] * w[2]) / 2.0
-    out[1] = (q[2] * w[0] + q[3] * w[1] - q[0] * w[2]) / 2.0
-    out[2] = (-q[1] * w[0] + q[0] * w[1] + q[3] * w[2]) / 2.0
-
-
-@njit(cache=True)
-def _to_body(A, x, inertia, out):
-    """out = (A x) / inertia, elementwise (3,): A x row by row, left to right, as Eigen's
-    3 x 3 product without fused multiply-adds (numpy's ``@`` calls BLAS, whose order and
-    FMAs differ in the last bit)."""
-    for a in range(3):
-        out[a] = (A[a, 0] * x[0] + A[a, 1] * x[1] + A[a, 2] * x[2]) / inertia[a]
-
-
-@njit(cache=True)
-def _normalise(q):
-    """q /= |q|, summing the squares in the order of Eigen's vectorised norm (YADE)."""
-    s = np.sqrt((q[0] * q[0] + q[2] * q[2]) + (q[1] * q[1] + q[3] * q[3]))
-    for i in range(4):
-        q[i] /= s
-
-
-@njit(cache=True)
-def integrate(dt, g, F, T, mass, inertia, lin_free, rot_free, aspherical, pos, vel, angvel, angmom, quat, rot):
-    """One leapfrog step of every body, in place (module docstring). ``g`` (3,) body
-    acceleration m/s^2; F, T (nb, 3) N, N m; lin_free, rot_free (nb, 3) 1.0 on free
-    directions (all 0 for non-moving bodies, which still move with their velocity);
-    aspherical (nb,) bool: Fincham's scheme (all rotations free). ``rot`` is refreshed."""
-    nb = len(mass)
-    # work arrays, once per call (no allocation per body)
-    A = np.empty((3, 3))
-    conj = np.empty(4)
-    ln = np.empty(3)
-    wv = np.empty(3)
-    dq = np.empty(4)
-    qh = np.empty(4)
-    qn = np.empty(4)
-    for i in range(nb):
-        for a in range(3):
-            if lin_free[i, a] > 0.0:
-                vel[i, a] += dt * (F[i, a] / mass[i] + g[a])
-            pos[i, a] += vel[i, a] * dt
-        q = quat[i]
-        if aspherical[i]:
-            conj[0], conj[1], conj[2], conj[3] = -q[0], -q[1], -q[2], q[3]
-            _eigen_matrix(conj, A)  # global -> body
-            M = T[i]
-            for a in range(3):
-                ln[a] = angmom[i, a] + dt / 2.0 * M[a]
-            _to_body(A, ln, inertia[i], wv)  # body-frame angular velocity at the half step
-            _dot_q(wv, q, dq)
-            for a in range(4):
-                qh[a] = q[a] + dt / 2.0 * dq[a]
-            for a in range(3):
-                angmom[i, a] += dt * M[a]
-            _to_body(A, angmom[i], inertia[i], wv)  # ... and at the step's end
-            _dot_q(wv, qh, dq)
-            for a in range(4):
-                qn[a] = q[a] + dt * dq[a]
-            # angVel = qn * wh (Eigen's quaternion-vector product on the unnormalised qn):
-            # uv = 2 u x wh, w = wh + qn_w uv + u x uv
-            u0, u1, u2, w0, w1, w2 = qn[0], qn[1], qn[2], wv[0], wv[1], wv[2]
-            c0 = u1 * w2 - u2 * w1
-            c1 = u2 * w0 - u0 * w2
-            c2 = u0 * w1 - u1 * w0
-            c0, c1, c2 = c0 + c0, c1 + c1, c2 + c2
-            angvel[i, 0] = w0 + qn[3] * c0 + (u1 * c2 - u2 * c1)
-            angvel[i, 1] = w1 + qn[3] * c1 + (u2 * c0 - u0 * c2)
-            angvel[i, 2] = w2 + qn[3] * c2 + (u0 * c1 - u1 * c0)
-            _normalise(qn)
-            for a in range(4):
-                quat[i, a] = qn[a]
-        else:
-            for a in range(3):
-                if rot_free[i, a] > 0.0:
-                    angvel[i, a] += dt * T[i, a] / inertia[i, a]
-            w2 = angvel[i, 0] ** 2 + angvel[i, 1] ** 2 + angvel[i, 2] ** 2
-            if w2 != 0.0:
-                ang = np.sqrt(w2)
-                h = (ang * dt) * 0.5
-                s = np.sin(h)
-                r0, r1, r2, r3 = s * (angvel[i, 0] / ang), s * (angvel[i, 1] / ang), s * (angvel[i, 2] / ang), np.cos(h)
-                x0 = r3 * q[0] + r0 * q[3] + r1 * q[2] - r2 * q[1]
-                x1 = r3 * q[1] + r1 * q[3] + r2 * q[0] - r0 * q[2]
-                x2 = r3 * q[2] + r2 * q[3] + r0 * q[1] - r1 * q[0]
-                x3 = r3 * q[3] - r0 * q[0] - r1 * q[1] - r2 * q[2]
-                quat[i, 0], quat[i, 1], quat[i, 2], quat[i, 3] = x0, x1, x2, x3
-                _normalise(quat[i])
-            elif not lin_free[i].any() and not rot_free[i].any():
-                continue  # a non-moving body that does not turn keeps its orientation as given
-            else:
-                _normalise(quat[i])
-        _quat_matrix(quat[i], rot[i])
-
-
-def free_directions(blocked: str, moving: bool) -> tuple[np.ndarray, np.ndarray]:
-    """(translation, rotation) masks (3,) of 1.0 on the directions a body may use, from
-    YADE's ``blockedDOFs`` letters (x y z translations, X Y Z rotations)."""
-    if not moving:
-        return np.zeros(3), np.zeros(3)
-    blocked = blocked or ""
-    return (np.array([0.0 if c in blocked else 1.0 for c in "xyz"]),
-            np.array([0.0 if c in blocked else 1.0 for c in "XYZ"]))
-
-
-def matrices(quat) -> np.ndarray:
-    """Rotation matrices of (nb, 4) quaternions (``drystone.rotations``)."""
-    return rotations.to_matrix(quat)
-
+# -- many steps in one call ----------------------------------------------------------
 
 @njit(cache=True)
 def _advance(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, angvel, moving, inv_mass, inv_inertia_local,

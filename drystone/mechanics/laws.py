@@ -1,5 +1,5 @@
 """Contact laws: one class per law a case can name (``[contact] law``), registered in
-``REGISTRY`` (as the stage types in drystone/stages.py). A law says which contact
+``REGISTRY`` (as the stage types in drystone/model/stages.py). A law says which contact
 geometries it runs on and which is its default, how its materials map onto YADE's
 ``PolyhedraMat`` (drystone/yade_scripts/scene.py builds them), which step engine steps it
 (``engine``: a name in drystone/yade_scripts/engines.py) and whether it stores elastic
@@ -18,7 +18,7 @@ class ContactLaw:
     name: str = ""
     #: one line for the case-keys table
     meaning: str = ""
-    #: contact geometries it runs on (drystone.contact.DETECTIONS), the first its default
+    #: contact geometries it runs on (drystone.mechanics.contact.DETECTIONS), the first its default
     detections: tuple[str, ...] = ()
     #: the step engines it can run with (drystone/yade_scripts/engines.py), the first its default
     engines: tuple[str, ...] = ()
@@ -57,7 +57,7 @@ def get(name: str) -> ContactLaw:
 
 @register
 class PenaltyCoulomb(ContactLaw):
-    """The Sacsayhuaman paper's law (drystone/contact.py): volumetric normal force, per-contact
+    """The Sacsayhuaman paper's law (drystone/mechanics/contact.py): volumetric normal force, per-contact
     incremental shear with Coulomb's cap, damping as a fraction of critical per mode. On the
     native geometry the compiled engine steps it (or, ``--engine python``, the numpy law with
     YADE's integrator, the reference); on YADE's geometry the numpy law."""

@@ -159,7 +159,7 @@ def speed_check(t: float, mass, vel, kinetic_J: float, budget: float, free_weigh
     who = f"block {names[k]} moves at {speed[k]:.4g} m/s (its limit {lim[k]:.4g} m/s)" if len(speed) else "the blocks"
     return (f"velocities beyond what the loads can give at t = {t:.6g} s: {who}; kinetic energy {kinetic_J:.4g} J "
             f"against at most {(SPEED_FACTOR * budget + math.sqrt(e_tol)) ** 2:.4g} J from gravity, the base's "
-            f"motion, applied forces and velocity jumps (speed bound, drystone/stability.py): the integration is "
+            f"motion, applied forces and velocity jumps (speed bound, drystone/mechanics/stability.py): the integration is "
             f"unstable (time step too large for the contact stiffness, or forces too large for it)")
 
 
@@ -168,7 +168,7 @@ REGION_RULE = ("a free block has left the model when its centroid is below the s
                "horizontally from the bounding box of the supports and free blocks at t = 0 (or above its top) than "
                "the supports' horizontal size plus the fall height (top of the free blocks minus the supports' "
                "underside): nothing holds it any more, and its motion in the platform frame has no physical meaning "
-               "(drystone/stability.py ModelRegion)")
+               "(drystone/mechanics/stability.py ModelRegion)")
 
 
 class ModelRegion:
@@ -269,7 +269,7 @@ def speed_bound_ratio(t, mass, g_eff, kinetic, elastic, gravity, jumps=()) -> fl
 def replay(root) -> list[tuple[float, str]]:
     """``energy_bound_ratio`` of every finished run under ``root`` (folders with
     histories.npz, spec.json and run_info.json), ascending: how close each came to being
-    stopped. ``python -m drystone.stability [ROOT]`` prints them (default results/)."""
+    stopped. ``python -m drystone.mechanics.stability [ROOT]`` prints them (default results/)."""
     import glob
     import json
     from pathlib import Path

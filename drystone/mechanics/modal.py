@@ -5,8 +5,8 @@ given by the blocks' world vertices), each free block has 6 degrees of freedom: 
 translation u of its centroid (m) and a rotation vector theta (rad) about it, in global
 axes; DOFs a block may not use (YADE's ``blocked_dofs`` letters: x y z translations,
 X Y Z rotations) are left out. The generalised forces Q(q) are those of the project's law
-(``drystone/contact.py``) without damping, evaluated from the exact overlap geometry
-(``drystone.overlap.all_contacts``) of the perturbed configuration:
+(``drystone/mechanics/contact.py``) without damping, evaluated from the exact overlap geometry
+(``drystone.mechanics.overlap.all_contacts``) of the perturbed configuration:
 
 * normal: F_n = K_n V along the contact normal, at the overlap centroid (for a flat joint
   the resultant of a Winkler pressure K_n x penetration, so the rotational stiffness
@@ -47,9 +47,9 @@ import numpy as np
 from scipy import linalg
 from scipy.spatial import ConvexHull
 
-from drystone import contact as law
-from drystone import overlap
-from drystone.contact import combine
+from drystone.mechanics import contact as law
+from drystone.mechanics import overlap
+from drystone.mechanics.contact import combine
 from drystone.units import GRAVITY as G  # default gravity, m/s^2
 _LETTERS = "xyzXYZ"
 
@@ -104,7 +104,7 @@ class Assembly:
     """Blocks at a static configuration.
 
     vertices: per block, world vertices (n, 3) m; moving: per block bool; density kg/m^3,
-    kn, kt N/m^3 per block (pairs combine in series, ``drystone.contact.combine``);
+    kn, kt N/m^3 per block (pairs combine in series, ``drystone.mechanics.contact.combine``);
     blocked: per block a string of blocked DOF letters (x y z X Y Z; "" for none); ids:
     block ids for the tables; gravity: m/s^2 vector, default (0, 0, -GRAVITY) (the analysis of a
     run takes the run's own: ``drystone.postprocess.identification.wall_assembly``)."""
@@ -273,7 +273,7 @@ class Assembly:
     def damping(self, xi, at=None) -> np.ndarray:
         """Damping matrix C (ndof x ndof; N s/m, N s, N m s/rad) of the contact dashpots
         distributed over each contact patch, as the dynamic law applies them
-        (``drystone.contact.damping_matrix``: every mode of one contact's pair of blocks gets
+        (``drystone.mechanics.contact.damping_matrix``: every mode of one contact's pair of blocks gets
         ``xi``), at the configuration ``at`` (default q = 0), every contact sticking. ``xi``:
         fraction of critical, a scalar or one per block (a pair takes the mean). A wrench at
         the patch centroid p acts on block b through T_b = [[1, -[p - x_b]x], [0, 1]]."""

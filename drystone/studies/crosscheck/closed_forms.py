@@ -2,13 +2,13 @@
 
 * ``toppling_deg(b, h)``: a rigid block of base b (along the tilt) and height h on a rigid
   tilting plane, friction high enough not to slide (mu > b/h), topples at atan(b/h).
-* ``rocking_history``: the same block under a load programme (``drystone.loading``:
+* ``rocking_history``: the same block under a load programme (``drystone.model.loading``:
   gravity ramp and tilt), by its rigid rocking equation about the downhill toe,
       I_toe phi'' = m a(t) . dr/dphi,   I_toe = m (b^2 + h^2) / 3,
   with r(phi) the centroid relative to the toe (rotated by phi towards the tilt) and a(t)
   the body acceleration of the programme; phi stays 0 while the moment does not lift the
   heel (a unilateral, rigid contact; no sliding, no bouncing). Its centroid history, read
-  with the package's collapse rule (``drystone.collapse.onset``: the onset of a motion of
+  with the package's collapse rule (``drystone.mechanics.collapse.onset``: the onset of a motion of
   5 mm per degree of tilt), gives the angle a rigid engine must report with that rule:
   atan(b/h) plus the time the run-away takes to reach that rate (the rule's lag).
 * ``half_sine_slide(A, T, mu, g)``: a rigid block on a base whose acceleration is the
@@ -31,19 +31,19 @@ import math
 
 import numpy as np
 
-from drystone import analytic, collapse
+from drystone.mechanics import analytic, collapse
 from drystone.units import GRAVITY
 
 
 def toppling_deg(b: float, h: float) -> float:
-    """atan(b/h) in degrees (``drystone.analytic.rigid_toppling_tilt_deg``)."""
+    """atan(b/h) in degrees (``drystone.mechanics.analytic.rigid_toppling_tilt_deg``)."""
     return analytic.rigid_toppling_tilt_deg(b, h)
 
 
 def rocking_history(b: float, h: float, prog, towards, t_end: float, interval: float, dt: float = 1e-4,
                     threshold: float | None = None) -> dict:
     """Rigid rocking of a b x h block (b along ``towards``) under ``prog`` (a
-    ``drystone.loading.LoadProgramme``) from t = 0 to ``t_end`` (s), integrated by RK4 with
+    ``drystone.model.loading.LoadProgramme``) from t = 0 to ``t_end`` (s), integrated by RK4 with
     step ``dt`` (s); samples every ``interval`` (s) as the package records them:
     ``{"t", "tilt_deg", "pos" (n, 1, 3) centroid relative to its start, "phi",
     "detected_time_s"}`` (the first sample where the centroid moved more than

@@ -14,11 +14,11 @@ platform, which therefore never moves in the simulation):
 * a sine excitation with ``start = "displacement"`` (the Sacsayhuaman paper's Eq. 9 as a
   base displacement) also carries the base's velocity jump at its start: every free block
   gets the relative velocity ``initial_relative_velocity`` = -(A / w) e when the stage
-  begins (``velocity_jump``; derivation in ``drystone.stages.initial_relative_velocity``);
+  begins (``velocity_jump``; derivation in ``drystone.model.stages.initial_relative_velocity``);
 * a settlement moves one non-moving block down at constant speed;
 * a last rest stage may end early once the kinetic energy has settled (``settle``).
 
-What each stage type imposes is declared with it (drystone/stages.py); ``LoadProgramme``
+What each stage type imposes is declared with it (drystone/model/stages.py); ``LoadProgramme``
 composes the stages' contributions at t: the body-force field and the imposed velocities.
 """
 from __future__ import annotations
@@ -29,8 +29,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from drystone import libm
-from drystone.spec import upgrade_stage
-from drystone.stages import REGISTRY, StageType
+from drystone.model.spec import upgrade_stage
+from drystone.model.stages import REGISTRY, StageType
 from drystone.units import GRAVITY
 
 Z = np.array([0.0, 0.0, 1.0])
@@ -38,7 +38,7 @@ Z = np.array([0.0, 0.0, 1.0])
 
 @dataclass
 class Stage:
-    """One resolved stage: ``type`` a key of drystone.stages.REGISTRY (gravity, settlement,
+    """One resolved stage: ``type`` a key of drystone.model.stages.REGISTRY (gravity, settlement,
     tilt, excitation, rest); absolute start and end times (s); ``params`` (copied: a
     programme may add to them, e.g. an excitation's samples)."""
 
@@ -54,7 +54,7 @@ class Stage:
 
     @property
     def behaviour(self) -> StageType:
-        """What the stage's type imposes (drystone/stages.py)."""
+        """What the stage's type imposes (drystone/model/stages.py)."""
         return REGISTRY[self.type]
 
 
@@ -79,7 +79,7 @@ class LoadProgramme:
 
     @classmethod
     def from_spec(cls, spec, folder=None) -> LoadProgramme:
-        """The programme of a spec (a drystone.spec.Spec, or a spec.json dict of any
+        """The programme of a spec (a drystone.model.spec.Spec, or a spec.json dict of any
         version); with ``folder`` (the run's), the files the stages need (excitation
         samples) are loaded from it."""
         stages = []

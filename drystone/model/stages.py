@@ -3,11 +3,11 @@
 Each type declares its case keys (``keys``; the README's key table is generated from
 them), checks a filled case stage (``validate``), turns it into its duration and the
 ``params`` of spec.json (``resolve``), and says what a resolved stage imposes at time t
-(the load hooks that drystone/loading.py's ``LoadProgramme`` composes). A hook of a type
+(the load hooks that drystone/model/loading.py's ``LoadProgramme`` composes). A hook of a type
 that imposes nothing returns its neutral value (None, zero, empty).
 
 Units: times s, angles deg, accelerations m/s^2, velocities m/s, lengths m; vectors in
-the platform frame (drystone/loading.py). No YADE import.
+the platform frame (drystone/model/loading.py). No YADE import.
 """
 from __future__ import annotations
 
@@ -18,9 +18,9 @@ from typing import ClassVar
 
 import numpy as np
 
-from drystone import monitors
-from drystone.case import REQUIRED, CaseError, Key
-from drystone.monitors import Monitor
+from drystone.mechanics import monitors
+from drystone.model.keys import REQUIRED, CaseError, Key
+from drystone.mechanics.monitors import Monitor
 from drystone.units import G_STANDARD
 
 Z = np.array([0.0, 0.0, 1.0])
@@ -52,7 +52,7 @@ class ResolveContext:
 class StageType:
     """A stage type. ``validate`` and ``resolve`` take the case stage (a dict filled with
     the defaults of ``keys``); the load hooks take a resolved stage ``st`` (``start``,
-    ``end`` s and ``params``, a drystone.loading.Stage) and a time ``t`` (s): the body-force
+    ``end`` s and ``params``, a drystone.model.loading.Stage) and a time ``t`` (s): the body-force
     hooks (``gravity_scale``, ``tilt_increment``, ``base_acceleration``) a 1-D array of times,
     evaluated element by element with the scalar formula (a programme's values at many steps
     in one call are those of one step at a time, bit for bit), the others one time."""
@@ -109,7 +109,7 @@ class StageType:
 
     def monitor(self, st, k: int, run) -> Monitor | None:
         """The job this stage (number ``k`` from 0) adds to every recorded sample from its
-        start (drystone/monitors.py; ``run``: the driver), or None."""
+        start (drystone/mechanics/monitors.py; ``run``: the driver), or None."""
         return None
 
     def load_samples(self, st, folder: Path) -> None:
@@ -300,7 +300,7 @@ class Excitation(StageType):
                      "a(t) = -A sin(wt) from a base at rest (the base velocity grows from 0); 'displacement' = the "
                      "paper's Eq. 9, base displacement d(t) = A/w^2 sin(wt), whose velocity A/w cos(wt) jumps from 0 "
                      "to A/w at the start: every free block gets the relative velocity -A/w along 'direction' when "
-                     "the stage begins (derivation: drystone/stages.py initial_relative_velocity)", str,
+                     "the stage begins (derivation: drystone/model/stages.py initial_relative_velocity)", str,
                      ("rest", "displacement")),
     }
 

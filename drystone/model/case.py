@@ -3,7 +3,7 @@
 ``load(path, overrides)`` reads a case, applies ``--set key=value`` overrides, refuses
 unknown keys, fills defaults and checks values, raising CaseError naming the file and
 key. ``python -m drystone keys`` prints the table below and the stage types' keys
-(drystone/stages.py; README points to it).
+(drystone/model/stages.py; README points to it).
 """
 from __future__ import annotations
 
@@ -12,30 +12,14 @@ import dataclasses
 import math
 import re
 import tomllib
-from dataclasses import dataclass
 from pathlib import Path
 
-from drystone import collapse, inputfiles, laws
+from drystone import inputfiles
 from drystone.geometry.blockfile import CONTACT_PROPERTIES, MATERIAL_PROPERTIES
+from drystone.model.keys import REQUIRED, CaseError, Key  # noqa: F401 (casemod.CaseError: callers read them here)
+from drystone.mechanics import collapse, laws
+from drystone.model.stages import REGISTRY as STAGE_TYPES
 from drystone.units import GRAVITY
-
-REQUIRED = object()
-
-
-class CaseError(ValueError):
-    """A case file problem; the message names the file and key."""
-
-
-@dataclass(frozen=True)
-class Key:
-    default: object
-    unit: str
-    meaning: str
-    kind: type | tuple = float
-    choices: tuple = ()
-    positive: bool = False  # > 0
-    nonneg: bool = False  # >= 0
-
 
 # -- the declaration --------------------------------------------------------------
 _PROPERTY = {  # each material property (the names: blockfile.MATERIAL_PROPERTIES)
@@ -62,8 +46,8 @@ SECTIONS: dict[str, dict[str, Key]] = {
     },
     "contact": {
         "law": Key(laws.DEFAULT, "-", " or ".join(f"{n} ({law.meaning})" for n, law in laws.REGISTRY.items())
-                   + " (drystone/laws.py)", str, tuple(laws.REGISTRY)),
-        "detection": Key("auto", "-", "contact geometry: native (drystone/overlap.py: exact overlap volume, "
+                   + " (drystone/mechanics/laws.py)", str, tuple(laws.REGISTRY)),
+        "detection": Key("auto", "-", "contact geometry: native (drystone/mechanics/overlap.py: exact overlap volume, "
                          "normal and area from its gradient, compiled; penalty_coulomb only), yade (YADE's "
                          "polyhedra intersection, CGAL) or auto (native with penalty_coulomb, yade with the "
                          "stock law)", str, ("auto", "native", "yade")),
@@ -85,7 +69,7 @@ SECTIONS: dict[str, dict[str, Key]] = {
                                      "'auto' = half the block's smallest dimension", (float, str)),
         "onset_rate": Key(collapse.RATE_M_PER_DEG, "m/deg", "in a tilt, a block that moves more than this "
                           "per degree of tilt (over onset_window) is moving: the collapse angle is the tilt "
-                          "where the motion that led to collapse began (drystone/collapse.py)", float,
+                          "where the motion that led to collapse began (drystone/mechanics/collapse.py)", float,
                           positive=True),
         "onset_window": Key(collapse.WINDOW_DEG, "deg", "tilt over which the onset rate is measured (filters "
                             "vibrations)", float, positive=True),
@@ -98,7 +82,7 @@ SECTIONS: dict[str, dict[str, Key]] = {
         "tilt_block": Key(None, "-", "block whose tilt (deg) is recorded for the slip report", int),
     },
 }
-# the keys of each stage type ([[stages]] type = ...) are declared with it: drystone/stages.py
+# the keys of each stage type ([[stages]] type = ...) are declared with it: drystone/model/stages.py
 
 
 def _kinds(spec: Key) -> tuple:
@@ -298,7 +282,7 @@ def validate(raw: dict, where: str, base_dir: Path, stem: str = "case", sweep_ru
     stages = raw.get("stages", [])
     if not isinstance(stages, list) or not stages:
         raise CaseError(f"{where}: at least one [[stages]] is required")
-    types = _stage_types()
+    types = STAGE_TYPES
     case["stages"] = []
     for k, s in enumerate(stages):
         w = f"{where} [[stages]] #{k + 1}"
@@ -323,14 +307,6 @@ def validate(raw: dict, where: str, base_dir: Path, stem: str = "case", sweep_ru
         if ref is not None and ref not in names:
             raise CaseError(f"{where}: [analysis] '{key}' names contact {ref!r}, not among [output] contacts {names}")
     return case
-
-
-def _stage_types() -> dict:
-    """The stage types (drystone/stages.py: their keys and checks), imported here at call
-    time because drystone.stages builds on this module's Key and CaseError."""
-    from drystone.stages import REGISTRY
-
-    return REGISTRY
 
 
 def _is_int(x) -> bool:
@@ -374,7 +350,7 @@ def describe() -> str:
         row("[materials.NAME]", name, k)
     for name, k in FORCE.items():
         row("[[forces]]", name, k)
-    for stype, t in _stage_types().items():
+    for stype, t in STAGE_TYPES.items():
         for name, k in t.keys.items():
             row(f"[[stages]] type = \"{stype}\"", name, k)
     return "\n".join(lines)

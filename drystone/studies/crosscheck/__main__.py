@@ -1,4 +1,4 @@
-"""``python -m drystone.crosscheck {small,all,report}``: the LMGC90 cross-check (issue 15, item 2).
+"""``python -m drystone.studies.crosscheck {small,all,report}``: the LMGC90 cross-check (issue 15, item 2).
 
 * ``small``: the toppling block and the half-sine pulse: LMGC90 (at its step and half of
   it), the closed forms, this package at K_n = 2e8 x 1, 10, 100 (~4 min on a quiet
@@ -17,11 +17,11 @@ import argparse
 import sys
 import time
 
-from drystone.crosscheck import cases, lmgc90_status
+from drystone.studies.crosscheck import cases, lmgc90_status
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m drystone.crosscheck", description=__doc__,
+    ap = argparse.ArgumentParser(prog="python -m drystone.studies.crosscheck", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("mode", choices=("small", "all", "report"))
     ap.add_argument("--cases", nargs="+", choices=sorted(cases.CASES), help="only these cases")
@@ -40,7 +40,7 @@ def main(argv=None) -> int:
         if not ok:
             print(f"crosscheck skipped: {msg}")
             return 0
-    from drystone.crosscheck import report, study
+    from drystone.studies.crosscheck import report, study
 
     out = study.OUT if args.out is None else args.out
     if args.mode == "report":

@@ -16,11 +16,11 @@ import time
 from pathlib import Path
 
 from drystone import paths
-from drystone.crosscheck import VERSION, cases, lmgc90, package
+from drystone.studies.crosscheck import VERSION, cases, lmgc90, package
 
 OUT = paths.RESULTS / "crosscheck"
 JSON = "crosscheck.json"
-FORMAT = "drystone.crosscheck"
+FORMAT = "drystone.studies.crosscheck"
 
 
 def load(out: Path = OUT) -> dict:

@@ -18,15 +18,15 @@ Modules:
   is written into LMGC90's module variables ``grav1..3`` before every step; a base motion
   is the platform's imposed velocity history; contact detection is re-run every step.
 * ``lmgc90``: the parent side: prepares a case exactly as the package does
-  (``drystone.resolve``: same geometry, materials, stages), starts the engine in a
+  (``drystone.model.resolve``: same geometry, materials, stages), starts the engine in a
   subprocess, reads its histories back and dates collapses with the package's own rule
-  (``drystone.collapse``).
+  (``drystone.mechanics.collapse``).
 * ``closed_forms``: the rigid-body references (toppling angle atan(b/h) and the rigid
   rocking equation with the same tilt programme; the rigid-plastic half-sine slide).
 * ``cases``: the four cross-check cases and the package-side runs at K_n = 2e8 and higher.
 * ``report``: ``results/crosscheck/``: crosscheck.json, report.md, figures.
 
-``python -m drystone.crosscheck {small,all,report}``.
+``python -m drystone.studies.crosscheck {small,all,report}``.
 """
 from __future__ import annotations
 

@@ -11,7 +11,7 @@ keeps its block's outward normal, which is outward for I too). From these polygo
   n, each weighted by the cosine between its normal and -n (so that faces across the joint
   count as their projection and faces along it not at all). Its area is |dV/dx_B|; its
   centroid p and its second moment J = int (x - p)(x - p)^T dA (m^4, a 3x3 tensor in the
-  plane) carry the distributed contact damping (``drystone.contact``).
+  plane) carry the distributed contact damping (``drystone.mechanics.contact``).
 
 The project's normal force F_n = K_n V (Sacsayhuaman paper Eq. 5 in YADE's volumetric form)
 then acts along  n = -dV/dx_B / |dV/dx_B|  (from A to B), the direction in which the
