@@ -5,6 +5,7 @@ import pytest
 import tolerances as tol
 from drystone.geometry import blockfile as bf
 from drystone.geometry import outlines as ol
+from drystone.geometry import polyhedron as ph
 from drystone.geometry import sacsayhuaman as sw
 
 
@@ -27,7 +28,9 @@ def test_two_stones_extruded_with_platform(tmp_path):
 
 
 @pytest.mark.parametrize("name, text, match", [
-    ("3.csv", "0 0\n1 0\n0.5 0.2\n1 1\n0 1\n", "not convex"),
+    ("3.csv", "0 0\n1 1\n1 0\n0 1\n", r"3\.csv \(stone 3\): stone outline crosses or touches itself"),
+    ("3.csv", "0 0\n1 0\n1 1\n2 1\n2 2\n1 2\n1 1\n0 1\n", r"\(stone 3\): .*coincide .*pinched"),
+    ("3.csv", "0 0\n1 0\n0.5 1e-7\n", r"\(stone 3\): the outline has no area"),
     ("3.csv", "0 0\n1 0\nabc def\n", r"3\.csv:3"),
     ("3.csv", "0 0\n1 0\n", "at least 3"),
     ("x.csv", "0 0\n1 0\n1 1\n", "named by the stone's id"),
@@ -56,3 +59,50 @@ def test_sacsayhuaman_layout_round_trip(tmp_path):
         assert got.block(bid).role == want.block(bid).role
         assert got.block(bid).blocked_dofs == want.block(bid).blocked_dofs
     assert {c["name"]: c["block"] for c in data["control_points"]} == {"A": 35, "B": 38, "C": 39, "D": 40}
+
+
+L_TEXT = "0 0\n2 0\n2 1\n1 1\n1 2\n0 2\n"  # x z, m: an L, re-entrant corner (1, 1)
+
+
+def test_convex_outlines_keep_version_1_and_one_vertex_list(tmp_path):
+    d = tmp_path / "w"
+    write(d, "1.csv", "0 0\n1 0\n1 0.5\n0 0.5\n")
+    data = ol.make(d, thickness=0.4, fix_bottom=False)
+    assert data["version"] == 1 and "parts" not in data["blocks"][1]
+    assert data["blocks"][1]["vertices"] == [[0.0, -0.2, 0.0], [0.0, 0.2, 0.0], [1.0, -0.2, 0.0], [1.0, 0.2, 0.0],
+                                             [1.0, -0.2, 0.5], [1.0, 0.2, 0.5], [0.0, -0.2, 0.5], [0.0, 0.2, 0.5]]
+
+
+def test_re_entrant_outline_becomes_one_stone_of_convex_parts(tmp_path):
+    """An L outline: one stone (id 2) of two extruded convex parts (the minimum), version 2,
+    the parts' volumes summing to the L's area x thickness; the convex stone beside it
+    keeps its vertex list."""
+    d = tmp_path / "w"
+    write(d, "1.csv", "0 -1\n2 -1\n2 0\n0 0\n")
+    write(d, "2.csv", L_TEXT)
+    data = ol.make(d, thickness=0.4)
+    assert data["version"] == bf.PARTS_VERSION
+    one, two = data["blocks"][1], data["blocks"][2]
+    assert "vertices" in one and "parts" not in one
+    assert "vertices" not in two and len(two["parts"]) == 2
+    area = 0.0
+    for part in two["parts"]:
+        v = np.asarray(part)
+        assert sorted(set(v[:, 1])) == [-0.2, 0.2] and len(v) == 2 * len(set(map(tuple, v[:, [0, 2]])))
+        front = v[v[:, 1] < 0][:, [0, 2]]
+        area += 0.5 * abs(np.sum(front[:, 0] * np.roll(front[:, 1], -1) - np.roll(front[:, 0], -1) * front[:, 1]))
+    assert area == pytest.approx(3.0, rel=tol.EXACT_REL)
+    bs = bf.parse(data)
+    assert bs.ids("fixed") == [1] and bs.ids("free") == [2]
+    assert sum(ph.volume_centroid(p)[0] for p in bs.block(2).parts) == pytest.approx(3.0 * 0.4, rel=tol.NUMERICAL_REL)
+
+
+def test_notched_outline_once_refused_is_a_two_part_stone(tmp_path):
+    """The re-entrant pentagon this file used to refuse ("not convex"): two parts now,
+    their volumes summing to its area (the square less the notch 0.5 x 1 x 0.5: 0.75 m^2) x thickness."""
+    d = tmp_path / "w"
+    write(d, "3.csv", "0 0\n1 0\n0.5 0.2\n1 1\n0 1\n")
+    bs = bf.parse(ol.make(d, thickness=0.5, fix_bottom=False))
+    parts = bs.block(3).parts
+    assert len(parts) == 2
+    assert sum(ph.volume_centroid(p)[0] for p in parts) == pytest.approx(0.75 * 0.5, rel=tol.NUMERICAL_REL)

@@ -1,6 +1,6 @@
 """The block-definition file: read, validate, write.
 
-Format ``drystone.blocks`` version 1, a JSON object (units: metres, kilograms, seconds;
+Format ``drystone.blocks`` version 1 or 2, a JSON object (units: metres, kilograms, seconds;
 stiffness per unit contact area in N/m^3)::
 
     {
@@ -33,6 +33,20 @@ YADE-style subset of ``xyzXYZ`` for free blocks (x, y, z translations and rotati
 about them, global axes). Control points are points attached to a block (given in the
 initial configuration).
 
+Version 2: a block may give ``parts`` instead of ``vertices``: a list of convex parts,
+each a vertex list obeying the rules of ``vertices`` below, ``"parts": [[[x, y, z], ...],
+[[x, y, z], ...]]``: one stone, one rigid body, whose shape is the union of the parts (a
+non-convex stone cut into convex pieces). A block gives one of the two keys, never both;
+a version-1 file may not use ``parts``. The parts of one stone must not overlap each other
+by more than ``OVERLAP_TOL`` and must form one solid: every part joined to the others face
+to face (``joined``: two parts share a patch of their opposite, coplanar faces more than
+``JOIN_MIN_WIDTH`` wide); parts touching only along an edge or at a corner, or apart, are
+refused, naming the parts. Parts of one stone never contact each other; material, role,
+blocked dofs, joints and control points belong to the stone. Its mass, centroid and
+inertia are those of the union (``drystone.geometry.massprops``). At most
+``MAX_PARTS_PER_BLOCK`` parts, each of at most ``MAX_VERTICES_PER_BLOCK`` vertices.
+``BlockSet.to_dict`` writes version 1 when every block is one part, else version 2.
+
 Convexity: the format has no faces, so YADE builds each block as the convex hull of its
 vertices, and a non-convex stone would silently become its hull (an L-shaped block
 +17 % mass). Every vertex must therefore be a corner of the hull: a vertex inside it,
@@ -41,9 +55,10 @@ corners on the hull's faces), or repeating another vertex, is refused (``not_con
 tolerance ``CORNER_REL_TOL`` x the block's size). Repeated vertices are refused, not
 merged: a file lists each corner once, so that it is the block that runs.
 
-Size: a block has at most ``MAX_VERTICES_PER_BLOCK`` vertices (80): no convex block with
-more fits the contact kernel (``drystone/mechanics/overlap.py``). A block above it is refused
-before its hull is built; the checks of a block take memory linear in its vertices.
+Size: a block (each part, in version 2) has at most ``MAX_VERTICES_PER_BLOCK`` vertices
+(80): no convex block with more fits the contact kernel (``drystone/mechanics/overlap.py``).
+A block above it is refused before its hull is built; the checks of a block take memory
+linear in its vertices.
 
 Numbers: every coordinate, position and material value a finite JSON number (not a
 string, not true/false); ids integers; ``density`` within ``DENSITY_RANGE``.
@@ -52,6 +67,7 @@ Axes: x along the wall, y through its thickness (out of plane), z up.
 """
 from __future__ import annotations
 
+import itertools
 import json
 import math
 import os
@@ -64,10 +80,17 @@ from scipy.spatial import cKDTree
 
 from drystone import inputfiles
 
+from . import massprops
 from . import polyhedron as ph
 
 FORMAT = "drystone.blocks"
+#: the version written for blocks of one convex part each (``BlockSet.to_dict``) and by the
+#: generators: every reader of this package since version 1 reads it
 VERSION = 1
+#: the first version with multi-part stones (``parts``)
+PARTS_VERSION = 2
+#: the versions this reader reads
+VERSIONS = (VERSION, PARTS_VERSION)
 ROLES = ("free", "fixed", "platform")
 #: a vertex standing out of the block's other vertices by less than this x the block's
 #: size (the diagonal of its bounding box) is not a corner (far above round-off, far below
@@ -96,6 +119,20 @@ DENSITY_RANGE = (100.0, 100000.0)
 #: largest accepted initial overlap thickness between two blocks (m); 1 um is far below
 #: the elastic penetration of any case here (tens of um and more) and far above round-off.
 OVERLAP_TOL = 1e-6
+#: most convex parts a stone (version 2 ``parts``) may have. The outline splitter
+#: (drystone/geometry/decompose.py: cuts along diagonals) gives at most 2r + 1 pieces for r
+#: re-entrant corners (usually about r + 1), so 32 takes any outline with up to 15
+#: re-entrant corners, far more than a dressed or rubble stone's few notches. It bounds the costs quadratic in the parts: the validation's pairwise
+#: checks of one stone's parts (at most 496 pairs, each a linear programme at worst) and,
+#: once the engines take parts, the K_a x K_b part pairs of a contact between two stones.
+MAX_PARTS_PER_BLOCK = 32
+#: two parts of one stone are joined face to face when a face of one and a face of the
+#: other have opposite normals, lie within OVERLAP_TOL of each other's plane and overlap in
+#: a patch wider than this (m; the width 2 x area / perimeter, a strip's width). Parts
+#: touching along an edge or at a corner share a patch of no area, or, misaligned by up to
+#: OVERLAP_TOL (which the overlap check lets pass), a strip at most OVERLAP_TOL wide: ten
+#: times that refuses them, far below any real joint (centimetres: a stone's thickness).
+JOIN_MIN_WIDTH = 10 * OVERLAP_TOL
 
 #: the properties of a material, each a number: density (kg/m^3), kn and kt (N/m^3), mu (-),
 #: damping (fraction of critical); the one list of them (``Material``, a case's
@@ -107,7 +144,7 @@ CONTACT_PROPERTIES = ("kn", "kt", "mu", "damping")
 #: those a joint (one pair of blocks) may override
 JOINT_PROPERTIES = ("mu", "damping")
 MATERIAL_KEYS = {*MATERIAL_PROPERTIES, "friction_angle_deg", "description"}
-BLOCK_KEYS = {"id", "role", "material", "vertices", "blocked_dofs", "label"}
+BLOCK_KEYS = {"id", "role", "material", "vertices", "parts", "blocked_dofs", "label"}
 JOINT_KEYS = {"blocks", *JOINT_PROPERTIES}
 CP_KEYS = {"name", "block", "position"}
 TOP_KEYS = {"format", "version", "name", "description", "source", "units", "materials",
@@ -131,27 +168,75 @@ class Material:
 
 @dataclass
 class Block:
+    """A stone: one rigid body, the union of its convex ``parts`` (one for a convex block).
+
+    ``Block(id, role, material, vertices)`` with an (n, 3) array makes a one-part block, as
+    before version 2. ``vertices`` is that one part's array; a multi-part stone has no
+    ``vertices`` (GeometryError: it is not one convex body, and every consumer of
+    ``vertices`` builds one from it, the hull, which would be a bigger stone); ``points``
+    holds every part's vertices for bounding boxes and extents."""
     id: int
     role: str
     material: str
-    vertices: np.ndarray  # (n, 3) m
+    parts: tuple  # of (n_i, 3) arrays, m: convex parts, each its corners
     blocked_dofs: str = ""
     label: str = ""
-    _planes: tuple | None = field(default=None, repr=False, compare=False)
+    _part_planes: tuple | None = field(default=None, repr=False, compare=False)
+    _moments: massprops.Moments | None = field(default=None, repr=False, compare=False)
+
+    def __post_init__(self):
+        if isinstance(self.parts, np.ndarray):  # one part given as its vertex array
+            self.parts = (self.parts,)
+        self.parts = tuple(np.asarray(p, dtype=float) for p in self.parts)
+
+    def _one_part(self, what: str) -> None:
+        if len(self.parts) != 1:
+            raise GeometryError(
+                f"block {self.id} has {len(self.parts)} parts: its {what} is not one convex body "
+                "(use .parts, or .points for bounding boxes; multi-part stones are validated but not yet simulated)")
+
+    @property
+    def vertices(self) -> np.ndarray:
+        """(n, 3) m: the corners of a one-part block (GeometryError for a multi-part one)."""
+        self._one_part("vertices")
+        return self.parts[0]
+
+    @property
+    def points(self) -> np.ndarray:
+        """(n, 3) m: every part's vertices, in part order (a one-part block's ``vertices``):
+        for bounding boxes and extents, not a convex body."""
+        return self.parts[0] if len(self.parts) == 1 else np.vstack(self.parts)
+
+    def part_planes(self) -> tuple:
+        """Per part, the outward unit face normals (f, 3) and offsets (f,) m (cached)."""
+        if self._part_planes is None:
+            self._part_planes = tuple(ph.planes(ph.hull(p)) for p in self.parts)
+        return self._part_planes
 
     def planes(self) -> tuple[np.ndarray, np.ndarray]:
-        """Outward unit face normals (f, 3) and offsets (f,) m of the block (cached)."""
-        if self._planes is None:
-            self._planes = ph.planes(ph.hull(self.vertices))
-        return self._planes
+        """Outward unit face normals (f, 3) and offsets (f,) m of a one-part block (cached)."""
+        self._one_part("face planes")
+        return self.part_planes()[0]
+
+    def moments(self) -> massprops.Moments:
+        """Volume (m^3), centroid (m) and second moment about it (m^5) of the union of the
+        parts (cached)."""
+        if self._moments is None:
+            self._moments = massprops.union_moments(self.parts)
+        return self._moments
+
+    def mass_properties(self, density: float) -> massprops.MassProperties:
+        """Mass (kg), centroid (m), inertia about it (kg m^2), principal moments and axes at
+        ``density`` (kg/m^3)."""
+        return massprops.of_moments(self.moments(), density)
 
     @property
     def volume(self) -> float:
-        return ph.volume_centroid(self.vertices)[0]
+        return self.moments().volume
 
     @property
     def centroid(self) -> np.ndarray:
-        return ph.volume_centroid(self.vertices)[1]
+        return self.moments().centroid
 
 
 @dataclass
@@ -178,20 +263,29 @@ class BlockSet:
         b = self.block(bid)
         return self.materials[b.material].density * b.volume
 
+    def mass_properties(self, bid: int) -> massprops.MassProperties:
+        """Block ``bid``'s mass properties at its material's density (the union of its parts)."""
+        b = self.block(bid)
+        return b.mass_properties(self.materials[b.material].density)
+
     def to_dict(self) -> dict:
         mats = {}
         for m in self.materials.values():
             mats[m.name] = {k: getattr(m, k) for k in MATERIAL_PROPERTIES}
         blocks = []
         for b in self.blocks:
-            d = {"id": b.id, "role": b.role, "material": b.material,
-                 "vertices": [[float(x) for x in p] for p in b.vertices]}
+            d = {"id": b.id, "role": b.role, "material": b.material}
+            if len(b.parts) == 1:
+                d["vertices"] = [[float(x) for x in p] for p in b.parts[0]]
+            else:
+                d["parts"] = [[[float(x) for x in p] for p in part] for part in b.parts]
             if b.blocked_dofs:
                 d["blocked_dofs"] = b.blocked_dofs
             if b.label:
                 d["label"] = b.label
             blocks.append(d)
-        out = {"format": FORMAT, "version": VERSION, "name": self.name,
+        version = VERSION if all(len(b.parts) == 1 for b in self.blocks) else PARTS_VERSION
+        out = {"format": FORMAT, "version": version, "name": self.name,
                "description": self.description, "units": {"length": "m", "mass": "kg"},
                "materials": mats, "blocks": blocks}
         if self.source:
@@ -265,17 +359,18 @@ def _point(where: str, key: str, value) -> np.ndarray:
     return np.array(value, dtype=float)
 
 
-def _vertices(where: str, value) -> np.ndarray:
-    """The (n, 3) vertex array of a block (m), or GeometryError naming the vertex."""
+def _vertices(where: str, value, key: str = "'vertices'") -> np.ndarray:
+    """The (n, 3) vertex array of a block or part (m), or GeometryError naming the vertex
+    (``key``: how the message names the list)."""
     if not isinstance(value, (list, tuple, np.ndarray)):
-        raise GeometryError(f"{where}: 'vertices' must be a list of [x, y, z] numbers, got {value!r}")
+        raise GeometryError(f"{where}: {key} must be a list of [x, y, z] numbers, got {value!r}")
     if len(value) > MAX_VERTICES_PER_BLOCK:  # before any work on them (hull, convexity)
         raise GeometryError(f"{where}: {len(value)} vertices, more than {MAX_VERTICES_PER_BLOCK} vertices "
                             "(drystone.geometry.blockfile.MAX_VERTICES_PER_BLOCK: no convex block with more corners "
                             "fits the contact kernel); give the stone's hull fewer corners")
     for i, p in enumerate(value):
         if not isinstance(p, (list, tuple, np.ndarray)) or len(p) != 3:
-            raise GeometryError(f"{where}: 'vertices': vertex {i} must be [x, y, z] (three numbers, m), got {p!r}")
+            raise GeometryError(f"{where}: {key}: vertex {i} must be [x, y, z] (three numbers, m), got {p!r}")
         for x in p:
             if not is_number(x):
                 raise GeometryError(f"{where}: vertices contain {_not_a_number(x)}: vertex {i} = {list(p)!r}")
@@ -308,6 +403,132 @@ def _xyz(p) -> str:
     return ", ".join(f"{x:.6g}" for x in p)
 
 
+def _part(where: str, value, key: str = "'vertices'"):
+    """One convex part's (n, 3) vertex array (m) and hull, or GeometryError."""
+    verts = _vertices(where, value, key)
+    try:
+        h = ph.hull(verts)
+    except ph.HullError as exc:
+        raise GeometryError(f"{where}: {exc}") from None
+    problem = not_convex(verts, h)
+    if problem:
+        raise GeometryError(f"{where}: {problem}")
+    vol = ph.volume_centroid(verts, h)[0]
+    if not vol > 0:
+        raise GeometryError(f"{where}: volume must be positive, got {vol}")
+    return verts, h
+
+
+def _parts(where: str, value) -> tuple[tuple, tuple]:
+    """A version-2 stone's convex parts (m) and their hulls: each part valid as a block's
+    ``vertices``, no two overlapping by more than OVERLAP_TOL, all joined face to face
+    (GeometryError naming the part otherwise)."""
+    if not isinstance(value, (list, tuple)) or not value:
+        raise GeometryError(f"{where}: 'parts' must be a non-empty list of parts, each a list of [x, y, z] "
+                            f"numbers, got {value!r}")
+    if len(value) > MAX_PARTS_PER_BLOCK:  # before any work on them
+        raise GeometryError(f"{where}: {len(value)} parts, more than {MAX_PARTS_PER_BLOCK} "
+                            "(drystone.geometry.blockfile.MAX_PARTS_PER_BLOCK: checks and contacts cost the square of "
+                            "the parts); cut the stone into fewer convex parts")
+    parts, hulls = [], []
+    for k, p in enumerate(value):
+        v, h = _part(f"{where}: part {k}", p, "its vertices")
+        parts.append(v)
+        hulls.append(h)
+    if len(parts) > 1:
+        _check_parts(where, parts, hulls)
+    return tuple(parts), tuple(hulls)
+
+
+def _check_parts(where: str, parts: list, hulls: list) -> None:
+    """Refuse parts of one stone that overlap by more than OVERLAP_TOL, or that are not all
+    joined face to face (``joined``), naming the parts."""
+    pl = [ph.planes(h) for h in hulls]
+    lo = np.array([p.min(axis=0) for p in parts])
+    hi = np.array([p.max(axis=0) for p in parts])
+    for i, j in candidate_pairs(lo, hi, OVERLAP_TOL):
+        if _face_separates(pl[i], parts[j], OVERLAP_TOL) or _face_separates(pl[j], parts[i], OVERLAP_TOL):
+            continue
+        t = ph.planes_overlap(pl[i], pl[j])
+        if t > OVERLAP_TOL:
+            raise GeometryError(f"{where}: parts {i} and {j} interpenetrate by {t:.3g} m "
+                                f"(tolerance {OVERLAP_TOL:g} m): the parts of one stone must not overlap")
+    faces = [ph.faces(p, h) for p, h in zip(parts, hulls)]
+    neighbours: dict[int, set[int]] = {k: set() for k in range(len(parts))}
+    for i, j in candidate_pairs(lo, hi, -OVERLAP_TOL):  # boxes that touch (within OVERLAP_TOL)
+        if joined(parts[i], faces[i], parts[j], faces[j]):
+            neighbours[i].add(j)
+            neighbours[j].add(i)
+    reached, todo = {0}, [0]
+    while todo:
+        for n in neighbours[todo.pop()] - reached:
+            reached.add(n)
+            todo.append(n)
+    if len(reached) < len(parts):
+        rest = sorted(set(range(len(parts))) - reached)
+        raise GeometryError(
+            f"{where} (a stone of {len(parts)} parts): part{'s' if len(rest) > 1 else ''} "
+            f"{{{', '.join(map(str, rest))}}} {'are' if len(rest) > 1 else 'is'} not joined face to face to the rest "
+            f"(part 0 and the parts joined to it: {{{', '.join(map(str, sorted(reached)))}}}): the parts of one stone "
+            f"must share faces (a patch wider than {JOIN_MIN_WIDTH:g} m); touching along an edge or at a corner, or "
+            "apart, they are not one solid")
+
+
+def _clip_convex(poly: np.ndarray, clip: np.ndarray) -> np.ndarray:
+    """The intersection (m, 2) of two convex polygons given counter-clockwise (Sutherland-Hodgman)."""
+    out = poly
+    for k in range(len(clip)):
+        if len(out) == 0:
+            break
+        a, b = clip[k], clip[(k + 1) % len(clip)]
+        e = b - a
+        side = e[0] * (out[:, 1] - a[1]) - e[1] * (out[:, 0] - a[0])  # >= 0: left of a->b, inside
+        nxt = []
+        for q in range(len(out)):
+            p0, p1, s0, s1 = out[q], out[(q + 1) % len(out)], side[q], side[(q + 1) % len(out)]
+            if s0 >= 0:
+                nxt.append(p0)
+            if (s0 >= 0) != (s1 >= 0):
+                nxt.append(p0 + (p1 - p0) * (s0 / (s0 - s1)))
+        out = np.array(nxt).reshape(-1, 2)
+    return out
+
+
+def _ccw(p: np.ndarray) -> np.ndarray:
+    x, y = p[:, 0], p[:, 1]
+    twice = float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+    return p if twice >= 0 else p[::-1]
+
+
+def joined(va, fa: ph.Faces, vb, fb: ph.Faces, tol: float = OVERLAP_TOL, min_width: float = JOIN_MIN_WIDTH) -> bool:
+    """Whether two convex parts (vertices m and ``ph.faces``) are joined face to face: a face
+    of one and a face of the other with opposite normals, each face's corners within ``tol``
+    (m) of the other's plane, overlapping in a patch wider than ``min_width`` (m; the width
+    2 x area / perimeter). Parts touching along an edge or at a corner are not."""
+    va, vb = np.asarray(va, float), np.asarray(vb, float)
+    for na, da, pa in zip(fa.normals, fa.offsets, fa.polygons):
+        qa = va[pa]
+        for nb, db, pb in zip(fb.normals, fb.offsets, fb.polygons):
+            if np.dot(na, nb) >= 0:
+                continue
+            qb = vb[pb]
+            if np.max(np.abs(qb @ na + da)) > tol or np.max(np.abs(qa @ nb + db)) > tol:
+                continue
+            e1 = np.cross(na, [1.0, 0, 0] if abs(na[0]) < 0.9 else [0, 1.0, 0])
+            e1 /= np.linalg.norm(e1)
+            e2 = np.cross(na, e1)
+            basis = np.stack([e1, e2], axis=1)
+            patch = _clip_convex(_ccw(qa @ basis), _ccw(qb @ basis))
+            if len(patch) < 3:
+                continue
+            x, y = patch[:, 0], patch[:, 1]
+            area = 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y)))
+            perimeter = float(np.linalg.norm(np.roll(patch, -1, axis=0) - patch, axis=1).sum())
+            if perimeter > 0 and 2.0 * area / perimeter > min_width:
+                return True
+    return False
+
+
 def parse(data: dict, where: str = "<blocks>", check_overlaps: bool = True) -> BlockSet:
     """Validate a block-definition object and return a BlockSet (raises GeometryError)."""
     if not isinstance(data, dict):
@@ -317,8 +538,10 @@ def parse(data: dict, where: str = "<blocks>", check_overlaps: bool = True) -> B
         raise GeometryError(f"{where}: unknown key(s) {sorted(unknown)}; allowed {sorted(TOP_KEYS)}")
     if data.get("format") != FORMAT:
         raise GeometryError(f"{where}: 'format' must be '{FORMAT}', got {data.get('format')!r}")
-    if not is_int(data.get("version")) or data.get("version") != VERSION:
-        raise GeometryError(f"{where}: unsupported 'version' {data.get('version')!r} (this reader: {VERSION})")
+    version = data.get("version")
+    if not is_int(version) or version not in VERSIONS:
+        raise GeometryError(f"{where}: unsupported 'version' {version!r} (this reader: "
+                            f"{' or '.join(str(v) for v in VERSIONS)})")
     units = data.get("units", {"length": "m", "mass": "kg"})
     if units != {"length": "m", "mass": "kg"}:
         raise GeometryError(f"{where}: 'units' must be {{'length': 'm', 'mass': 'kg'}}, got {units}")
@@ -352,17 +575,16 @@ def parse(data: dict, where: str = "<blocks>", check_overlaps: bool = True) -> B
         mat = b.get("material")
         if not isinstance(mat, str) or mat not in materials:
             raise GeometryError(f"{w}: unknown material {mat!r} (defined: {sorted(materials)})")
-        verts = _vertices(w, b.get("vertices"))
-        try:
-            h = ph.hull(verts)
-        except ph.HullError as exc:
-            raise GeometryError(f"{w}: {exc}") from None
-        problem = not_convex(verts, h)
-        if problem:
-            raise GeometryError(f"{w}: {problem}")
-        vol = ph.volume_centroid(verts, h)[0]
-        if not vol > 0:
-            raise GeometryError(f"{w}: volume must be positive, got {vol}")
+        if "parts" in b:
+            if version < PARTS_VERSION:
+                raise GeometryError(f"{w}: 'parts' needs version {PARTS_VERSION} (this file is version {version}): "
+                                    f"set \"version\": {PARTS_VERSION}, or give one convex part as 'vertices'")
+            if "vertices" in b:
+                raise GeometryError(f"{w}: give either 'vertices' (one convex part) or 'parts' (several), not both")
+            parts, hulls = _parts(w, b["parts"])
+        else:
+            verts, h = _part(w, b.get("vertices"))
+            parts, hulls = (verts,), (h,)
         dofs = b.get("blocked_dofs", "")
         if not isinstance(dofs, str) or set(dofs) - set("xyzXYZ") or len(set(dofs)) != len(dofs):
             raise GeometryError(f"{w}: 'blocked_dofs' must be a subset of 'xyzXYZ', got {dofs!r}")
@@ -371,7 +593,7 @@ def parse(data: dict, where: str = "<blocks>", check_overlaps: bool = True) -> B
         label = b.get("label", "")
         if not isinstance(label, str):
             raise GeometryError(f"{w}: 'label' must be a string, got {label!r}")
-        blocks.append(Block(bid, role, mat, verts, dofs, label, ph.planes(h)))
+        blocks.append(Block(bid, role, mat, parts, dofs, label, tuple(ph.planes(h) for h in hulls)))
 
     if not any(b.role == "free" for b in blocks):
         raise GeometryError(f"{where}: no block has role 'free': nothing would move")
@@ -452,21 +674,31 @@ def check_no_overlaps(bs: BlockSet, where: str = "<blocks>", tol: float = OVERLA
     file order. Pairs of non-moving blocks (fixed/platform) are not checked: they never
     interact. Only pairs whose bounding boxes overlap by more than ``tol`` (found by a sort
     and sweep: O(n log n) for n blocks) and that no face plane of either separates (within
-    ``tol``) get the exact, linear-programme, test."""
+    ``tol``) get the exact, linear-programme, test. Multi-part stones part by part: two
+    stones overlap if a part of one overlaps a part of the other (bounding boxes over all
+    parts first, then each pair of parts whose boxes overlap)."""
     bl = bs.blocks
-    lo = np.array([b.vertices.min(axis=0) for b in bl]).reshape(-1, 3)
-    hi = np.array([b.vertices.max(axis=0) for b in bl]).reshape(-1, 3)
+    lo = np.array([b.points.min(axis=0) for b in bl]).reshape(-1, 3)
+    hi = np.array([b.points.max(axis=0) for b in bl]).reshape(-1, 3)
     for i, j in candidate_pairs(lo, hi, tol):
         a, b = bl[i], bl[j]
         if a.role != "free" and b.role != "free":
             continue
-        if _face_separates(a.planes(), b.vertices, tol) or _face_separates(b.planes(), a.vertices, tol):
-            continue
-        t = ph.planes_overlap(a.planes(), b.planes())
-        if t > tol:
-            raise GeometryError(
-                f"{where}: blocks {a.id} and {b.id} interpenetrate by {t:.3g} m "
-                f"(tolerance {tol:g} m)")
+        single = len(a.parts) == 1 and len(b.parts) == 1
+        for (ka, va, pa), (kb, vb, pb) in itertools.product(zip(range(len(a.parts)), a.parts, a.part_planes()),
+                                                             zip(range(len(b.parts)), b.parts, b.part_planes())):
+            if not single and not (np.all(va.min(axis=0) < vb.max(axis=0) - tol)
+                                   and np.all(vb.min(axis=0) < va.max(axis=0) - tol)):
+                continue
+            if _face_separates(pa, vb, tol) or _face_separates(pb, va, tol):
+                continue
+            t = ph.planes_overlap(pa, pb)
+            if t > tol:
+                which = "" if single else (
+                    f" (part {ka} of block {a.id} and part {kb} of block {b.id})")
+                raise GeometryError(
+                    f"{where}: blocks {a.id} and {b.id} interpenetrate by {t:.3g} m{which} "
+                    f"(tolerance {tol:g} m)")
 
 
 def load(path, check_overlaps: bool = True) -> BlockSet:

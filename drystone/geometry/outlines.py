@@ -4,12 +4,22 @@ e.g. digitised from a photograph of the wall's face, extruded through the thickn
 
 Input: a folder with one text file per stone named ``<id>.csv`` or ``<id>.txt`` (the id is
 the stone's number, e.g. the paper's Figure 19c), two columns x z per line (comma, space or
-tab separated; ``#`` comments and one header line allowed), at least 3 vertices, the
-polygon convex (YADE polyhedra are convex: split a re-entrant stone into convex parts,
-each its own file). Repeated points and points on a straight edge between their
-neighbours (within ``FLAT_REL_TOL`` x the outline's size) are dropped: they are not
-corners, and the block file takes corners only. A 0.1 m platform slab is added under the
-lowest stone.
+tab separated; ``#`` comments and one header line allowed), at least 3 vertices in order
+around the stone (either sense; the last joins the first). The rules of an outline are
+``drystone.geometry.decompose.check_outline``'s: repeated points and points on a
+straight edge between their neighbours (within ``decompose.FLAT_REL_TOL`` x the outline's
+size) are dropped (they are not corners, and the block file takes corners only); an
+outline with no area (a sliver), one that crosses or touches itself, is pinched at a
+repeated corner or doubles back is refused, naming the file and stone. A 0.1 m platform
+slab is added under the lowest stone.
+
+Stones: a convex outline is one convex block (``vertices``: each corner at y = -T/2 and
+T/2). A non-convex outline (re-entrant corners: a notched or L-shaped stone) becomes one
+stone of several convex ``parts`` (block file version 2), the extruded pieces of
+``decompose.convex_pieces``: the exact minimum partition by diagonals up to
+``decompose.EXACT_MAX_CORNERS`` corners, Hertel-Mehlhorn (at most 4 x the minimum) above.
+The file is version 2 only when some stone has parts (validated by ``blockfile``; a run
+refuses multi-part stones by name until the engines take them).
 
 Roles: ``layout = "sacsayhuaman"`` applies the paper's (stones 1-7 fixed, side blocks 8,
 9, 14, 15, 24, 25, 34 free only in z, y and about x, control points A-D at the top of
@@ -22,25 +32,18 @@ import re
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial import ConvexHull
 
 from . import blockfile as bf
+from . import decompose as dc
 from . import params as pc
+from .decompose import OutlineError  # the outline rules have one home: decompose.py
 
 PLATFORM_THICKNESS = 0.1  # m
-CONVEX_TOL = 1e-9  # m^2: outlines of less area than this are refused
-#: a point less than this x the outline's size off the line through its neighbours is not a
-#: corner (dropped if on the line, refused if inward); 1e-6 is far below any digitising
-#: precision and far above the block file's corner tolerance (blockfile.CORNER_REL_TOL)
-FLAT_REL_TOL = 1e-6
-
-
-class OutlineError(bf.GeometryError):
-    """A malformed or non-convex outline; the message names the file and stone."""
 
 
 def read_outline(path) -> np.ndarray:
-    """(n, 2) array of the x, z vertices (m) of one outline file, counter-clockwise."""
+    """(n, 2) array of the x, z corners (m) of one outline file, counter-clockwise
+    (``decompose.check_outline``; errors name the file and stone)."""
     path = Path(path)
     pts = []
     for k, line in enumerate(path.read_text().splitlines(), 1):
@@ -57,47 +60,17 @@ def read_outline(path) -> np.ndarray:
         if len(vals) != 2 or not all(np.isfinite(vals)):
             raise OutlineError(f"{path}:{k}: expected two finite numbers x z, got {line.strip()!r}")
         pts.append(vals)
-    p = np.array(pts, float).reshape(-1, 2)
-    if len(p) > 1 and np.allclose(p[0], p[-1]):
-        p = p[:-1]  # closed polygon written with its first vertex repeated
-    if len(p) < 3:
-        raise OutlineError(f"{path}: a stone outline needs at least 3 vertices, got {len(p)}")
-    area2 = _area2(p)
-    if abs(area2) < 2 * CONVEX_TOL:
-        raise OutlineError(f"{path}: the outline has no area")
-    if area2 < 0:
-        p = p[::-1]
-    tol = FLAT_REL_TOL * float(np.linalg.norm(np.ptp(p, axis=0)))
-    out = _outward(p)
-    while len(p) > 3 and np.min(np.abs(out)) <= tol:  # drop repeated points and points on an edge
-        p = np.delete(p, np.argmin(np.abs(out)), axis=0)
-        out = _outward(p)
-    bad = np.flatnonzero(out < -tol)
-    if len(bad):
-        v = p[bad[0]]
-        raise OutlineError(f"{path}: stone outline is not convex (re-entrant corner at x = {v[0]:.4g}, "
-                           f"z = {v[1]:.4g} m); split it into convex stones")
-    area, hull_area = _area2(p) / 2, ConvexHull(p).volume
-    if abs(area - hull_area) > FLAT_REL_TOL * hull_area:
-        raise OutlineError(f"{path}: stone outline is not convex: its area, {area:.6g} m^2, is not its convex "
-                           f"hull's, {hull_area:.6g} m^2 (does it cross itself?)")
-    return p
+    return dc.check_outline(np.array(pts, float).reshape(-1, 2), _where(path))
 
 
-def _area2(p: np.ndarray) -> float:
-    """Twice the signed area (m^2) of a polygon (n, 2): > 0 counter-clockwise."""
-    return float(np.sum(p[:, 0] * np.roll(p[:, 1], -1) - np.roll(p[:, 0], -1) * p[:, 1]))
+def _where(path: Path) -> str:
+    """An outline file and its stone, for messages."""
+    return f"{path} (stone {int(path.stem)})" if path.stem.isdigit() else str(path)
 
 
-def _outward(p: np.ndarray) -> np.ndarray:
-    """Per vertex of a counter-clockwise polygon (n, 2), its distance (m) outside the line
-    through its two neighbours (< 0: a re-entrant corner; -inf: the neighbours coincide)."""
-    prev, nxt = np.roll(p, 1, axis=0), np.roll(p, -1, axis=0)
-    chord = nxt - prev
-    length = np.linalg.norm(chord, axis=1)
-    d = p - prev
-    cross = d[:, 0] * chord[:, 1] - d[:, 1] * chord[:, 0]
-    return np.where(length > 0, cross / np.where(length > 0, length, 1.0), -np.inf)
+def _points(block: dict) -> np.ndarray:
+    """Every vertex (m) of a block dict, one part or several."""
+    return np.concatenate([np.asarray(v, float) for v in block.get("parts", [block.get("vertices")])])
 
 
 def make(folder, thickness: float, layout: str | None = None, fix_bottom: bool = True, density=2300.0, kn=2e8,
@@ -117,20 +90,26 @@ def make(folder, thickness: float, layout: str | None = None, fix_bottom: bool =
     files = sorted(f for f in folder.glob("*") if f.suffix.lower() in (".csv", ".txt"))
     if not files:
         raise OutlineError(f"{folder}: no outline files (<id>.csv or <id>.txt)")
-    stones = {}
+    stones, files_by_id = {}, {}
     for f in files:
         if not f.stem.isdigit() or int(f.stem) == 0:
             raise OutlineError(f"{f}: outline files are named by the stone's id, a positive integer (1.csv ...)")
         if int(f.stem) in stones:
             raise OutlineError(f"{f}: a second outline for stone {int(f.stem)}")
         stones[int(f.stem)] = read_outline(f)
+        files_by_id[int(f.stem)] = f
     h = thickness / 2.0
     blocks = []
     zmin = min(p[:, 1].min() for p in stones.values())
     for bid in sorted(stones):
-        p = stones[bid]
-        verts = [[x, y, z] for x, z in p for y in (-h, h)]
-        blocks.append({"id": bid, "role": "free", "material": "stone", "vertices": verts})
+        pieces = dc.convex_pieces(stones[bid], _where(files_by_id[bid]))
+        extruded = [[[x, y, z] for x, z in q for y in (-h, h)] for q in pieces]
+        block = {"id": bid, "role": "free", "material": "stone"}
+        if len(extruded) == 1:
+            block["vertices"] = extruded[0]
+        else:
+            block["parts"] = extruded
+        blocks.append(block)
     xs = np.concatenate([p[:, 0] for p in stones.values()])
     margin = 0.5 * (xs.max() - xs.min())
     x0, x1 = xs.min() - margin, xs.max() + margin
@@ -156,9 +135,10 @@ def make(folder, thickness: float, layout: str | None = None, fix_bottom: bool =
                                                                             float(top[:, 1].max())]})
     elif fix_bottom:
         for b in blocks:
-            if np.min(np.asarray(b["vertices"])[:, 2]) <= zmin + 1e-6:
+            if np.min(_points(b)[:, 2]) <= zmin + 1e-6:
                 b["role"] = "fixed"
-    d = {"format": "drystone.blocks", "version": 1, "name": name or folder.name,
+    version = bf.PARTS_VERSION if any("parts" in b for b in blocks) else bf.VERSION
+    d = {"format": "drystone.blocks", "version": version, "name": name or folder.name,
          "units": {"length": "m", "mass": "kg"},
          "materials": {"stone": {"density": density, "kn": kn, "kt": kt, "mu": mu, "damping": damping}},
          "blocks": [platform] + blocks, "control_points": control_points,

@@ -1,9 +1,10 @@
 """Convex polyhedron helpers (numpy/scipy only, no YADE).
 
-A block is the convex hull of its vertices (metres). These functions give the hull's
-volume (m^3), centroid (m), its planar faces (``faces``: the one place hull triangles are
-merged into faces), and the overlap between two hulls, which is what the block-file
-validator, the time-step estimate and the contact kernels need.
+A block (or one convex part of a stone) is the convex hull of its vertices (metres). These
+functions give the hull's volume (m^3), centroid (m) and second moment (m^5, ``moments``),
+its planar faces (``faces``: the one place hull triangles are merged into faces), and the
+overlap between two hulls, which is what the block-file validator, the mass properties,
+the time-step estimate and the contact kernels need.
 """
 from __future__ import annotations
 
@@ -65,17 +66,44 @@ def corner_gaps(vertices, h: ConvexHull | None = None, rows: int = 256) -> np.nd
     return gaps
 
 
-def volume_centroid(vertices, h: ConvexHull | None = None) -> tuple[float, np.ndarray]:
-    """Volume (m^3) and centroid (m) of the convex hull of ``vertices`` (``h``: that hull,
-    if at hand)."""
+def _tetrahedra(vertices, h: ConvexHull | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The hull cut into tetrahedra from c0, the mean of its corners (inside it): c0 (m),
+    each hull triangle's corners relative to c0 (f, 3, 3) m and six times each
+    tetrahedron's volume (f,) m^3 (positive whatever Qhull's winding: c0 is inside)."""
     v = np.asarray(vertices, dtype=float)
     h = hull(v) if h is None else h
     c0 = v[h.vertices].mean(axis=0)
     tets = v[h.simplices] - c0  # (f, 3, 3): each face triangle with apex c0
     vol6 = np.abs(np.einsum("ij,ij->i", tets[:, 0], np.cross(tets[:, 1], tets[:, 2])))
+    return c0, tets, vol6
+
+
+def volume_centroid(vertices, h: ConvexHull | None = None) -> tuple[float, np.ndarray]:
+    """Volume (m^3) and centroid (m) of the convex hull of ``vertices`` (``h``: that hull,
+    if at hand)."""
+    c0, tets, vol6 = _tetrahedra(vertices, h)
     vol = vol6.sum() / 6.0
     cent = c0 + (vol6[:, None] * tets.sum(axis=1) / 4.0).sum(axis=0) / vol6.sum()
     return float(vol), cent
+
+
+def moments(vertices, h: ConvexHull | None = None) -> tuple[float, np.ndarray, np.ndarray]:
+    """Volume (m^3), centroid (m) and second moment about the centroid
+    S = int (x - c)(x - c)^T dV (m^5, a symmetric 3 x 3 tensor in the vertices' axes) of
+    the convex hull of ``vertices``, exact (polyhedral integrals): the hull cut into
+    tetrahedra from an inside point o, each with corners o, o + a, o + b, o + c and volume
+    V gives int (x - o)(x - o)^T dV = V / 20 (a a^T + b b^T + c c^T + s s^T), s = a + b + c.
+    Volume and centroid are ``volume_centroid``'s, bit for bit. The inertia tensor of a
+    body of density rho is rho (tr(S) I - S) (``drystone.geometry.massprops``)."""
+    c0, tets, vol6 = _tetrahedra(vertices, h)
+    vol = vol6.sum() / 6.0
+    cent = c0 + (vol6[:, None] * tets.sum(axis=1) / 4.0).sum(axis=0) / vol6.sum()
+    s = tets.sum(axis=1)
+    m2 = np.einsum("k,kpi,kpj->ij", vol6, tets, tets) + np.einsum("k,ki,kj->ij", vol6, s, s)
+    m2 /= 120.0  # vol6 / 6 / 20: about c0
+    d = cent - c0
+    second = m2 - vol * np.outer(d, d)  # about the centroid (parallel axes)
+    return float(vol), cent, second
 
 
 def extent(vertices) -> np.ndarray:

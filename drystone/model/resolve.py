@@ -39,6 +39,11 @@ def _geometry(case: dict, where: str, out: Path, check_overlaps: bool = True) ->
             raise casemod.CaseError(f"{where}: [case] geometry: {exc}") from None
         bs = bf.parse(data, f"{where}: generated geometry {geo['generator']!r}", check_overlaps)
         source = {"generator": geo}
+    for b in bs.blocks:  # what the engines cannot take fails here, not inside YADE
+        if len(b.parts) > 1:
+            raise bf.GeometryError(
+                f"{geo if isinstance(geo, str) else where}: block {b.id} has {len(b.parts)} parts: multi-part stones "
+                "are validated but not yet simulated (the engines take one convex body per stone)")
     for b in bs.blocks:  # what the contact kernel cannot hold fails here, not inside YADE
         why = overlap.too_large(b.vertices)
         if why:
