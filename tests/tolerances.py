@@ -553,3 +553,14 @@ DEPTH_SD_MIN_REL = 0.1
 #: sensitivity (twice the measured ratio) and within 5 % of the motion (above 1 cm)
 ENGINE_SENSITIVITY_FACTOR = 4
 ENGINE_DIVERGENCE_OF_MOTION = 0.05
+
+# ---------------------------------------------------------------------------------------
+# Generated polygonal walls (drystone/geometry/polygonal_wall.py)
+# ---------------------------------------------------------------------------------------
+
+#: the stones' face areas sum to length x height: shared corners are merged within 1e-9 of
+#: the wall's size (polygonal_wall.MERGE_REL_TOL), and a stone's outline may drop a corner
+#: less than decompose.FLAT_REL_TOL (1e-6) x its size off straight (an area change of at
+#: most half that times an edge, ~1e-6 of the stone's area); summed over the stones at most
+#: ~1e-6 of the face, margin 10: 1e-5 (measured: ~1e-15)
+TILING_AREA_REL = 1e-5

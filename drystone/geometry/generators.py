@@ -17,7 +17,9 @@ GENERATORS = {
     "irregular_wall": ("drystone.geometry.irregular_wall", "make"),
     "tilt_wall": ("drystone.geometry.irregular_wall", "tilt_wall"),
     "sacsayhuaman": ("drystone.geometry.sacsayhuaman", "make"),
+    "polygonal_wall": ("drystone.geometry.polygonal_wall", "make"),
     "outlines": ("drystone.geometry.outlines", "make"),
+    "dxf": ("drystone.geometry.dxf", "make"),
 }
 
 

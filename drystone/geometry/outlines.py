@@ -24,7 +24,10 @@ refuses multi-part stones by name until the engines take them).
 Roles: ``layout = "sacsayhuaman"`` applies the paper's (stones 1-7 fixed, side blocks 8,
 9, 14, 15, 24, 25, 34 free only in z, y and about x, control points A-D at the top of
 35, 38, 39, 40; ids 1-40 required); otherwise the stones touching the platform are
-``fixed`` when ``fix_bottom`` (default) and the rest free.
+``fixed`` when ``fix_bottom`` (default) and the rest free, and the control points (for the
+figures) are ``top_<id>`` at the centroids of the top stones (``top_stones``) on the front
+face (y = -T/2). ``build`` turns outlines into the block file for this reader and for the
+DXF reader (``drystone/geometry/dxf.py``).
 """
 from __future__ import annotations
 
@@ -98,31 +101,102 @@ def make(folder, thickness: float, layout: str | None = None, fix_bottom: bool =
             raise OutlineError(f"{f}: a second outline for stone {int(f.stem)}")
         stones[int(f.stem)] = read_outline(f)
         files_by_id[int(f.stem)] = f
+    return build(stones, thickness, {bid: _where(f) for bid, f in files_by_id.items()}, origin=f"outlines in {folder}",
+                 layout=layout, fix_bottom=fix_bottom, density=density, kn=kn, kt=kt, mu=mu, damping=damping,
+                 name=name or folder.name,
+                 generator={"name": "outlines", "folder": str(folder), "thickness": thickness, "layout": layout},
+                 description=f"stones from the outlines in {folder}, extruded to {thickness} m")
+
+
+#: a stone is a "top stone" (default control point at its centroid) when its top lies within
+#: TOP_REL x the wall's height of the wall's top
+TOP_REL = 0.1
+
+
+def top_stones(stones: dict) -> list[int]:
+    """Ids of the top stones of ``{id: (n, 2) outline}``: those whose highest corner is within
+    ``TOP_REL`` x the wall's height of the highest corner of the wall."""
+    zmax = max(p[:, 1].max() for p in stones.values())
+    zmin = min(p[:, 1].min() for p in stones.values())
+    return sorted(b for b, p in stones.items() if p[:, 1].max() >= zmax - TOP_REL * (zmax - zmin))
+
+
+def centroid(p: np.ndarray) -> np.ndarray:
+    """Area centroid (x, z) of a simple polygon (n, 2)."""
+    x, z = p[:, 0], p[:, 1]
+    xn, zn = np.roll(x, -1), np.roll(z, -1)
+    c = x * zn - xn * z
+    a = c.sum() / 2.0
+    return np.array([((x + xn) * c).sum(), ((z + zn) * c).sum()]) / (6.0 * a)
+
+
+def _distance(p: np.ndarray, q) -> float:
+    """Distance (m) from point ``q`` (x, z) to the polygon ``p`` (0 inside or on it)."""
+    q = np.asarray(q, float)
+    a, b = p, np.roll(p, -1, axis=0)
+    inside = False
+    for (x0, z0), (x1, z1) in zip(a, b):
+        if (z0 > q[1]) != (z1 > q[1]) and q[0] < x0 + (q[1] - z0) * (x1 - x0) / (z1 - z0):
+            inside = not inside
+    if inside:
+        return 0.0
+    ab = b - a
+    t = np.clip(np.einsum("ij,ij->i", q - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300), 0, 1)
+    return float(np.min(np.linalg.norm(a + t[:, None] * ab - q, axis=1)))
+
+
+def stone_at(stones: dict, q) -> int:
+    """Id of the stone containing the point ``q`` (x, z), or else the nearest one."""
+    return min(sorted(stones), key=lambda b: _distance(stones[b], q))
+
+
+def build(stones: dict, thickness: float, where: dict, *, origin: str, roles: dict | None = None,
+          depths: dict | None = None, platform: np.ndarray | None = None, control_points=None,
+          layout: str | None = None, fix_bottom: bool = True, density=2300.0, kn=2e8, kt=1e8, mu=0.4,
+          damping=0.8, name: str = "outlines", generator: dict | None = None, description: str = "") -> dict:
+    """The block-file dict of the stones ``{id: (n, 2) counter-clockwise outline (x, z, m)}``
+    (as ``decompose.check_outline`` returns them) extruded through ``thickness`` (m; y from
+    -T/2 to T/2, or a stone's own ``depths[id]``), shared by the outline folder and DXF
+    readers. ``where[id]`` names a stone in messages, ``origin`` the source. ``roles``:
+    ``{id: "free" | "fixed"}`` fixes a stone's role; the others are fixed when they touch the
+    platform and ``fix_bottom``, else free (``layout = "sacsayhuaman"`` overrides both).
+    ``platform``: a convex (n, 2) outline for the platform (id 0), extruded through 3 x the
+    deepest stone; default a 0.1 m slab under the lowest stone, 2 x the wall's length wide.
+    ``control_points``: ``[(name, x, z)]`` on the stone containing (or nearest to) each point,
+    at the front face (y = -T/2); none given: one ``top_<id>`` at the centroid of each top stone
+    (``top_stones``)."""
+    roles = roles or {}
+    depths = depths or {}
     h = thickness / 2.0
     blocks = []
     zmin = min(p[:, 1].min() for p in stones.values())
     for bid in sorted(stones):
-        pieces = dc.convex_pieces(stones[bid], _where(files_by_id[bid]))
-        extruded = [[[x, y, z] for x, z in q for y in (-h, h)] for q in pieces]
-        block = {"id": bid, "role": "free", "material": "stone"}
+        hb = depths.get(bid, thickness) / 2.0
+        pieces = dc.convex_pieces(stones[bid], where[bid])
+        extruded = [[[x, y, z] for x, z in q for y in (-hb, hb)] for q in pieces]
+        block = {"id": bid, "role": roles.get(bid, "free"), "material": "stone"}
         if len(extruded) == 1:
             block["vertices"] = extruded[0]
         else:
             block["parts"] = extruded
         blocks.append(block)
-    xs = np.concatenate([p[:, 0] for p in stones.values()])
-    margin = 0.5 * (xs.max() - xs.min())
-    x0, x1 = xs.min() - margin, xs.max() + margin
-    y0, y1 = -h - thickness, h + thickness
-    z0, z1 = zmin - PLATFORM_THICKNESS, zmin
-    platform = {"id": 0, "role": "platform", "material": "stone",
-                "vertices": [[x, y, z] for x in (x0, x1) for y in (y0, y1) for z in (z0, z1)]}
-    control_points = []
+    hmax = max([h] + [d / 2.0 for d in depths.values()])
+    y0, y1 = -3 * hmax, 3 * hmax
+    if platform is None:
+        xs = np.concatenate([p[:, 0] for p in stones.values()])
+        margin = 0.5 * (xs.max() - xs.min())
+        x0, x1 = xs.min() - margin, xs.max() + margin
+        z0, z1 = zmin - PLATFORM_THICKNESS, zmin
+        pv = [[x, y, z] for x in (x0, x1) for y in (y0, y1) for z in (z0, z1)]
+    else:
+        pv = [[x, y, z] for x, z in platform for y in (y0, y1)]
+    platform_block = {"id": 0, "role": "platform", "material": "stone", "vertices": pv}
+    cps = []
     if layout == "sacsayhuaman":
         from . import sacsayhuaman as sw
         missing = sorted(set(range(1, 41)) - set(stones))
         if missing:
-            raise OutlineError(f"{folder}: layout 'sacsayhuaman' needs stones 1-40; missing {missing}")
+            raise OutlineError(f"{origin}: layout 'sacsayhuaman' needs stones 1-40; missing {missing}")
         for b in blocks:
             if b["id"] <= sw.COURSES[0]:
                 b["role"] = "fixed"
@@ -131,18 +205,28 @@ def make(folder, thickness: float, layout: str | None = None, fix_bottom: bool =
         for cp, bid in sw.CONTROL.items():
             p = stones[bid]
             top = p[np.isclose(p[:, 1], p[:, 1].max(), atol=1e-6)]
-            control_points.append({"name": cp, "block": bid, "position": [float(top[:, 0].mean()), 0.0,
-                                                                            float(top[:, 1].max())]})
-    elif fix_bottom:
-        for b in blocks:
-            if np.min(_points(b)[:, 2]) <= zmin + 1e-6:
-                b["role"] = "fixed"
+            cps.append({"name": cp, "block": bid, "position": [float(top[:, 0].mean()), 0.0,
+                                                               float(top[:, 1].max())]})
+    else:
+        if fix_bottom:
+            for b in blocks:
+                if b["id"] not in roles and np.min(_points(b)[:, 2]) <= zmin + 1e-6:
+                    b["role"] = "fixed"
+        if control_points:
+            for cname, x, z in control_points:
+                bid = stone_at(stones, (x, z))
+                cps.append({"name": cname, "block": bid,
+                            "position": [float(x), -depths.get(bid, thickness) / 2.0, float(z)]})
+        else:
+            for bid in top_stones(stones):
+                cx, cz = centroid(stones[bid])
+                cps.append({"name": f"top_{bid}", "block": bid,
+                            "position": [float(cx), -depths.get(bid, thickness) / 2.0, float(cz)]})
     version = bf.PARTS_VERSION if any("parts" in b for b in blocks) else bf.VERSION
-    d = {"format": "drystone.blocks", "version": version, "name": name or folder.name,
+    d = {"format": "drystone.blocks", "version": version, "name": name,
          "units": {"length": "m", "mass": "kg"},
          "materials": {"stone": {"density": density, "kn": kn, "kt": kt, "mu": mu, "damping": damping}},
-         "blocks": [platform] + blocks, "control_points": control_points,
-         "generator": {"name": "outlines", "folder": str(folder), "thickness": thickness, "layout": layout},
-         "description": f"stones from the outlines in {folder}, extruded to {thickness} m"}
-    bf.parse(d, f"outlines in {folder}")  # convex, no overlaps, finite: errors name the stone
+         "blocks": [platform_block] + blocks, "control_points": cps,
+         "generator": generator or {}, "description": description}
+    bf.parse(d, origin)  # convex, no overlaps, finite: errors name the stone
     return d

@@ -245,6 +245,11 @@ def validate(raw: dict, where: str, base_dir: Path, stem: str = "case", sweep_ru
         if not fp.is_dir():
             raise CaseError(f"{where}: [case] geometry 'folder': {fp} is not a folder")
         case["case"]["geometry"] = dict(geo, folder=str(fp.resolve()))
+    elif isinstance(geo.get("file"), str):  # generators reading one file (dxf): relative to the case
+        fp = (base_dir / geo["file"]) if not Path(geo["file"]).is_absolute() else Path(geo["file"])
+        if not fp.is_file():
+            raise CaseError(f"{where}: [case] geometry 'file': {fp} not found")
+        case["case"]["geometry"] = dict(geo, file=str(fp.resolve()))
     if isinstance(case["time"]["step"], str) and case["time"]["step"] != "auto":
         raise CaseError(f"{where}: [time] 'step' must be a number (s) or 'auto', got {case['time']['step']!r}")
     if isinstance(case["time"]["step"], float) and case["time"]["step"] <= 0:
