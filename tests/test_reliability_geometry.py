@@ -96,12 +96,14 @@ def test_real_corners_close_to_flat_are_kept():
 
 def _case_geometries():
     """Each generator with its defaults and every generator table of cases/**/*.toml."""
-    specs = [{"generator": n} for n in generators.GENERATORS if n not in ("boxes_on_platform", "outlines", "dxf")]
+    specs = [{"generator": n} for n in generators.GENERATORS if n not in ("boxes_on_platform", "outlines", "dxf", "meshes")]
     specs.append({"generator": "boxes_on_platform", "boxes": [{"id": 1, "center_xy": [0, 0], "size": [1, 1, 1]}]})
     for f in sorted(ROOT.glob("cases/**/*.toml")):
         geo = tomllib.loads(f.read_text()).get("case", {}).get("geometry")
         if isinstance(geo, dict) and isinstance(geo.get("file"), str):  # dxf: relative to the case file
             geo = dict(geo, file=str((f.parent / geo["file"]).resolve()))
+        if isinstance(geo, dict) and isinstance(geo.get("folder"), str):  # outlines, meshes: the same
+            geo = dict(geo, folder=str((f.parent / geo["folder"]).resolve()))
         if isinstance(geo, dict) and geo not in specs:
             specs.append(geo)
     specs += [{"generator": "tilt_wall", "seed": s, "depth_spread": d} for s in range(5) for d in (0.0, 1 / 3)]

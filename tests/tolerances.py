@@ -564,3 +564,15 @@ ENGINE_DIVERGENCE_OF_MOTION = 0.05
 #: most half that times an edge, ~1e-6 of the stone's area); summed over the stones at most
 #: ~1e-6 of the face, margin 10: 1e-5 (measured: ~1e-15)
 TILING_AREA_REL = 1e-5
+
+# ---------------------------------------------------------------------------------------
+# Scanned-stone meshes (drystone/geometry/meshes.py)
+# ---------------------------------------------------------------------------------------
+
+#: coacd's decomposition of a 2 x 2 x 1 m extruded L (volume 3 m^3) into convex parts: the
+#: L is two boxes, so the concavity threshold (0.05) does not enter; the parts differ from
+#: the boxes only by coacd's preprocessing (its manifold remeshing moves faces by ~1e-4 of
+#: the size: measured 1e-4 m at the bottom, a total of -9.4e-5 of the volume, the same for
+#: seeds 0-2). A face of the L (largest 2 m^2) moved by 1e-4 m changes the volume by
+#: 2e-4 m^3 = 7e-5 of it; a few such faces: 1e-3 leaves a margin of ten over the measured
+COACD_L_VOLUME_REL = 1e-3

@@ -20,6 +20,7 @@ GENERATORS = {
     "polygonal_wall": ("drystone.geometry.polygonal_wall", "make"),
     "outlines": ("drystone.geometry.outlines", "make"),
     "dxf": ("drystone.geometry.dxf", "make"),
+    "meshes": ("drystone.geometry.meshes", "make"),
 }
 
 
