@@ -70,23 +70,17 @@ def main(argv=None) -> int:
                 print(f"warning: {left['count']} of {left['free_blocks']} free block(s) left the model "
                       f"({', '.join(str(b['block']) for b in left['blocks'][:10])}): their motion is unbounded "
                       "and has no residual (summary.json run.left_model)", file=sys.stderr)
-        elif a.cmd == "keys":
-            if a.update_readme:
-                from drystone import paths
-                p = paths.ROOT / "README.md"
-                p.write_text(casemod.readme_with_keys(p.read_text()))
-                print(f"updated {p}")
-            else:
-                print(casemod.describe())
-        elif a.cmd == "layout":
+        elif a.cmd in ("keys", "layout"):
             from drystone import layers
+            table, into_readme = ((casemod.describe, casemod.readme_with_keys) if a.cmd == "keys"
+                                  else (layers.readme_block, layers.readme_with_layout))
             if a.update_readme:
                 from drystone import paths
                 p = paths.ROOT / "README.md"
-                p.write_text(layers.readme_with_layout(p.read_text()))
+                p.write_text(into_readme(p.read_text()))
                 print(f"updated {p}")
             else:
-                print(layers.readme_block())
+                print(table())
         elif a.cmd == "compare":
             from drystone.postprocess import compare
             print(compare.report(a.folders))
