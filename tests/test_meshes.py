@@ -178,3 +178,17 @@ def test_shipped_examples():
     g = c["case"]["geometry"]
     assert g["generator"] == "meshes" and Path(g["folder"]) == SCANS.resolve()
     assert bf.parse(generators.generate(g)).ids("free") == [2]
+
+
+def test_case_paths_resolve_relative_to_the_case_file(tmp_path):
+    """folder, file and files of a generator are read beside the case file, whatever the
+    working folder; a missing one is refused naming it."""
+    (tmp_path / "scans").mkdir()
+    (tmp_path / "scans" / "a.obj").write_text("")
+    geo = {"generator": "meshes", "files": ["scans/a.obj"], "units": "m"}
+    out = case_mod._generator_paths(geo, tmp_path, "c.toml")
+    assert out["files"] == [str((tmp_path / "scans" / "a.obj").resolve())] and geo["files"] == ["scans/a.obj"]
+    with pytest.raises(case_mod.CaseError, match=r"'files': .*b\.obj not found"):
+        case_mod._generator_paths(dict(geo, files=["scans/a.obj", "scans/b.obj"]), tmp_path, "c.toml")
+    with pytest.raises(case_mod.CaseError, match="'folder': .* is not a folder"):
+        case_mod._generator_paths({"generator": "outlines", "folder": "nowhere"}, tmp_path, "c.toml")

@@ -240,16 +240,8 @@ def validate(raw: dict, where: str, base_dir: Path, stem: str = "case", sweep_ru
         case["case"]["geometry"] = str(gp.resolve())
     elif "generator" not in geo:
         raise CaseError(f"{where}: [case] 'geometry' table needs a 'generator' key")
-    elif isinstance(geo.get("folder"), str):  # generators reading files (outlines): relative to the case
-        fp = (base_dir / geo["folder"]) if not Path(geo["folder"]).is_absolute() else Path(geo["folder"])
-        if not fp.is_dir():
-            raise CaseError(f"{where}: [case] geometry 'folder': {fp} is not a folder")
-        case["case"]["geometry"] = dict(geo, folder=str(fp.resolve()))
-    elif isinstance(geo.get("file"), str):  # generators reading one file (dxf): relative to the case
-        fp = (base_dir / geo["file"]) if not Path(geo["file"]).is_absolute() else Path(geo["file"])
-        if not fp.is_file():
-            raise CaseError(f"{where}: [case] geometry 'file': {fp} not found")
-        case["case"]["geometry"] = dict(geo, file=str(fp.resolve()))
+    else:  # generators reading files (outlines, dxf, meshes): their paths relative to the case file
+        case["case"]["geometry"] = _generator_paths(geo, base_dir, where)
     if isinstance(case["time"]["step"], str) and case["time"]["step"] != "auto":
         raise CaseError(f"{where}: [time] 'step' must be a number (s) or 'auto', got {case['time']['step']!r}")
     if isinstance(case["time"]["step"], float) and case["time"]["step"] <= 0:
@@ -312,6 +304,30 @@ def validate(raw: dict, where: str, base_dir: Path, stem: str = "case", sweep_ru
         if ref is not None and ref not in names:
             raise CaseError(f"{where}: [analysis] '{key}' names contact {ref!r}, not among [output] contacts {names}")
     return case
+
+
+#: generator parameters that name input paths: key -> (what it must be, is it a list)
+GENERATOR_PATHS = {"folder": ("folder", False), "file": ("file", False), "files": ("file", True)}
+
+
+def _generator_paths(geo: dict, base_dir: Path, where: str) -> dict:
+    """``geo`` with its path parameters (``GENERATOR_PATHS``) resolved relative to the case
+    file's folder ``base_dir``; a missing file or folder is refused, naming it."""
+    out = dict(geo)
+    for key, (kind, many) in GENERATOR_PATHS.items():
+        value = geo.get(key)
+        items = value if many and isinstance(value, list) else [value]
+        if not all(isinstance(v, str) for v in items) or (many and not isinstance(value, list)):
+            continue  # not a path: the generator's own checks name it
+        resolved = []
+        for v in items:
+            fp = Path(v) if Path(v).is_absolute() else base_dir / v
+            if not (fp.is_dir() if kind == "folder" else fp.is_file()):
+                raise CaseError(f"{where}: [case] geometry '{key}': {fp} " + ("is not a folder" if kind == "folder"
+                                                                               else "not found"))
+            resolved.append(str(fp.resolve()))
+        out[key] = resolved if many else resolved[0]
+    return out
 
 
 def _is_int(x) -> bool:
