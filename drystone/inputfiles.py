@@ -39,30 +39,26 @@ def read_text(path, error=ValueError, what: str = "file") -> str:
 
 def load_toml(path, error=ValueError, what: str = "file") -> dict:
     """Parse a TOML file (``read_text`` first); the errors of ``check_values`` too."""
-    p = Path(path)
-    text = read_text(p, error, what)
-    try:
-        data = tomllib.loads(text)
-    except RecursionError:
-        raise error(f"{p}: not valid TOML: nested deeper than Python can read") from None
-    except ValueError as exc:  # TOMLDecodeError, and Python's limit on the digits of an integer
-        raise error(f"{p}: not valid TOML: {_why(exc)}") from None
-    check_values(data, str(p), error)
-    return data
+    return _load(path, error, what, "TOML", tomllib.loads)
 
 
 def load_json(path, error=ValueError, what: str = "file"):
     """Parse a JSON file (``read_text`` first); the errors of ``check_values`` too."""
+    return _load(path, error, what, "JSON", json.loads)
+
+
+def _load(path, error, what: str, kind: str, parse):
+    """``parse`` the text of ``path``; every failure one ``error`` naming the file."""
     p = Path(path)
     text = read_text(p, error, what)
     try:
-        data = json.loads(text)
+        data = parse(text)
     except RecursionError:
-        raise error(f"{p}: not valid JSON: nested deeper than Python can read") from None
+        raise error(f"{p}: not valid {kind}: nested deeper than Python can read") from None
     except json.JSONDecodeError as exc:
-        raise error(f"{p}: not valid JSON: line {exc.lineno}, column {exc.colno}: {exc.msg}") from None
-    except ValueError as exc:  # Python's limit on the digits of an integer
-        raise error(f"{p}: not valid JSON: {_why(exc)}") from None
+        raise error(f"{p}: not valid {kind}: line {exc.lineno}, column {exc.colno}: {exc.msg}") from None
+    except ValueError as exc:  # TOMLDecodeError, and Python's limit on the digits of an integer
+        raise error(f"{p}: not valid {kind}: {_why(exc)}") from None
     check_values(data, str(p), error)
     return data
 

@@ -65,3 +65,21 @@ def assert_figure(path, size_in: tuple[float, float], dpi: float) -> None:
     colours = len(np.unique((middle.reshape(-1, 3) * 255).round().astype(int), axis=0))
     assert ink >= FIGURE_MIN_INK and colours >= FIGURE_MIN_COLOURS, \
         f"{path}: {ink:.2%} of the middle inked, {colours} colours: nothing drawn?"
+
+
+def refused_run(folder: Path, blocks: dict) -> str:
+    """Write ``blocks`` (a block-file dict) and a gravity case using it into ``folder``, run
+    ``python -m drystone run`` there; assert the refusal (exit 2, one line, no traceback,
+    nothing written) and return its message."""
+    import json
+    import subprocess
+    import sys
+
+    (folder / "blocks.json").write_text(json.dumps(blocks))
+    (folder / "c.toml").write_text('[case]\ngeometry = "blocks.json"\n[[stages]]\ntype = "gravity"\nduration = 0.1\n')
+    r = subprocess.run([sys.executable, "-m", "drystone", "run", "c.toml", "--out", "out"], cwd=folder,
+                       capture_output=True, text=True)
+    assert r.returncode == 2, r.stderr
+    assert r.stderr.strip().count("\n") == 0 and "Traceback" not in r.stderr
+    assert sorted(p.name for p in folder.iterdir()) == ["blocks.json", "c.toml"]
+    return r.stderr

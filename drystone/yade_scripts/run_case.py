@@ -116,7 +116,7 @@ class Driver:
 
     def _sample(self, t):
         s = self.recorder.sample(t)
-        for m in sorted(self.monitors, key=lambda m: m.order):
+        for m in self.monitors:  # kept in their order (_enter_stage)
             m.on_sample(self, s)
 
     def _enter_stage(self, k):
@@ -142,7 +142,7 @@ class Driver:
                   "relative to the platform", flush=True)
         m = self.prog.monitor(k, self)
         if m is not None:
-            self.monitors.append(m)
+            self.monitors = sorted(self.monitors + [m], key=lambda x: x.order)
 
     def fail(self, msg):
         """Stop the run on a failed check: no histories, failure.txt, exit 3."""
