@@ -313,9 +313,3 @@ def test_too_many_parts_refused_before_any_hull(tmp_path, monkeypatch):
     assert len(bf.parse(ok).block(7).parts) == bf.MAX_PARTS_PER_BLOCK
 
 
-def test_a_run_refuses_a_multi_part_stone_before_yade(tmp_path):
-    """The engines take one convex body per stone: a run names the file and the stone, one
-    line, exit 2, nothing written."""
-    err = refused_run(tmp_path, stone_file(L_PARTS))
-    assert (f"{tmp_path / 'blocks.json'}: block 7 has 2 parts: multi-part stones are validated but not yet "
-            "simulated (the engines take one convex body per stone)") in err

@@ -58,7 +58,7 @@ def test_fingerprint_is_pinned_for_every_version(tmp_path):
 
 def test_spec_json_is_version_2_with_type(tmp_path):
     d = json.loads(json.dumps(_spec(tmp_path).to_dict()))
-    assert (d["format"], d["version"]) == ("drystone-spec", SPEC_VERSION) and SPEC_VERSION == 2
+    assert (d["format"], d["version"]) == ("drystone-spec", SPEC_VERSION) and SPEC_VERSION == 3
     assert [st["type"] for st in d["stages"]] == [s["type"] for s in PIN_CASE["stages"]]
     assert all(list(st) == ["type", "start", "end", "params"] for st in d["stages"])
     assert list(d)[:3] == ["format", "version", "name"] and "provenance" not in d
@@ -73,8 +73,9 @@ def test_upgrade_renames_kind_and_leaves_its_input(tmp_path):
     assert upgrade(new) == new
     assert upgrade_stage({"kind": "tilt", "params": {}}) == {"type": "tilt", "params": {}}  # summary inputs
     assert stage_type({"kind": "rest"}) == stage_type({"type": "rest"}) == "rest"
-    with pytest.raises(SpecError, match="unsupported spec version 3"):
-        upgrade(dict(new, version=3))
+    with pytest.raises(SpecError, match=f"unsupported spec version {SPEC_VERSION + 1}"):
+        upgrade(dict(new, version=SPEC_VERSION + 1))
+    assert upgrade(dict(new, version=2)) == new  # version 3 only adds a block's optional 'parts'
     with pytest.raises(SpecError, match="not a run specification"):
         upgrade(dict(new, format="drystone.blocks"))
 

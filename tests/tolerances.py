@@ -576,3 +576,22 @@ TILING_AREA_REL = 1e-5
 #: seeds 0-2). A face of the L (largest 2 m^2) moved by 1e-4 m changes the volume by
 #: 2e-4 m^3 = 7e-5 of it; a few such faces: 1e-3 leaves a margin of ten over the measured
 COACD_L_VOLUME_REL = 1e-3
+
+# ---------------------------------------------------------------------------------------
+# Stones of several convex parts in a run (test_multipart_runs.py)
+# ---------------------------------------------------------------------------------------
+
+#: a box cut into two halves along the direction it slides, no damping: both halves carry
+#: the same pressure, so their contacts sum to the whole's (K_n V, K_t A du and mu F_n are
+#: additive); what remains is the integration in the clump's principal frame (YADE's
+#: clump and a single polyhedron order their axes differently) and the sums' order:
+#: round-off grown over 40 000 steps of a sliding block, 4.6e-14 m measured; 1e-10 m
+CUT_BLOCK_SAME_RUN_M = 1e-10
+#: the compiled step against the numpy engine on a multi-part stone: the same law in a
+#: different order of sums, 1.4e-12 m measured over a 1.8 s run; 1e-9 m
+ENGINES_MULTIPART_M = 1e-9
+#: a stone pushed 5 % below its threshold moves by its joints' elastic deflection,
+#: P / (K A) ~ 1e-4 m; 1e-3 m. 5 % above it accelerates at ~0.05 P / m for 0.6 s: at least
+#: 0.5 x 0.05 x 0.7 x 9.81 x 0.6^2 m = 6 cm along its path, 1 cm asserted
+PUSH_STAYED_M = 1e-3
+PUSH_MOVED_M = 1e-2

@@ -193,7 +193,7 @@ class Block:
         if len(self.parts) != 1:
             raise GeometryError(
                 f"block {self.id} has {len(self.parts)} parts: its {what} is not one convex body "
-                "(use .parts, or .points for bounding boxes; multi-part stones are validated but not yet simulated)")
+                "(use .parts, or .points for bounding boxes)")
 
     @property
     def vertices(self) -> np.ndarray:

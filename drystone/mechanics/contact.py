@@ -28,7 +28,12 @@ of 2 xi omega_k (M phi_k)(M phi_k)^T (``damping_matrix``). For one block on a ri
 this is exact: bouncing, rocking and sliding each decay at xi (tests/test_damping.py);
 for a flat joint with a diagonal M it is the dashpot pressure above with
 c = 2 xi sqrt(K_n m / A) for the translation and 2 xi sqrt(K_n I / R) for rocking. While a
-contact slips K has no tangential part, so neither has C. The damping is capped: the
+contact slips K has no tangential part, so neither has C. A joint between stones of several
+convex parts can be several contacts (one per pair of parts); each contact's C alone would
+damp the joint's translation at sqrt(k) x xi for a joint cut into k equal contacts (C grows
+as sqrt(K)), so the contacts of one pair of bodies share the ratio: each gets
+xi sqrt(sum A_j) / sum sqrt(A_j) (``joint_share``; exact for the translation of coplanar
+patches, 1 for a joint that is one contact). The damping is capped: the
 normal dashpot never pulls (F_n + F_dn >= 0), the damping moment keeps the resultant of
 the normal pressure inside the patch (its inertia ellipse, exact for a rectangle), and
 spring plus dashpot stay within the Coulomb cap mu F_n (``cap_damping``).
@@ -402,6 +407,38 @@ def _add_body(W, r, im, ii):
         for b in range(3):
             W[3 + a, b] += IS[a, b]
             W[3 + a, 3 + b] += ii[a, b]
+
+
+@njit(cache=True)
+def joint_share(ia, ib, nb, area):
+    """(m,) factor on the damping ratio of each contact between bodies ia and ib (ids
+    below ``nb``): sqrt(sum A) / sum sqrt(A) over the contacts of the same pair of bodies
+    (areas m^2), 1 for a pair with one contact (module docstring, "Damping")."""
+    m = len(ia)
+    out = np.ones(m)
+    if m < 2:
+        return out
+    key = np.empty(m, np.int64)
+    for k in range(m):
+        key[k] = min(ia[k], ib[k]) * nb + max(ia[k], ib[k])
+    order = np.argsort(key, kind="mergesort")
+    i = 0
+    while i < m:
+        j = i + 1
+        while j < m and key[order[j]] == key[order[i]]:
+            j += 1
+        if j - i > 1:
+            total = 0.0
+            roots = 0.0
+            for q in range(i, j):
+                a = max(area[order[q]], 0.0)
+                total += a
+                roots += np.sqrt(a)
+            if roots > 0.0:
+                for q in range(i, j):
+                    out[order[q]] = np.sqrt(total) / roots
+        i = j
+    return out
 
 
 @njit(cache=True)

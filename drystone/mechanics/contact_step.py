@@ -65,7 +65,9 @@ class NumpyStep:
     ``CompiledStep``).
 
     ``pairs(id1, id2) -> dict(kn, kt, mu, damping)`` gives joint properties by YADE ids;
-    ``mass`` (n_bodies,) kg with inf for non-moving bodies.
+    ``mass`` (n_bodies,) kg with inf for non-moving bodies; ``local_vertices`` per shape
+    in its body's frame and ``owner`` (ns,) each shape's body (default: one shape per
+    body), as ``CompiledStep``'s (native detection only: YADE's geometry is per body).
 
     Contact geometry (``detection``): ``native`` computes every overlap itself
     (``drystone.mechanics.overlap``: exact volume and centroid, normal and area from the volume's
@@ -75,7 +77,7 @@ class NumpyStep:
     the overlap's extent (``drystone.mechanics.contact.contact_area``).
     """
 
-    def __init__(self, pair_props, mass, local_vertices, detection, inertia=None):
+    def __init__(self, pair_props, mass, local_vertices, detection, inertia=None, owner=None):
         self.pair_props = pair_props
         self.mass = np.asarray(mass, float)
         self.moving = np.isfinite(self.mass)
@@ -85,6 +87,11 @@ class NumpyStep:
         self.inv_mass = np.where(self.moving, 1.0 / self.mass, 0.0)
         self.native = detection == "native"
         self.shapes = ov.Shapes(local_vertices)  # overlaps (native) and contact patches (both)
+        ns = len(local_vertices)
+        self.owner = np.arange(ns, dtype=np.int64) if owner is None else np.asarray(owner, np.int64)
+        self.shared = len(np.unique(self.owner)) < ns  # a body of several shapes
+        if not (self.native or np.array_equal(self.owner, np.arange(len(self.mass)))):
+            raise ValueError("YADE's contact geometry takes one convex shape per body (no parts)")
         if not self.native:  # for the contact-area estimate on YADE's geometry
             self.vloc = _padded(local_vertices)  # repeated entries leave min/max/argmax unchanged
             self.nloc = _padded([ph.faces(v).normals for v in local_vertices])
@@ -110,7 +117,8 @@ class NumpyStep:
 
     def yade_geometry(self, rows, bodies_state):
         """Overlaps from YADE's interactions (``rows`` (m, 9): id1, id2, volume, normal,
-        point): (ia, ib, volume, normal, point, area, patch area, centroid, second moment)."""
+        point): (ia, ib, volume, normal, point, area, patch area, centroid, second moment,
+        the contacts' keys)."""
         rows = np.asarray(rows, float).reshape(-1, 9)
         # YADE may keep interactions between two non-moving bodies: no force, no geometry needed
         rows = rows[self.moving[rows[:, 0].astype(int)] | self.moving[rows[:, 1].astype(int)]]
@@ -121,7 +129,7 @@ class NumpyStep:
         n = rows[:, 3:6]
         c = rows[:, 6:9]
         if len(rows) == 0:
-            return ia, ib, vol, n, c, np.zeros(0), np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3, 3))
+            return ia, ib, vol, n, c, np.zeros(0), np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3, 3)), []
         # contact area from the overlap extent along the joint's face normal
         # face normals in the global frame, then vertex projections x.m = x_local.(R^T m) + pos.m
         fa = np.matmul(self.nloc[ia], rot[ia].transpose(0, 2, 1))
@@ -139,23 +147,25 @@ class NumpyStep:
         s = self.shapes
         pa, pc, pj = ov.patches_of_pairs(s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, pos, rot,
                                          ia, ib, ov.TOL)
-        return ia, ib, vol, n, c, law.contact_area(vol, hi - lo, e), pa, pc, pj
+        return ia, ib, vol, n, c, law.contact_area(vol, hi - lo, e), pa, pc, pj, list(zip(ia.tolist(), ib.tolist()))
 
     def native_geometry(self, bodies_state):
-        """Overlaps computed here (drystone.mechanics.overlap): (ia, ib, volume, normal, point, area,
-        patch area, patch centroid, patch second moment)."""
+        """Overlaps computed here (drystone.mechanics.overlap): (ia, ib (bodies), volume, normal,
+        point, area, patch area, patch centroid, patch second moment, the contacts' keys: their
+        pairs of shapes)."""
         pos, _, _, rot = bodies_state
         s = self.shapes
-        ia, ib, vol, c, n, area, pc, pj = ov.contacts_with_patches(s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces,
-                                                                   s.fk, pos, rot, self.moving, ov.TOL)
-        return ia, ib, vol, n, c, area, area, pc, pj
+        sa, sb, vol, c, n, area, pc, pj = ov.contacts_of_shapes(s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces,
+                                                                s.fk, self.owner, pos, rot, self.moving, ov.TOL)
+        keys = list(zip(sa.tolist(), sb.tolist()))
+        return self.owner[sa], self.owner[sb], vol, n, c, area, area, pc, pj, keys
 
     def forces(self, geometry, bodies_state, dt):
         """This step's contact forces and torques (nb, 3) on every body (N, N m), from
         ``geometry`` (``native_geometry`` or ``yade_geometry``) and ``bodies_state``
         (pos, vel, angvel, R) over all bodies (m, m/s, rad/s, rotation matrices). With
         YADE's geometry the elastic normal force is applied by YADE's law, not here."""
-        ia, ib, vol, n, c, area, parea, pc, pj = geometry
+        ia, ib, vol, n, c, area, parea, pc, pj, keys = geometry
         st = self.state
         nb = len(self.mass)
         if len(ia) == 0:
@@ -164,8 +174,9 @@ class NumpyStep:
             self.elastic = (self.elastic[1], 0.0)
             return np.zeros((nb, 3)), np.zeros((nb, 3))
         pos, vel, angvel, rot = bodies_state
-        keys = list(zip(ia.tolist(), ib.tolist()))
-        kn, kt, mu, xi = self._props_arrays(keys)
+        kn, kt, mu, xi = self._props_arrays(list(zip(ia.tolist(), ib.tolist())))
+        if self.shared:  # a body of several shapes: its joints' contacts share the damping ratio
+            xi = xi * law.joint_share(ia, ib, nb, area)
 
         ra = c - pos[ia]
         rb = c - pos[ib]
@@ -208,12 +219,13 @@ class NumpyStep:
 
 @njit(cache=True)
 def _props(ia, ib, nb, mat, table, jkeys, jvals):
-    """(m, 4) kn, kt, mu, damping of each contact: the material pair's, or the joint's
-    override (jkeys: sorted ia * nb + ib of the overridden pairs, ia < ib)."""
+    """(m, 4) kn, kt, mu, damping of each contact between bodies ia and ib: the material
+    pair's, or the joint's override (jkeys: sorted a * nb + b of the overridden pairs of
+    bodies, a < b)."""
     m = len(ia)
     out = np.empty((m, 4))
     for c in range(m):
-        key = ia[c] * nb + ib[c]
+        key = min(ia[c], ib[c]) * nb + max(ia[c], ib[c])
         j = np.searchsorted(jkeys, key)
         if j < len(jkeys) and jkeys[j] == key:
             out[c] = jvals[j]
@@ -246,18 +258,26 @@ def _global_inverse(R, d, out):
 
 
 @njit(cache=True)
-def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, angvel, moving, inv_mass,
-                    inv_inertia_local, mat, table, jkeys, jvals, prev_keys, prev_shear, prev_basis, dt, tol, size):
-    nb = len(nv)
-    ia, ib, vol, c, n, area, pc, pj = ov.contacts_with_patches(verts, nv, normals, offsets, nf, faces, fk, pos, rot,
-                                                              moving, tol)
+def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving, inv_mass,
+                    inv_inertia_local, mat, table, jkeys, jvals, prev_keys, prev_shear, prev_basis, dt, tol, size, shared):
+    """One step's contacts between shapes (ia, ib: shape indices; shape s a convex part of
+    body ``owner[s]``, ``size`` per shape; ``shared``: some body has several shapes) and
+    the forces and torques on the bodies."""
+    nb = len(pos)
+    ns = len(nv)
+    ia, ib, vol, c, n, area, pc, pj = ov.contacts_of_shapes(verts, nv, normals, offsets, nf, faces, fk, owner, pos,
+                                                            rot, moving, tol)
     m = len(ia)
-    keys = ia * nb + ib
-    P = _props(ia, ib, nb, mat, table, jkeys, jvals)
+    keys = ia * ns + ib  # a contact's history is its pair of shapes'
+    oa = owner[ia]
+    ob = owner[ib]
+    P = _props(oa, ob, nb, mat, table, jkeys, jvals)
     kn = P[:, 0].copy()
     kt = P[:, 1].copy()
     mu = P[:, 2].copy()
     xi = P[:, 3].copy()
+    if shared:  # a body of several shapes: its joints' contacts share the damping ratio
+        xi *= law.joint_share(oa, ob, nb, area)
     # each contact's history: its shear force and its damping's modal basis (zeros for a new
     # contact: no basis, a cold solve, also at the next step if it is not damped now)
     prev = _previous(keys, prev_keys)
@@ -283,11 +303,11 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, a
     inv_glob = np.empty((nb, 3, 3))
     for i in range(nb):
         _global_inverse(rot[i], inv_inertia_local[i], inv_glob[i])
-    iia = inv_glob[ia]
-    iib = inv_glob[ib]
+    iia = inv_glob[oa]
+    iib = inv_glob[ob]
     for k in range(m):
-        a = ia[k]
-        b = ib[k]
+        a = oa[k]
+        b = ob[k]
         nk = n[k]
         for q in range(3):
             ra[k, q] = c[k, q] - pos[a, q]
@@ -332,16 +352,16 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, a
             - (vel[a, 2] + (angvel[a, 0] * pa[k, 1] - angvel[a, 1] * pa[k, 0]))
         for q in range(3):
             twist[k, 3 + q] = angvel[b, q] - angvel[a, q]
-    fd, md, om = law.damping_wrenches_warm(n, area, pj, kn, kt, xi, ~slipping, pa, pb, inv_mass[ia], inv_mass[ib],
+    fd, md, om = law.damping_wrenches_warm(n, area, pj, kn, kt, xi, ~slipping, pa, pb, inv_mass[oa], inv_mass[ob],
                                            iia, iib, twist, fn, fs, mu, lever, basis, warm)
     F = np.zeros((nb, 3))
     T = np.zeros((nb, 3))
     e_el = 0.0
     om_max = 0.0
-    depth_ratio = 0.0  # largest depth V/A over the smaller block's size
+    depth_ratio = 0.0  # largest depth V/A over the smaller shape's size
     for k in range(m):
-        a = ia[k]
-        b = ib[k]
+        a = oa[k]
+        b = ob[k]
         for q in range(3):
             fc = fs[k, q] + fn[k] * n[k, q]
             F[b, q] += fc + fd[k, q]
@@ -360,7 +380,7 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, a
         if area[k] > 0.0:
             e_el += 0.5 * fn[k] * vol[k] / area[k] + (fs[k, 0] ** 2 + fs[k, 1] ** 2 + fs[k, 2] ** 2) / (
                 2.0 * kt[k] * area[k])
-            r = vol[k] / area[k] / min(size[a], size[b])
+            r = vol[k] / area[k] / min(size[ia[k]], size[ib[k]])
             if r > depth_ratio:
                 depth_ratio = r
         if om[k] > om_max:
@@ -372,21 +392,27 @@ class CompiledStep:
     """The project's law (native contact geometry) as one compiled call per step.
 
     ``mass`` (nb,) kg, inf for non-moving bodies; ``inertia`` (nb, 3) principal moments in
-    the body frame, kg m^2; ``local_vertices`` per body in its body frame, m;
-    ``material`` (nb,) index into ``table`` (nm, nm, 4): kn, kt (N/m^3), mu, damping of
-    each pair of materials; ``joints`` {(ia, ib): (kn, kt, mu, damping)} overrides for
-    pairs of bodies; ``size`` (nb,) each body's smallest dimension (m): ``depth_ratio``
-    is the largest contact depth V/A over the smaller size of its two bodies (the
-    tunnelling check, ``drystone.mechanics.stability``). ``state`` is the last step's contacts as a
-    ``ContactState`` (built when asked for)."""
+    the body frame, kg m^2; ``local_vertices`` per shape (a convex body, or a convex part
+    of a non-convex one) in its body's frame, m; ``owner`` (ns,) the body of each shape
+    (default: shape i is body i); ``material`` (nb,) index into ``table`` (nm, nm, 4): kn,
+    kt (N/m^3), mu, damping of each pair of materials; ``joints`` {(ia, ib): (kn, kt, mu,
+    damping)} overrides for pairs of bodies; ``size`` (ns,) each shape's smallest
+    dimension (m): ``depth_ratio`` is the largest contact depth V/A over the smaller size
+    of its two shapes (the tunnelling check, ``drystone.mechanics.stability``). A
+    contact is a pair of shapes of different bodies, its shear history kept per pair of
+    shapes; its forces act on the shapes' bodies. ``state`` is the last step's contacts
+    as a ``ContactState`` (built when asked for; ids of bodies)."""
 
-    def __init__(self, mass, inertia, local_vertices, material, table, joints=None, size=None):
+    def __init__(self, mass, inertia, local_vertices, material, table, joints=None, size=None, owner=None):
         self.mass = np.asarray(mass, float)
         self.moving = np.isfinite(self.mass)
         self.inv_mass = np.where(self.moving, 1.0 / np.where(self.moving, self.mass, 1.0), 0.0)
         inertia = np.asarray(inertia, float)
         self.inv_inertia_local = np.where(self.moving[:, None], 1.0 / inertia, 0.0)
         self.shapes = ov.Shapes(local_vertices)
+        ns = len(local_vertices)
+        self.owner = np.arange(ns, dtype=np.int64) if owner is None else np.asarray(owner, np.int64)
+        self.shared = len(np.unique(self.owner)) < ns  # a body of several shapes
         self.material = np.asarray(material, np.int64)
         self.table = np.asarray(table, float)
         nb = len(self.mass)
@@ -397,7 +423,7 @@ class CompiledStep:
         self.keys = np.zeros(0, np.int64)
         self.shear_store = np.zeros((0, 3))
         self.basis_store = np.zeros((0, 6, 6))  # each contact's damping modes (contact.damping_wrenches_warm)
-        self.size = np.full(nb, np.inf) if size is None else np.asarray(size, float)
+        self.size = np.full(ns, np.inf) if size is None else np.asarray(size, float)
         self.depth_ratio = 0.0
         self._raw = None
         self._state = None
@@ -410,9 +436,9 @@ class CompiledStep:
         s = self.shapes
         (ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, basis, F, T, e_el, om_max,
          self.depth_ratio) = _contact_forces(
-            s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, pos, rot, vel, angvel, self.moving,
+            s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, self.owner, pos, rot, vel, angvel, self.moving,
             self.inv_mass, self.inv_inertia_local, self.material, self.table, self.jkeys, self.jvals, self.keys,
-            self.shear_store, self.basis_store, dt, ov.TOL, self.size)
+            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared)
         self.keys, self.shear_store, self.basis_store = keys, fs, basis
         self.elastic = (self.elastic[1], e_el)
         self.max_omega_dt = max(self.max_omega_dt, om_max * dt)
@@ -432,9 +458,9 @@ class CompiledStep:
         s = self.shapes
         (done, ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, basis, F, T, e_prev, e_last, om_max,
          self.depth_ratio) = _advance(
-            s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, pos, rot, vel, angvel, self.moving,
+            s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, self.owner, pos, rot, vel, angvel, self.moving,
             self.inv_mass, self.inv_inertia_local, self.material, self.table, self.jkeys, self.jvals, self.keys,
-            self.shear_store, self.basis_store, dt, ov.TOL, self.size, g, F_ext, self.elastic[1], *motion)
+            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared, g, F_ext, self.elastic[1], *motion)
         self.keys, self.shear_store, self.basis_store = keys, fs, basis
         self.elastic = (e_prev, e_last)
         self.max_omega_dt = max(self.max_omega_dt, om_max * dt)
@@ -448,7 +474,8 @@ class CompiledStep:
             st = ContactState()
             if self._raw is not None and len(self._raw[0]):
                 ia, ib, vol, c, n, area, fn, fs, fd, slipping = self._raw
-                st.id1, st.id2, st.normal, st.point, st.volume, st.area, st.fn = ia, ib, n, c, vol, area, fn
+                st.id1, st.id2, st.normal, st.point, st.volume, st.area, st.fn = (self.owner[ia], self.owner[ib], n, c,
+                                                                                  vol, area, fn)
                 st.f_extra = fs + fd
                 st.shear = fs + fd - law.dot(fd, n)[:, None] * n
                 st.slipping = slipping
@@ -459,8 +486,8 @@ class CompiledStep:
 # -- many steps in one call ----------------------------------------------------------
 
 @njit(cache=True)
-def _advance(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, angvel, moving, inv_mass, inv_inertia_local,
-             mat, table, jkeys, jvals, keys, shear, basis, dt, tol, size, g, F_ext, e_last, mass, inertia, lin_free,
+def _advance(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving, inv_mass, inv_inertia_local,
+             mat, table, jkeys, jvals, keys, shear, basis, dt, tol, size, shared, g, F_ext, e_last, mass, inertia, lin_free,
              rot_free, aspherical, angmom, quat):
     """``CompiledStep.advance``: len(g) steps of ``_contact_forces`` + ``integrate``
     without leaving compiled code; the arithmetic of each step is that of one call of
@@ -471,8 +498,8 @@ def _advance(verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, angvel, 
     s = 0
     while True:
         (ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, basis, F, T, e_el, om, depth) = _contact_forces(
-            verts, nv, normals, offsets, nf, faces, fk, pos, rot, vel, angvel, moving, inv_mass, inv_inertia_local,
-            mat, table, jkeys, jvals, keys, shear, basis, dt, tol, size)
+            verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving, inv_mass,
+            inv_inertia_local, mat, table, jkeys, jvals, keys, shear, basis, dt, tol, size, shared)
         shear = fs
         e_prev = e_last
         e_last = e_el

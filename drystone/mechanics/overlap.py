@@ -37,7 +37,9 @@ touching ones and the separated ones whose boxes overlap (no clip for them). Thi
 
 Contact search (``contacts_with_patches``): the bodies' bounding boxes are sorted and swept
 (``sweep_pairs``, O(n log n) plus the pairs that overlap along the sweep axis) for the
-candidate pairs, in lexicographic order, which are then clipped.
+candidate pairs, in lexicographic order, which are then clipped. A non-convex stone is
+several convex shapes of one body (``contacts_of_shapes``: its parts never pair with
+each other).
 
 Units: metres. Arrays: per body, local vertices (nv, 3), face planes (nf, 3) + (nf,),
 faces as vertex indices padded with -1, counter-clockwise seen from outside.
@@ -585,6 +587,24 @@ def contacts_with_patches(verts, nv, normals, offsets, nf, faces, fk, pos, rot, 
     GV, GN, GD, lo, hi = _global_geometry(verts, nv, normals, offsets, nf, pos, rot)
     ia, ib = sweep_pairs(lo, hi, moving)
     return _contacts_of_pairs(GV, GN, GD, nv, nf, faces, fk, ia, ib, tol, TOUCHING_IS_NO_CONTACT)
+
+
+@njit(cache=True)
+def contacts_of_shapes(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, moving, tol):
+    """``contacts_with_patches`` over shapes (the convex parts of stones): shape s is body
+    ``owner[s]``'s part, its vertices ``verts[s]`` in that body's frame, so it moves with
+    ``pos[owner[s]]``, ``rot[owner[s]]``, ``moving[owner[s]]`` (arrays over bodies).
+    Pairs of shapes of one body are no candidates: a stone's parts never contact each other.
+    Returns the contacts as ``contacts_with_patches`` does, ia and ib shape indices. With
+    one shape per body (``owner`` the identity) the result is ``contacts_with_patches``'s
+    bit for bit."""
+    pos_s = pos[owner]
+    rot_s = rot[owner]
+    moving_s = moving[owner]
+    GV, GN, GD, lo, hi = _global_geometry(verts, nv, normals, offsets, nf, pos_s, rot_s)
+    ia, ib = sweep_pairs(lo, hi, moving_s)
+    keep = owner[ia] != owner[ib]
+    return _contacts_of_pairs(GV, GN, GD, nv, nf, faces, fk, ia[keep], ib[keep], tol, TOUCHING_IS_NO_CONTACT)
 
 
 @njit(cache=True)

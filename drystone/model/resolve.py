@@ -39,15 +39,12 @@ def _geometry(case: dict, where: str, out: Path, check_overlaps: bool = True) ->
             raise casemod.CaseError(f"{where}: [case] geometry: {exc}") from None
         bs = bf.parse(data, f"{where}: generated geometry {geo['generator']!r}", check_overlaps)
         source = {"generator": geo}
-    for b in bs.blocks:  # what the engines cannot take fails here, not inside YADE
-        if len(b.parts) > 1:
-            raise bf.GeometryError(
-                f"{geo if isinstance(geo, str) else where}: block {b.id} has {len(b.parts)} parts: multi-part stones "
-                "are validated but not yet simulated (the engines take one convex body per stone)")
     for b in bs.blocks:  # what the contact kernel cannot hold fails here, not inside YADE
-        why = overlap.too_large(b.vertices)
-        if why:
-            raise bf.GeometryError(f"{geo if isinstance(geo, str) else where}: block {b.id}: {why}")
+        for k, part in enumerate(b.parts):
+            why = overlap.too_large(part)
+            if why:
+                what = f"block {b.id}" + (f" part {k}" if len(b.parts) > 1 else "")
+                raise bf.GeometryError(f"{geo if isinstance(geo, str) else where}: {what}: {why}")
     bf.write(data, out / "geometry.json")
     return bs, source
 
@@ -79,11 +76,11 @@ def _check_force_depth(f: dict, k: int, bs: bf.BlockSet, mats: dict, where: str)
     from drystone.mechanics import stability
 
     b = bs.block(f["block"])
-    area = timestep.largest_face_area(b.vertices)
+    area = timestep.largest_face_area(b.points)
     force = math.hypot(*f["force"])
     depth = force / (mats[b.material]["kn"] * area)
     # its support is not known here: the thinnest block of the geometry bounds it
-    limit = stability.TUNNEL_FRACTION * min(float(ph.extent(c.vertices).min()) for c in bs.blocks)
+    limit = stability.TUNNEL_FRACTION * min(float(ph.extent(c.points).min()) for c in bs.blocks)
     if depth > limit:
         raise casemod.CaseError(
             f"{where}: [[forces]] #{k + 1}: {force:.3g} N on block {f['block']} would press it {depth:.3g} m into "
@@ -106,11 +103,21 @@ def _check_references(case: dict, bs: bf.BlockSet, mats: dict, where: str) -> No
         _check_force_depth(f, k, bs, mats, where)
 
 
-def _detection(case: dict, where: str) -> str:
-    """The contact geometry: native or yade ('auto' follows the law)."""
+def _detection(case: dict, bs: bf.BlockSet, where: str) -> str:
+    """The contact geometry: native or yade ('auto' follows the law). Stones of several
+    parts need the native geometry (YADE's takes one convex body per stone pair)."""
     detection, law = case["contact"]["detection"], laws.get(case["contact"]["law"])
     if detection == "auto":
-        return law.default_detection
+        detection = law.default_detection
+    multi = [b.id for b in bs.blocks if len(b.parts) > 1]
+    if multi and detection != "native":
+        raise casemod.CaseError(
+            f"{where}: block {multi[0]} has {len(bs.block(multi[0]).parts)} parts: stones of several convex parts "
+            f"run with the project's law on the native contact geometry, not law = {law.name!r} with detection = "
+            f"{detection!r} (YADE's geometry takes one convex body per pair; its stock law would need clumps it "
+            "cannot hold shear for)")
+    if case["contact"]["detection"] == "auto":
+        return detection
     if detection not in law.detections:
         runs_on = [f"law = {n!r}" for n, other in laws.REGISTRY.items() if detection in other.detections]
         raise casemod.CaseError(f"{where}: [contact] 'detection' = {detection!r} needs {' or '.join(runs_on)} "
@@ -125,9 +132,17 @@ def _check_analysis(case: dict, bs: bf.BlockSet, where: str) -> None:
 
 
 def _blocks(bs: bf.BlockSet) -> list[dict]:
-    """The blocks as spec.json lists them (vertices m, platform frame)."""
-    return [{"id": b.id, "role": b.role, "material": b.material, "vertices": b.vertices.tolist(),
-             "blocked_dofs": b.blocked_dofs} for b in bs.blocks]
+    """The blocks as spec.json lists them (m, platform frame): a convex block its
+    ``vertices``; a stone of several convex parts its ``parts`` and, as ``vertices``,
+    every part's corners (for its extent and height, never as a body)."""
+    out = []
+    for b in bs.blocks:
+        d = {"id": b.id, "role": b.role, "material": b.material, "vertices": b.points.tolist()}
+        if len(b.parts) > 1:
+            d["parts"] = [p.tolist() for p in b.parts]
+        d["blocked_dofs"] = b.blocked_dofs
+        out.append(d)
+    return out
 
 
 def _time_step(case: dict, bs: bf.BlockSet, blocks: list[dict], mats: dict, where: str) -> tuple[float, float, dict]:
@@ -163,7 +178,7 @@ def _stages(case: dict, bs: bf.BlockSet, dt: float, where: str, out: Path) -> tu
 def _collapse_threshold(case: dict, bs: bf.BlockSet) -> dict[str, float]:
     """Per free block (id as a string): the displacement (m) beyond which it has collapsed."""
     cd = case["output"]["collapse_displacement"]
-    return {str(b.id): float(cd) if cd != "auto" else 0.5 * float(ph.extent(b.vertices).min())
+    return {str(b.id): float(cd) if cd != "auto" else 0.5 * float(ph.extent(b.points).min())
             for b in bs.blocks if b.role == "free"}
 
 
@@ -182,7 +197,7 @@ def resolve(case: dict, where: str, out: Path, check_overlaps: bool = True) -> S
     bs, geo_source = _geometry(case, where, out, check_overlaps)
     mats = _materials(case, bs, where)
     _check_references(case, bs, mats, where)
-    detection = _detection(case, where)
+    detection = _detection(case, bs, where)
     _check_analysis(case, bs, where)
     blocks = _blocks(bs)
     dt, dt_crit, crit = _time_step(case, bs, blocks, mats, where)

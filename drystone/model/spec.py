@@ -7,7 +7,9 @@ For the readers written against the JSON dict, both also give read-only mapping 
 fresh copy: dicts and lists); new code uses the attributes. A changed spec is a new one
 (``Spec.replace``).
 
-Versions: 1 named a stage's type ``kind``, 2 names it ``type``. Every reader of a spec of
+Versions: 1 named a stage's type ``kind``, 2 names it ``type``, 3 adds a block's
+``parts`` (a stone of several convex parts; its ``vertices`` are then every part's
+corners, for extents only; a reader of version 2 would take the stone for their hull). Every reader of a spec of
 any version goes through ``upgrade`` (``spec_dict``, ``load_spec``); summary.json's
 ``inputs.stages`` mirror a spec's stages and are read with ``stage_type``. Core layer: no
 YADE, no numpy.
@@ -22,7 +24,7 @@ from pathlib import Path
 from types import MappingProxyType
 
 #: spec.json's format name and version (histories.npz and summary.json carry theirs)
-SPEC_FORMAT, SPEC_VERSION = "drystone-spec", 2
+SPEC_FORMAT, SPEC_VERSION = "drystone-spec", 3
 
 
 class SpecError(ValueError):
@@ -153,7 +155,7 @@ class Spec(_ReadOnlyMapping):
     dt_critical_detail: Mapping  # the critical contact (drystone/model/timestep.py)
     gravity: float  # m/s^2
     materials: Mapping  # name -> density kg/m^3, kn kt N/m^3, mu, damping
-    blocks: tuple  # {id, role, material, vertices m, blocked_dofs}
+    blocks: tuple  # {id, role, material, vertices m, [parts m,] blocked_dofs}
     joint_overrides: Mapping  # "a-b" (a < b) -> contact properties of that joint
     control_points: tuple  # {name, block, position m}
     stages: tuple  # StageSpec, contiguous from t = 0

@@ -4,7 +4,9 @@ For a free block i of mass m_i whose largest face has area A_i, the stiffest con
 mode is a normal one: the block pressed on two opposite faces by neighbours of similar
 mass, omega_i^2 = 4 K_n A_i / m_i (the Gershgorin bound of a chain of such contacts).
 Rocking modes are softer (the rocking stiffness of a face is K_n A b^2/12 against an
-inertia larger than m b^2/12). With contact damping xi (fraction of critical) the
+inertia larger than m b^2/12). A stone of several convex parts: m from the union's volume
+(the parts' volumes summed) and A the largest face of the hull of its corners (the same estimate as
+a convex block's; for a convex block cut into parts it is the uncut block's: the same step). With contact damping xi (fraction of critical) the
 central-difference limit is dt_crit = (2 / omega)(sqrt(1 + xi^2) - xi).
 """
 from __future__ import annotations
@@ -35,7 +37,7 @@ def critical_step(blocks, materials) -> tuple[float, dict]:
         if b["role"] != "free":
             continue
         m = materials[b["material"]]
-        vol = ph.volume_centroid(b["vertices"])[0]
+        vol = sum(ph.volume_centroid(p)[0] for p in b.get("parts", [b["vertices"]]))
         mass = m["density"] * vol
         k = 4.0 * m["kn"] * largest_face_area(b["vertices"])
         dt = law.critical_time_step(mass, k, m["damping"])

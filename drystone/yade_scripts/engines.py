@@ -160,7 +160,7 @@ class NumpyEngine(Engine):
     def __init__(self, run):
         super().__init__(run)
         self.step = ce.PenaltyCoulomb(lambda a, b: pair_properties(run, a, b), run.mass, run.local_v,
-                                      run.spec.detection, run.inertia)
+                                      run.spec.detection, run.inertia, run.owner)
 
     def forces(self, t, g):
         run = self.run
@@ -207,7 +207,7 @@ class CompiledEngine(Engine):
         self.mass_int = np.where(np.isfinite(run.mass), run.mass, 1.0)  # never divided for non-moving bodies
         self.inertia_int = np.where(np.isfinite(run.mass)[:, None], run.inertia, 1.0)
         self.step = ce.Compiled(run.mass, run.inertia, run.local_v, material, table, joints,
-                                run.size * stability.TUNNEL_FRACTION)
+                                run.shape_size * stability.TUNNEL_FRACTION, run.owner)
         self.F = self.T = None
         self._normalise_orientations()
 

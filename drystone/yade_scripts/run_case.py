@@ -54,18 +54,18 @@ class Driver:
         self.dyn = np.array(tables["dynamic"], int)
         O, nb = self.O, len(self.O.bodies)
         self.states = [O.bodies[i].state for i in range(nb)]
-        self.mass = np.array([O.bodies[i].state.mass if O.bodies[i].dynamic else np.inf for i in range(nb)])
+        # a clump's members move with it: never integrated themselves (mass inf here)
+        self.mass = np.array([O.bodies[i].state.mass if O.bodies[i].dynamic and not O.bodies[i].isClumpMember
+                              else np.inf for i in range(nb)])
         self.inertia = np.array([tuple(O.bodies[i].state.inertia) for i in range(nb)])
         self.blocks = {b["id"]: b for b in spec.blocks}
-        self.local_v = [[tuple(v) for v in O.bodies[i].shape.v] for i in range(nb)]
         self.pos = np.array([tuple(O.bodies[i].state.pos) for i in range(nb)])
         self.pos0 = self.pos.copy()
         self.vel, self.angvel = np.zeros((nb, 3)), np.zeros((nb, 3))
         self.quat = np.array([tuple(O.bodies[i].state.ori) for i in range(nb)])
         self.quat0 = self.quat.copy()
         self.rot = rotations.to_matrix(self.quat)
-        sizes = {b["id"]: float(ph.extent(np.asarray(b["vertices"])).min()) for b in spec.blocks}
-        self.size = np.array([sizes[self.bid[i]] for i in range(nb)])  # smallest dimension, m
+        self._shapes(tables["members"])
         self.prog = LoadProgramme.from_spec(spec, self.out)  # excitation samples from the run folder
         self.moving_static = [self.yid[b] for b in self.prog.moving_blocks()]
         self.moving = np.concatenate([self.dyn, np.array(self.moving_static, int)])  # the bodies read back
@@ -89,6 +89,35 @@ class Driver:
         self.iter, self.t = 0, 0.0  # the step being taken: YADE's iteration and time
         self.python_time = self.kernel_time = 0.0  # s in the per-step Python, of which in compiled kernels
         self.progress = monitors.Progress()
+
+    def _shapes(self, members: dict) -> None:
+        """The convex shapes the contact laws see, in YADE's body order: a body's Polyhedra,
+        or each member of a clump (a multi-part stone) as a shape of the clump body.
+        ``owner`` (ns,) each shape's body, ``local_v`` its vertices in that body's frame (m),
+        ``shape_size`` its smallest dimension (m); ``size`` per body: its smallest, a
+        multi-part stone's smallest part's (the tunnelling check, stability.TUNNEL_FRACTION)."""
+        O, nb = self.O, len(self.O.bodies)
+        clump_of = {m: c for c, ms in members.items() for m in ms}
+        owner, local_v, shape_size = [], [], []
+        self.size = np.full(nb, np.inf)
+        for i in range(nb):
+            if i in members:
+                continue
+            block = self.blocks[self.bid[i]]
+            if i in clump_of:  # a part: its vertices into the clump's frame
+                c = clump_of[i]
+                part = block["parts"][members[c].index(i)]
+                x = self.pos[i] + np.asarray([tuple(v) for v in O.bodies[i].shape.v]) @ self.rot[i].T
+                local_v.append([tuple(v) for v in (x - self.pos[c]) @ self.rot[c]])
+                owner.append(c)
+                size = float(ph.extent(np.asarray(part)).min())
+            else:
+                local_v.append([tuple(v) for v in O.bodies[i].shape.v])
+                owner.append(i)
+                size = float(ph.extent(np.asarray(block["vertices"])).min())
+            shape_size.append(size)
+            self.size[owner[-1]] = min(self.size[owner[-1]], size)
+        self.owner, self.local_v, self.shape_size = np.array(owner, np.int64), local_v, np.array(shape_size)
 
     def step(self):
         """One step that needs Python: the load, a stage's start, the forces, a recorded

@@ -1,6 +1,10 @@
 """Build a YADE scene from a resolved run specification (runs inside YADE only).
 
-Bodies: one Polyhedra body per block, in file order. Blocks with role ``fixed`` or
+Bodies: one Polyhedra body per block, in file order; a stone of several convex parts
+(``parts`` in the spec) is a YADE clump of one Polyhedra body per part
+(``O.bodies.appendClumped``: its members first, then the clump body, which carries the
+stone's state; YADE gives it the union's mass, centroid and principal inertia from its
+members', which are exact for polyhedra that do not overlap). Blocks with role ``fixed`` or
 ``platform`` are non-dynamic; they share a collision-mask bit that the collider's
 ``avoidSelfInteractionMask`` excludes, so no contact between two non-moving blocks is
 ever computed (YADE would otherwise intersect them every step).
@@ -33,8 +37,9 @@ def build(spec, integrate: bool = True) -> dict:
     """Create materials, bodies and engines of ``spec`` (a drystone.model.spec.Spec); return lookup tables. ``integrate=False``
     leaves NewtonIntegrator out of the engines (the compiled step moves the bodies).
 
-    Returns dict with ``yid`` (block id -> YADE id), ``bid`` (YADE id -> block id),
-    ``dynamic`` (list of YADE ids that move), ``newton`` (the NewtonIntegrator).
+    Returns dict with ``yid`` (block id -> YADE id: the clump's for a multi-part stone),
+    ``bid`` (YADE id -> block id, the members' too), ``dynamic`` (list of YADE ids that
+    move), ``members`` (clump's YADE id -> its members' ids), ``newton`` (the NewtonIntegrator).
     """
     O = yade.Omega()
     O.reset()
@@ -44,15 +49,25 @@ def build(spec, integrate: bool = True) -> dict:
         ym = _material(dict(m, name=name), law, spec.stock_shear_area)
         O.materials.append(ym)
         mats[name] = ym
-    yid, bid, dynamic = {}, {}, []
+    yid, bid, dynamic, members = {}, {}, [], {}
     for b in spec.blocks:
-        verts = [yade.Vector3(*p) for p in b["vertices"]]
         moving = b["role"] == "free"
-        body = utils.polyhedron(verts, material=mats[b["material"]], fixed=not moving,
-                                mask=DYNAMIC_MASK if moving else STATIC_MASK)
+
+        def polyhedron(vertices):
+            return utils.polyhedron([yade.Vector3(*p) for p in vertices], material=mats[b["material"]],
+                                    fixed=not moving, mask=DYNAMIC_MASK if moving else STATIC_MASK)
+
+        if "parts" in b:
+            i, ids = O.bodies.appendClumped([polyhedron(p) for p in b["parts"]])
+            O.bodies[i].dynamic = moving
+            members[i] = list(ids)
+            bid.update((m, b["id"]) for m in ids)
+            body = O.bodies[i]
+        else:
+            body = polyhedron(b["vertices"])
+            i = O.bodies.append(body)
         if moving and b.get("blocked_dofs"):
             body.state.blockedDOFs = b["blocked_dofs"]
-        i = O.bodies.append(body)
         yid[b["id"]] = i
         bid[i] = b["id"]
         if moving:
@@ -74,4 +89,4 @@ def build(spec, integrate: bool = True) -> dict:
             newton,
         ]
     O.dt = spec.dt
-    return {"yid": yid, "bid": bid, "dynamic": dynamic, "newton": newton}
+    return {"yid": yid, "bid": bid, "dynamic": dynamic, "members": members, "newton": newton}
