@@ -9,7 +9,9 @@
                   thread is timed ``REPEATS`` times (the fastest kept) and set against the
                   goal of issue 14 (``GOAL_MS``, ``GOAL_SPEEDUP`` over the issue's
                   ``BASELINE_MS``; this run's numpy step beside it).
-``scale``         running-bond and irregular walls of about 40, 500 and 2000 stones under
+``scale``         running-bond and irregular walls of about 40, 500 and 2000 stones, and a
+                  polygonal wall of about 500 (``POLYGONAL``: a third of its stones
+                  re-entrant, each several convex parts, one body) under
                   gravity for a few hundred steps (our law, native geometry, one thread): ms
                   per step, contacts, us per contact-step, the growth exponent of the cost
                   with the number of stones (least-squares slope of log ms/step on log N),
@@ -255,7 +257,14 @@ def running_bond_section(workdir: Path) -> list[dict]:
 
 #: stones of the scale section's walls (about; the irregular walls' counts are drawn)
 SIZES = (40, 500, 2000)
-WALLS = ("running_bond", "irregular")
+WALLS = ("running_bond", "irregular", "polygonal")
+#: the sizes a wall kind is built at, where not SIZES: the polygonal wall at 500 stones only
+#: (its generator's repairs make a 2000-stone face slow to draw)
+WALL_SIZES = {"polygonal": (500,)}
+#: the polygonal wall (drystone/geometry/polygonal_wall.py): a 12 x 5 m face of stones 0.25-0.5 m
+#: in equivalent diameter (500 stones at seed 0), re-entrant stones (several convex parts)
+#: r = 0.5 of the convex ones, LAYOUT's thickness
+POLYGONAL = {"length": 12.0, "height": 5.0, "stone_size": [0.25, 0.5], "reentrant": 0.5}
 #: stones about 0.6 m long, 0.3 m high, 0.6 m deep (ashlar size), 2300 kg/m^3, K_n 2e8 N/m^3
 STONE_LENGTH, COURSE_HEIGHT, THICKNESS = 0.6, 0.3, 0.6
 #: (courses, stones per course) of each size
@@ -279,6 +288,8 @@ def wall_geometry(kind: str, size: int, seed: int = 0) -> dict:
         return {"generator": "irregular_wall", "length": length, "height": height, "thickness": THICKNESS,
                 "courses": courses, "stone_length": [0.75 * STONE_LENGTH, 1.25 * STONE_LENGTH], "seed": seed,
                 "name": f"irregular_{size}"}
+    if kind == "polygonal":
+        return {"generator": "polygonal_wall", "thickness": THICKNESS, "seed": seed, **POLYGONAL}
     raise ValueError(f"wall kind {kind!r}: one of {list(WALLS)}")
 
 
@@ -305,8 +316,9 @@ def time_step(data: dict, safety: float | None = None) -> float:
         safety = casemod.SECTIONS["time"]["safety"].default
     mats = data["materials"]
     damp = max(m["damping"] for m in mats.values())
-    blocks = [{"id": b["id"], "role": b["role"], "material": b["material"], "vertices": b["vertices"]}
-              for b in data["blocks"]]
+    blocks = [{"id": b["id"], "role": b["role"], "material": b["material"],
+               "vertices": b["vertices"] if "vertices" in b else [p for part in b["parts"] for p in part],
+               **({"parts": b["parts"]} if "parts" in b else {})} for b in data["blocks"]]
     return safety * timestep.critical_step(blocks, {n: dict(m, damping=damp) for n, m in mats.items()})[0]
 
 
@@ -334,9 +346,10 @@ def growth_exponent(n, cost) -> float:
 
 
 def settled_configuration(run_dir: Path):
-    """(Shapes, pos, rot, moving) of a finished run's last recorded state, as
-    ``contacts_with_patches`` takes them: free blocks where the run left them, the others
-    where they were."""
+    """(Shapes, pos, rot, moving, owner) of a finished run's last recorded state, as
+    ``contacts_of_shapes`` takes them (a shape per convex part, ``owner`` its block's row;
+    pos, rot, moving per block): free blocks where the run left them, the others where
+    they were."""
     from drystone.mechanics import overlap as ov
     from drystone.mechanics import rotations
     from drystone.geometry import polyhedron as ph
@@ -344,21 +357,22 @@ def settled_configuration(run_dir: Path):
     spec = json.loads((run_dir / "spec.json").read_text())
     h = np.load(run_dir / "histories.npz")
     row = {int(b): k for k, b in enumerate(h["block_ids"])}
-    local, pos, rot, moving = [], [], [], []
-    for b in spec["blocks"]:
-        v = np.asarray(b["vertices"], float)
+    local, owner, pos, rot, moving = [], [], [], [], []
+    for i, b in enumerate(spec["blocks"]):
+        parts = [np.asarray(p, float) for p in b.get("parts", [b["vertices"]])]
         k = row.get(b["id"])
         if k is None:
-            c = ph.volume_centroid(v)[1]
-            local.append(v - c)
+            c = ph.volume_centroid(parts[0])[1] if len(parts) == 1 else np.vstack(parts).mean(axis=0)
             pos.append(c)
             rot.append(np.eye(3))
         else:
-            local.append(v - h["pos0"][k])
+            c = h["pos0"][k]
             pos.append(h["pos"][-1][k])
             rot.append(rotations.to_matrix(h["quat"][-1][k]) @ rotations.to_matrix(h["quat0"][k]).T)
+        local += [p - c for p in parts]
+        owner += [i] * len(parts)
         moving.append(k is not None)
-    return ov.Shapes(local), np.array(pos), np.array(rot), np.array(moving)
+    return ov.Shapes(local), np.array(pos), np.array(rot), np.array(moving), np.array(owner, np.int64)
 
 
 def _best_ms(fn, budget_s: float = 1.0, repeats: int = 3) -> float:
@@ -384,19 +398,23 @@ def contact_search_times(run_dir: Path, budget_s: float = 1.0) -> dict:
     and the former all-pairs search."""
     from drystone.mechanics import overlap as ov
 
-    s, pos, rot, moving = settled_configuration(run_dir)
-    args = (s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, pos, rot, moving, ov.TOL)
-    GV, GN, GD, lo, hi = ov._global_geometry(s.verts, s.nv, s.normals, s.offsets, s.nf, pos, rot)
-    ia, ib = ov.sweep_pairs(lo, hi, moving)
-    out = ov.contacts_with_patches(*args)
-    r = {"bodies": int(len(s.nv)), "candidates": int(len(ia)), "contacts": int(len(out[0])),
-         "search_ms": _best_ms(lambda: ov.contacts_with_patches(*args), budget_s),
-         "geometry_ms": _best_ms(lambda: ov._global_geometry(s.verts, s.nv, s.normals, s.offsets, s.nf, pos, rot),
+    s, pos, rot, moving, owner = settled_configuration(run_dir)
+    pos_s, rot_s, moving_s = pos[owner], rot[owner], moving[owner]  # per shape
+    args = (s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, owner, pos, rot, moving, ov.TOL)
+    GV, GN, GD, lo, hi = ov._global_geometry(s.verts, s.nv, s.normals, s.offsets, s.nf, pos_s, rot_s)
+    ia, ib = ov.sweep_pairs(lo, hi, moving_s)
+    keep = owner[ia] != owner[ib]  # a stone's parts are no pair
+    ia, ib = ia[keep], ib[keep]
+    out = ov.contacts_of_shapes(*args)
+    r = {"bodies": int(len(pos)), "shapes": int(len(s.nv)), "candidates": int(len(ia)), "contacts": int(len(out[0])),
+         "search_ms": _best_ms(lambda: ov.contacts_of_shapes(*args), budget_s),
+         "geometry_ms": _best_ms(lambda: ov._global_geometry(s.verts, s.nv, s.normals, s.offsets, s.nf, pos_s, rot_s),
                                  budget_s / 4),
-         "broad_phase_ms": _best_ms(lambda: ov.sweep_pairs(lo, hi, moving), budget_s / 4),
+         "broad_phase_ms": _best_ms(lambda: ov.sweep_pairs(lo, hi, moving_s), budget_s / 4),
          "clip_ms": _best_ms(lambda: ov._contacts_of_pairs(GV, GN, GD, s.nv, s.nf, s.faces, s.fk, ia, ib, ov.TOL,
                                                            ov.TOUCHING_IS_NO_CONTACT), budget_s)}
-    r["all_pairs_ms"] = _best_ms(lambda: ov._contacts_all_pairs(*args), budget_s)
+    if len(pos) == len(s.nv):  # the former all-pairs search knows no parts
+        r["all_pairs_ms"] = _best_ms(lambda: ov._contacts_all_pairs(*args[:7] + args[8:]), budget_s)
     return r
 
 
@@ -411,19 +429,20 @@ def step_times(run_dir: Path, budget_s: float = 1.0) -> dict:
     from drystone.mechanics import contact_step as cs
     from drystone.mechanics import integration
 
-    s, pos, rot, moving = settled_configuration(run_dir)
+    s, pos, rot, moving, owner = settled_configuration(run_dir)
     spec = json.loads((run_dir / "spec.json").read_text())
     h = np.load(run_dir / "histories.npz")
     row = {int(b): k for k, b in enumerate(h["block_ids"])}
-    nb = len(s.nv)
+    nb = len(pos)
     mass = np.array([h["mass"][row[b["id"]]] if b["id"] in row else np.inf for b in spec["blocks"]], float)
-    ext = np.array([np.ptp(s.verts[i, :s.nv[i]], axis=0) for i in range(nb)])
+    ext = np.array([np.ptp(np.asarray(b["vertices"], float), axis=0) for b in spec["blocks"]])
     box = np.stack([ext[:, 1] ** 2 + ext[:, 2] ** 2, ext[:, 0] ** 2 + ext[:, 2] ** 2, ext[:, 0] ** 2 + ext[:, 1] ** 2], 1)
     inertia = np.where(moving[:, None], np.where(moving, mass, 1.0)[:, None] / 12.0 * box, 1.0)
     mat = next(iter(spec["materials"].values()))
     props = law.pair_properties(mat, mat)
     table = np.array([[[props[k] for k in ("kn", "kt", "mu", "damping")]]])
-    step = cs.CompiledStep(mass, inertia, [s.verts[i, :s.nv[i]] for i in range(nb)], np.zeros(nb, int), table)
+    step = cs.CompiledStep(mass, inertia, [s.verts[i, :s.nv[i]] for i in range(len(s.nv))], np.zeros(nb, int), table,
+                           owner=owner)
     vel, w, dt = np.zeros((nb, 3)), np.zeros((nb, 3)), float(spec["dt"])
     F, T = step.forces(pos, rot, vel, w, dt)
     free = np.where(moving[:, None], 1.0, 0.0) * np.ones((nb, 3))
@@ -447,7 +466,7 @@ def scale_section(workdir: Path, sizes=SIZES, walls=WALLS, steps: int = 300, eng
           "native geometry, 1 thread):", flush=True)
     rows = []
     for kind, engine in [(k, e) for k in walls for e in engines]:
-        for size in sizes:
+        for size in [n for n in sizes if n in WALL_SIZES.get(kind, sizes)]:
             geo = wall_geometry(kind, size)
             data = build_wall(geo)
             n, dt = stone_count(data), time_step(data)
@@ -476,7 +495,7 @@ def scale_section(workdir: Path, sizes=SIZES, walls=WALLS, steps: int = 300, eng
                   f"  {'':21s} contact search alone {sr['search_ms']:.2f} ms ({100 * r['search_share']:.0f} % of the "
                   f"step): broad phase {sr['geometry_ms'] + sr['broad_phase_ms']:.3f} ms "
                   f"({100 * r['broad_phase_share']:.1f} %), clip of {sr['candidates']} candidates "
-                  f"{sr['clip_ms']:.2f} ms; the former all-pairs search {sr['all_pairs_ms']:.2f} ms\n"
+                  f"{sr['clip_ms']:.2f} ms" + (f"; the former all-pairs search {sr['all_pairs_ms']:.2f} ms" if "all_pairs_ms" in sr else "") + "\n"
                   f"  {'':21s} step in two halves alone: contact forces (search, law, damping) "
                   f"{r['split']['forces_ms']:.3f} ms, integration of {n} stones {r['split']['integrate_ms']:.3f} ms",
                   flush=True)

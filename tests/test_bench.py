@@ -146,7 +146,7 @@ def test_settled_configuration_places_the_blocks(tmp_path):
     q1 = rotations.multiply(qz, q0)
     np.savez(tmp_path / "histories.npz", block_ids=np.array([7]), pos0=np.array([[1.0, 0.5, 0.25]]),
              quat0=q0[None], pos=np.array([[[1.0, 0.5, 0.25]], [[0.0, 0.0, 1.0]]]), quat=np.stack([q0, q1])[:, None])
-    s, pos, rot, moving = bench.settled_configuration(tmp_path)
+    s, pos, rot, moving, owner = bench.settled_configuration(tmp_path)
     assert list(moving) == [False, True]
     GV = ov._global_geometry(s.verts, s.nv, s.normals, s.offsets, s.nf, pos, rot)[0]
     v = GV[1][:8]

@@ -195,3 +195,20 @@ def test_joint_share_keeps_one_contact_and_splits_equal_halves():
     assert f[0] == pytest.approx(1 / math.sqrt(2), rel=tol.FEW_ULP_REL) and f[3] == f[0]
     # the joint's translation: sum of 2 xi f sqrt(K_n A_i m) equals 2 xi sqrt(K_n sum(A) m)
     assert (f[0] * np.sqrt(area[[0, 3]])).sum() == pytest.approx(np.sqrt(area[[0, 3]].sum()), rel=tol.FEW_ULP_REL)
+
+
+# --- figures and VTK draw every part ----------------------------------------------------------
+
+def test_figures_and_vtk_draw_each_part(outdir):
+    from conftest import assert_figure
+    from drystone.postprocess import snapshots, vtk
+
+    data = stone_file([L_FOOT, L_LEG])
+    pts, faces = snapshots.stone_geometry(data["blocks"])[7]
+    assert len(pts) == 16 and len(faces) == 12  # two boxes' corners and faces, not their hull's 8 and 6
+    assert_figure(snapshots.elevation(write(outdir, data), outdir / "elevation.png"), (10, 5), dpi=110)
+    case = gravity_then([], write(outdir, data))
+    run_case(case, outdir)
+    pvd = vtk.write(outdir / "case", every=10)
+    last = sorted(pvd.parent.glob("blocks_*.vtp"))[-1].read_text()
+    assert 'NumberOfPolys="18"' in last  # the platform's 6 faces and the L's 12

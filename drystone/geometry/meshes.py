@@ -29,7 +29,7 @@ Shapes (``decomposition``):
   per stone in the block file's description.
 * ``"coacd"``: an approximate convex decomposition (coacd, ``threshold`` its concavity
   limit, ``seed``), each part's hull simplified as above, a stone of convex ``parts``
-  (block file version 2; validated, not yet simulated). coacd's parts only approximately
+  (block file version 2; one rigid body in a run). coacd's parts only approximately
   tile the mesh (a part's faces may lie ~1e-4 x the size off its neighbour's), so they may
   overlap by more than blockfile.OVERLAP_TOL or fail the face-to-face join rule: such a
   stone is refused by the block file's checks, naming the stone and the parts, not forced.

@@ -29,7 +29,7 @@ Method (units m):
    no such pair is left); for that the uniform typology seeds smaller cells
    (``REENTRANT_PAIR_FILL`` x max / sqrt(2), at least ``REENTRANT_CELL_MIN`` x min). Such a
    stone becomes several convex ``parts`` (``decompose.convex_pieces``; block file
-   version 2, validated but not yet simulated). ``reentrant = 0`` gives convex stones and a version 1 file.
+   version 2; one rigid body in a run). ``reentrant = 0`` gives convex stones and a version 1 file.
 
 Sizes: every stone not touching the rectangle's boundary has an equivalent diameter within
 ``stone_size``; stones clipped by the wall's ends, foot or top (border stones) can be
@@ -113,14 +113,23 @@ def _power_cells(pts, w, length, height):
     rect = np.array([[0.0, 0.0], [length, 0.0], [length, height], [0.0, height]])
     cells = []
     sq = (pts ** 2).sum(axis=1)
+    w_max = float(np.max(w)) if len(w) else 0.0
     for i in range(len(pts)):
         poly = rect
-        order = np.argsort(((pts - pts[i]) ** 2).sum(axis=1))
+        d2 = ((pts - pts[i]) ** 2).sum(axis=1)
+        order = np.argsort(d2)
+        reach = np.sqrt(((poly - pts[i]) ** 2).sum(axis=1).max())  # farthest corner of the cell from p_i
         for j in order[1:]:
+            # the bisector of i and j lies (|d|^2 + w_i - w_j) / (2 |d|) >= (|d|^2 - w_max) / (2 |d|) from p_i,
+            # growing with |d|: past the cell's farthest corner no later seed cuts the cell (an exact stop)
+            dj = np.sqrt(d2[j])
+            if dj > 0 and (d2[j] - w_max) / (2.0 * dj) > reach:
+                break
             # |x - p_i|^2 - w_i <= |x - p_j|^2 - w_j  <=>  2 (p_j - p_i) . x <= |p_j|^2 - |p_i|^2 - w_j + w_i
             poly = _clip(poly, 2.0 * (pts[j] - pts[i]), sq[j] - sq[i] - w[j] + w[i])
             if len(poly) < 3:
                 break
+            reach = np.sqrt(((poly - pts[i]) ** 2).sum(axis=1).max())
         cells.append(poly if len(poly) >= 3 and _area(poly) > 0 else None)
     return cells
 
@@ -139,16 +148,17 @@ def _seeds(rng, length, height, dmin, dmax, typology, reentrant):
             dmean = max(REENTRANT_CELL_MIN * dmin, min(dmean, REENTRANT_PAIR_FILL * dmax / np.sqrt(2.0)))
         n = max(1, int(round(area / (np.pi / 4 * dmean ** 2))))
         targets = [dmean] * n
-    pts, rad = [], []
+    pts, rad = np.empty((len(targets), 2)), np.empty(len(targets))
+    n = 0
     for d in targets:
         r = 0.5 * d
         for _ in range(300):
             p = rng.uniform([0.0, 0.0], [length, height])
-            if all(np.hypot(*(p - q)) >= SPACING_FRACTION * (r + rq) for q, rq in zip(pts, rad)):
-                pts.append(p)
-                rad.append(r)
+            if np.all(np.hypot(p[0] - pts[:n, 0], p[1] - pts[:n, 1]) >= SPACING_FRACTION * (r + rad[:n])):
+                pts[n], rad[n] = p, r
+                n += 1
                 break
-    pts = np.array(pts)
+    pts, rad = pts[:n], rad[:n]
     w = (WEIGHT_SHRINK * np.array(rad)) ** 2 if typology == "sacsayhuaman" else np.zeros(len(pts))
     return pts, w
 

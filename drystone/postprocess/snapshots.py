@@ -29,11 +29,28 @@ def block_faces(vertices: np.ndarray) -> list[np.ndarray]:
     return [vertices[idx] for idx in ph.faces(vertices)[2]]
 
 
+def stone_geometry(blocks) -> dict:
+    """{block id: (points (n, 3) m, faces)} of a block file's or spec's blocks: a convex
+    block's vertices and hull faces; a stone of several ``parts`` every part's vertices in
+    part order and each part's faces (index arrays into those points, so that a rigid
+    motion of the points moves the faces)."""
+    out = {}
+    for b in blocks:
+        parts = [np.asarray(p, float) for p in b.get("parts", [b.get("vertices")])]
+        faces, offset = [], 0
+        for p in parts:
+            faces += [idx + offset for idx in ph.faces(p)[2]]
+            offset += len(p)
+        out[b["id"]] = (np.vstack(parts), faces)
+    return out
+
+
 def positions_at(out: Path, times: list[float], world: bool = True) -> list[tuple[float, dict]]:
-    """(sample time, {block id: vertices (n, 3)}) at the samples nearest to ``times``."""
+    """(sample time, {block id: vertices (n, 3)}, tilt deg) at the samples nearest to
+    ``times``; a multi-part stone's vertices are its parts' (``stone_geometry``)."""
     out = Path(out)
     spec = json.loads((out / "spec.json").read_text())
-    geo = {b["id"]: np.asarray(b["vertices"], float) for b in json.loads((out / "geometry.json").read_text())["blocks"]}
+    geo = {bid: v for bid, (v, _) in stone_geometry(json.loads((out / "geometry.json").read_text())["blocks"]).items()}
     h = summ.load_histories(out)
     prog = LoadProgramme([Stage(stage_type(s), s["start"], s["end"], s["params"]) for s in spec["stages"]
                           if stage_type(s) != "excitation"], spec["gravity"])
@@ -59,7 +76,9 @@ def render(out: Path, times: list[float], path: Path, world: bool = True, elev: 
     The axes span every frame's blocks, or with ``frame_on_first`` the first frame's (so
     that stones thrown far after a collapse do not shrink the wall to a dot)."""
     out = Path(out)
-    roles = {b["id"]: b["role"] for b in json.loads((out / "geometry.json").read_text())["blocks"]}
+    blocks = json.loads((out / "geometry.json").read_text())["blocks"]
+    roles = {b["id"]: b["role"] for b in blocks}
+    faces = {bid: f for bid, (_, f) in stone_geometry(blocks).items()}
     frames = positions_at(out, times, world)
     framed = frames[:1] if frame_on_first else frames
     allv = np.vstack([v for _, verts, _ in framed for bid, v in verts.items() if roles[bid] != "platform"])
@@ -72,8 +91,8 @@ def render(out: Path, times: list[float], path: Path, world: bool = True, elev: 
         ax = fig.add_subplot(1, n, k + 1, projection="3d")
         for bid, v in verts.items():
             colour = {"platform": "0.35", "fixed": "0.7"}.get(roles[bid], "#d9b38c")
-            ax.add_collection3d(Poly3DCollection(block_faces(v), facecolor=colour, edgecolor="k", linewidths=0.3,
-                                                 alpha=1.0))
+            ax.add_collection3d(Poly3DCollection([v[idx] for idx in faces[bid]], facecolor=colour, edgecolor="k",
+                                                 linewidths=0.3, alpha=1.0))
         for d, setl in enumerate((ax.set_xlim, ax.set_ylim, ax.set_zlim)):
             setl(mid[d] - 0.55 * span, mid[d] + 0.55 * span)
         ax.view_init(elev=elev, azim=azim)
@@ -122,14 +141,17 @@ def elevation(block_file: Path, path: Path) -> Path:
     d = json.loads(Path(block_file).read_text())
     fig, ax = plt.subplots(figsize=(10, 5))
     for b in d["blocks"]:
-        v = np.asarray(b["vertices"], float)
-        front = v[np.isclose(v[:, 1], v[:, 1].min())][:, [0, 2]]
-        c = front.mean(axis=0)
-        order = np.argsort(np.arctan2(front[:, 1] - c[1], front[:, 0] - c[0]))
         colour = {"platform": "0.35", "fixed": "0.75"}.get(b["role"], "#e8cfa9" if not b.get("blocked_dofs") else "#c9a46b")
-        ax.add_patch(Polygon(front[order], closed=True, facecolor=colour, edgecolor="k", lw=0.6))
+        parts = [np.asarray(p, float) for p in b.get("parts", [b.get("vertices")])]
+        for k, v in enumerate(parts):  # a stone of several parts: each part's outline, the joints between them thin
+            front = v[np.isclose(v[:, 1], v[:, 1].min())][:, [0, 2]]
+            c = front.mean(axis=0)
+            order = np.argsort(np.arctan2(front[:, 1] - c[1], front[:, 0] - c[0]))
+            ax.add_patch(Polygon(front[order], closed=True, facecolor=colour, edgecolor="k" if len(parts) == 1 else "0.5",
+                                 lw=0.6 if len(parts) == 1 else 0.3))
         if b["role"] != "platform":
-            ax.text(*c, str(b["id"]), ha="center", va="center", fontsize=8)
+            pts = np.vstack(parts)
+            ax.text(*pts[:, [0, 2]].mean(axis=0), str(b["id"]), ha="center", va="center", fontsize=8)
     for cp in d.get("control_points", []):
         ax.plot(cp["position"][0], cp["position"][2], "rv", ms=8)
         ax.text(cp["position"][0], cp["position"][2] + 0.05, cp["name"], color="r", ha="center", va="bottom")

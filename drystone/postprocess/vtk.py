@@ -17,7 +17,6 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-from drystone.geometry import polyhedron as ph
 from drystone.postprocess import snapshots
 from drystone.postprocess import summary as summ
 
@@ -62,8 +61,9 @@ def write(run: Path, every: int = 1, world: bool = True, out: Path | None = None
     out.mkdir(parents=True, exist_ok=True)
     h = summ.load_histories(run)
     ids = [int(i) for i in h["block_ids"]]
-    geo = {b["id"]: np.asarray(b["vertices"], float) for b in json.loads((run / "geometry.json").read_text())["blocks"]}
-    faces = {bid: ph.faces(v)[2] for bid, v in geo.items()}  # vertex order is kept by the rigid motion
+    # a stone's faces (a multi-part stone's: every part's), by vertex index: the rigid motion keeps the order
+    faces = {bid: f for bid, (_, f) in snapshots.stone_geometry(
+        json.loads((run / "geometry.json").read_text())["blocks"]).items()}
     times = h["t"][::every]
     entries = []
     for k, (t, verts, _tilt) in enumerate(snapshots.positions_at(run, list(times), world=world)):
