@@ -18,8 +18,8 @@ T/2). A non-convex outline (re-entrant corners: a notched or L-shaped stone) bec
 stone of several convex ``parts`` (block file version 2), the extruded pieces of
 ``decompose.convex_pieces``: the exact minimum partition by diagonals up to
 ``decompose.EXACT_MAX_CORNERS`` corners, Hertel-Mehlhorn (at most 4 x the minimum) above.
-The file is version 2 only when some stone has parts (validated by ``blockfile``; a run
-refuses multi-part stones by name until the engines take them).
+The file is version 2 only when some stone has parts (validated by ``blockfile``; in a
+run one rigid body, a YADE clump of its parts).
 
 Roles: ``layout = "sacsayhuaman"`` applies the paper's (stones 1-7 fixed, side blocks 8,
 9, 14, 15, 24, 25, 34 free only in z, y and about x, control points A-D at the top of
