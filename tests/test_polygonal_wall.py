@@ -120,3 +120,14 @@ def test_parameter_errors_are_named(kw, words):
     assert "'polygonal_wall'" in str(e.value)
     for w in words:
         assert w in str(e.value), str(e.value)
+
+
+def test_a_short_edge_that_cannot_be_collapsed_stays():
+    """A short joint whose collapse would break a stone's rules stays (the scan restarted on
+    it forever before: this 15 x 6 m face never finished); faces that finished before are
+    drawn as before (the same stones)."""
+    from drystone.geometry import polygonal_wall as pw
+
+    stones = pw.outlines(15.0, 6.0, (0.3, 0.6), 0, 0.5, "uniform", 3)
+    assert 400 < len(stones) < 700
+    assert all(pw.MIN_CORNERS <= len(s) <= pw.MAX_CORNERS for s in stones)

@@ -228,12 +228,19 @@ class _Mesh:
         border end stays, a rectangle corner stays). Not done where a stone would be left
         with fewer than 3 corners or not convex (the edge then stays)."""
         changed = True
+        failed = set()  # short edges that could not be collapsed since the last collapse
         while changed:
             changed = False
             for ring in self.rings:
                 for a, b in zip(ring, ring[1:] + ring[:1]):
-                    if np.hypot(*(self.xyz[a] - self.xyz[b])) >= emin or self._collapse(a, b):
+                    if np.hypot(*(self.xyz[a] - self.xyz[b])) >= emin or (a, b) in failed:
                         continue
+                    if self._collapse(a, b):
+                        failed.clear()
+                        continue
+                    # a failed collapse restarts the scan (walls drawn so far depend on this order);
+                    # met again before any other collapse, the edge stays (it looped forever before)
+                    failed.add((a, b))
                     changed = True
                     break
                 if changed:
