@@ -212,3 +212,11 @@ def test_figures_and_vtk_draw_each_part(outdir):
     pvd = vtk.write(outdir / "case", every=10)
     last = sorted(pvd.parent.glob("blocks_*.vtp"))[-1].read_text()
     assert 'NumberOfPolys="18"' in last  # the platform's 6 faces and the L's 12
+
+
+def test_modal_model_refuses_a_multi_part_stone(outdir):
+    from drystone.postprocess import identification
+
+    run_case(gravity_then([], write(outdir, stone_file([L_FOOT, L_LEG]))), outdir)
+    with pytest.raises(ValueError, match="block 7 has 2 parts: the modal model"):
+        identification.wall_assembly(outdir / "case")

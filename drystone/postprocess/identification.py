@@ -253,8 +253,12 @@ def wall_assembly(out, time_s: float | None = None):
         if not grav:
             raise ValueError(f"{out}: no gravity stage: give the time of the static configuration")
         time_s = grav[-1]["end"]
-    (t, verts, _), = snapshots.positions_at(out, [time_s], world=False)
     blocks = spec["blocks"]
+    multi = [b for b in blocks if "parts" in b]
+    if multi:  # the modal model's blocks are convex (its contact patches are per pair of blocks)
+        raise ValueError(f"{out}: block {multi[0]['id']} has {len(multi[0]['parts'])} parts: the modal model "
+                         "(drystone/mechanics/modal.py) takes convex blocks only")
+    (t, verts, _), = snapshots.positions_at(out, [time_s], world=False)
     mats = [spec["materials"][b["material"]] for b in blocks]
     g = spec["gravity"]
     gvec = np.array([0.0, 0.0, -float(g)]) if np.isscalar(g) else np.asarray(g, float)
