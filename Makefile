@@ -11,7 +11,7 @@ RUN     := $(PY) -m drystone
 
 .PHONY: setup system-deps test demo run gravity4 settlement4 bench clean help records spectrum ogawa3d ogawa \
         reference sweep tilt tilt-rate tilt-sensitivity tilt-report sacsayhuaman sacsayhuaman-report vtk ogawa-pga readme free-decay \
-        fragility fragility-small fragility-report crosscheck
+        fragility fragility-small fragility-report crosscheck shape-study shape-study-small shape-study-report
 
 help:
 	@echo "make setup        install Debian's YADE, make .venv, install PyPI dependencies"
@@ -37,6 +37,9 @@ help:
 	@echo "make vtk DIR=results/<run> [EVERY=5]   VTK files of a finished run for ParaView (<run>/vtk/blocks.pvd)"
 	@echo "make fragility [DASK=...]      fragility curves: FEMA P695 far field (22 records) x PGA 0.1-1.0 g, mu and K_n drawn per run (220 runs; cost in results/fragility/report.md)"
 	@echo "make fragility-small           the fragility pipeline on 4 short runs (~2 min on 2 cores; not a result)"
+	@echo "make shape-study [DASK=...]     stone shape: coursed, polygonal, interlocking (multi-part) and split walls of the Sacsayhuaman section's size, 3 seeds: tilt angle + PGA at collapse under 3 records by bisection (cost in results/shape/report.md)"
+	@echo "make shape-study-small          the shape study's pipeline on 2 variants, 1 seed, 1 short record (~1-2 min; not a result)"
+	@echo "make shape-study-report         rewrite results/shape/ from the runs made so far"
 	@echo "make crosscheck [XC=all]   LMGC90 (rigid) vs this package: toppling block + half-sine pulse (~3 min); XC=all adds the 40-block wall (~10 min) and the 5 tilt walls (hours); skipped without compas_lmgc90"
 
 setup: system-deps $(STAMP)
@@ -147,6 +150,15 @@ fragility-small: setup
 
 fragility-report: setup
 	$(PY) -m drystone.studies.fragility report --config full
+
+shape-study: setup
+	$(PY) -m drystone.studies.shape all --config full --workers $(JOBS) $(if $(DASK),--dask $(DASK))
+
+shape-study-small: setup
+	$(PY) -m drystone.studies.shape all --config small --workers $(JOBS)
+
+shape-study-report: setup
+	$(PY) -m drystone.studies.shape report --config full
 
 crosscheck: setup
 	$(PY) -m drystone.studies.crosscheck $(or $(XC),small)

@@ -56,7 +56,7 @@ LAYERS = (
           "`drystone/` (`runner.py`, `sweep.py`, `cli.py`, `bench.py`, `free_decay.py`)",
           "run a case, sweeps (local or Dask), the command line, speed figures, the free-decay check"),
     Layer(6, "studies", (), ("drystone.studies",), "`drystone/studies/`",
-          "the papers and beyond, one package each: `tilt/`, `ogawa/`, `sacsayhuaman/`, `fragility/`, "
+          "the papers and beyond, one package each: `tilt/`, `ogawa/`, `sacsayhuaman/`, `fragility/`, `shape/`, "
           "`crosscheck/` (LMGC90); `readme_tables.py`"),
 )
 

@@ -26,6 +26,8 @@ content is then whatever an earlier run generated, or the placeholder telling wh
   results/sacsayhuaman/report.md (``make sacsayhuaman``);
 * ``free_decay``: damping ratio per mode of one block, both contact geometries
   (results/free_decay/report.md; ``make free-decay``);
+* ``shape``: the shape study's results per wall variant, its answers and cost
+  (results/shape/report.md; ``make shape-study``);
 * ``identification``: the table of the paper's peaks as FFT bins and the transfer-function
   peaks (results/sacsayhuaman/identification.md; ``python -m drystone.studies.sacsayhuaman identify``).
 
@@ -181,6 +183,29 @@ def fragility(results: Path) -> str:
     return "\n\n".join(out) + "\n\n" + _source_note(p, results=results)
 
 
+def shape(results: Path) -> str:
+    """The shape study's results table (mean ± seed-to-seed sd per wall variant), its
+    answers, the incomplete warning if any, and its run count and cost
+    (results/shape/report.md; ``make shape-study``)."""
+    p = results / "shape" / "report.md"
+    if not p.is_file():
+        raise Missing(f"{p} missing (make shape-study)")
+    lines = p.read_text().splitlines()
+    out = [ln for ln in lines if ln.startswith("**Incomplete")][:1]
+    out.append(first_table_after(p, "Results"))
+    if "**Answer.**" in lines:
+        k = lines.index("**Answer.**") + 1
+        while k < len(lines) and not lines[k].strip():
+            k += 1
+        answers = []
+        while k < len(lines) and lines[k].startswith("* "):
+            answers.append(lines[k])
+            k += 1
+        out += ["**Answer.**\n\n" + "\n".join(answers)] if answers else []
+    out += [ln for ln in lines if ln.startswith("Runs: ")][:1]
+    return "\n\n".join(out) + "\n\n" + _source_note(p, results=results)
+
+
 def crosscheck(results: Path) -> str:
     """The LMGC90 cross-check's Santa-Cruz tilt-wall summary (collapse angles per wall)."""
     p = results / "crosscheck" / "report.md"
@@ -247,7 +272,7 @@ def bench(results: Path) -> str:
 
 BLOCKS = {"bench": bench, "verification": verification, "tilt": tilt, "tilt_checks": tilt_checks, "ogawa": ogawa,
           "sacsayhuaman_table3": sacsayhuaman_table3, "free_decay": free_decay, "identification": identification,
-          "fragility": fragility, "crosscheck": crosscheck}
+          "fragility": fragility, "crosscheck": crosscheck, "shape": shape}
 
 
 def update(text: str, results: Path, blocks: dict | None = None) -> tuple[str, list[str], list[str]]:

@@ -1,0 +1,427 @@
+"""The shape study's plan: wall variants, seeds, records, and the files its runs read.
+
+Four walls of the Sacsayhuaman section's footprint, height and weight (``footprint``: read
+from the generated section, drystone/geometry/sacsayhuaman.py: 8.64 m long, 0.8 m thick,
+4 m high, 2300 kg/m^3, every stone through the full thickness), per seed (``VARIANTS``):
+
+* ``coursed`` (a): today's generated section, coursed irregular stones (the
+  ``sacsayhuaman`` generator: drystone/geometry/irregular_wall.py, 40 stones, the paper's
+  numbering, course 1 fixed, side blocks 8, 9, 14, 15, 24, 25, 34 with blocked_dofs "xYZ");
+* ``polygonal`` (b): polygonal masonry of convex stones (``polygonal_wall``, typology
+  "sacsayhuaman", ``reentrant`` 0, stone sizes ``STONE_SIZE``: about 40 stones, as (a));
+* ``interlocking`` (c): the same seed's layout with ``REENTRANT`` of the stones made
+  re-entrant by merging pairs of neighbouring cells (``polygonal_wall`` with reentrant > 0:
+  for the sacsayhuaman typology the seeds, and so the cells, are those of (b); the merged
+  stones are single rigid bodies of several convex ``parts``, block file version 2);
+* ``interlocking_split`` (c'): the stones of (c) with every part its own block
+  (drystone/geometry/split.py ``split_parts``): what the package forced before multi-part
+  stones.
+
+The same boundary conditions as (a) for (b), (c), (c'): stones touching the platform are
+fixed (the generator's ``fix_bottom``; ``fix_bottom`` here), and free blocks with a face on
+either end of the wall (x = 0 or x = L) get blocked_dofs "xYZ" (``hold_ends``: the wall
+goes on beyond the section, so they may move out of plane and up and rotate out of plane
+only). For (c') both rules are applied after the split, block by block: a part of a fixed
+stone that does not reach the platform is free, and a part that does not reach an end is
+not held. (a) keeps its generator's rules (the paper's: course 1 fixed, its top-right
+stone 40 stays free).
+
+Weights: every variant tiles the L x H face with stones extruded through T, so the
+volumes, and at one density the weights, agree to round-off (``WEIGHT_REL_TOL``, checked
+by ``geometries`` and reported).
+
+Records (``write_records``): the three records of the Sacsayhuaman study
+(cases/sweeps/sacsayhuaman_table3.toml: ``paruro2014``, ``cusco2023``, ``ancash1970`` from
+drystone/motions/catalogue.py: the user's files in data/records/user/ if present, else the
+FEMA P695 far-field analogues, ASSUMED stand-ins), each cut to its strong-motion window
+(``WINDOW``: 5-95 % of the Arias intensity, or where that is longer than ``MAX_CORE_S``
+the window of that length holding the most intensity: the paruro2014 analogue's; plus
+``PAD_S`` before and after, the pads Hann-tapered so the base starts and ends at rest in
+acceleration; the record's PGA lies inside, ``pga_inside``) and
+written as plain text in g (``results/<out>/records/<name>_window.txt``: rewritten only
+when different, so a finished run is recognised by its fingerprint).
+
+Where things go: ``results/<out>/`` (``results/shape/`` for the full config) holds
+``plan.json``, ``geometry/<variant>_s<seed>.json``, the tilt sweep ``tilt.toml`` and the
+bisection rounds ``rounds/round_NN.toml``; runs go to ``results/<runs>/<run>/`` (one
+sweep name for every round: ``shape_runs``) and ``results/<tilt_runs>/<run>/``.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from drystone import paths, tomlio
+
+RECORD_CASE = paths.CASES / "shape" / "record.toml"
+TILT_CASE = paths.CASES / "shape" / "tilt.toml"
+#: the base case's stage indices (cases/shape/record.toml: gravity, excitation, rest)
+EXCITATION_STAGE, REST_STAGE = 1, 2
+#: the Sacsayhuaman study's records (cases/sweeps/sacsayhuaman_table3.toml)
+RECORDS = ("paruro2014", "cusco2023", "ancash1970")
+#: polygonal walls: [min, max] equivalent stone diameters (m), chosen so the convex wall has
+#: about the section's 40 stones (38-39 for seeds 0-4)
+STONE_SIZE = (0.6, 1.6)
+#: fraction of re-entrant stones of (c): pairs merged = round(r n / (1 + r)) of n cells
+#: (about 9 of 30 stones)
+REENTRANT = 0.3
+#: Lloyd steps of the polygonal generator (its default)
+LLOYD = 3
+#: weights of the variants of one seed must agree within this (relative)
+WEIGHT_REL_TOL = 1e-9
+#: strong-motion window: Arias intensity fractions, and the pad (s) before and after it
+WINDOW = (0.05, 0.95)
+PAD_S = 1.0
+#: the window's core (without the pads) is at most this long (s): a longer one (the paruro2014
+#: analogue's 5-95 % lasts 38 s) is replaced by the window of this length holding the most
+#: Arias intensity; the study's cost is about proportional to the records' length
+MAX_CORE_S = 18.0
+#: blocked_dofs of the stones at the wall's ends (as the section's side blocks)
+END_DOFS = "xYZ"
+
+
+@dataclass(frozen=True)
+class Config:
+    """One configuration of the study (``CONFIGS``). PGAs in g."""
+
+    name: str
+    out: str                                   # results/<out>/: plan, geometries, rounds, report
+    runs: str                                  # sweep name of the seismic runs (results/<runs>/<run>/)
+    tilt_runs: str                             # sweep name of the tilt runs
+    variants: tuple = ("coursed", "polygonal", "interlocking", "interlocking_split")
+    seeds: tuple = (0, 1, 2)
+    records: tuple = RECORDS
+    pga_low_g: float = 0.0                     # assumed safe (not run): gravity alone
+    pga_cap_g: float = 3.2                     # the highest PGA run; a wall standing there: "> cap"
+    resolution_g: float = 0.1                  # the bracket's final width
+    tilt: bool = True
+    record_duration_s: float | None = None     # cut the window further (small config only)
+    rest_max_s: float | None = None            # cap the rest stage below the case's (small config only)
+    notes: tuple = field(default_factory=tuple)
+    results_root: str | None = None            # instead of results/ (tests)
+
+    @property
+    def results(self) -> Path:
+        return Path(self.results_root) if self.results_root else paths.RESULTS
+
+    @property
+    def out_dir(self) -> Path:
+        return self.results / self.out
+
+    @property
+    def records_dir(self) -> Path:
+        return self.out_dir / "records"
+
+
+CONFIGS = {
+    "full": Config(name="full", out="shape", runs="shape_runs", tilt_runs="shape_tilt_runs"),
+    "small": Config(name="small", out="shape_small", runs="shape_small_runs", tilt_runs="shape_small_tilt_runs",
+                    variants=("coursed", "polygonal"), seeds=(0,), records=("ancash1970",), resolution_g=1.6,
+                    record_duration_s=3.0, rest_max_s=1.5,
+                    notes=("1 seed, 1 record cut to 3 s, 2 variants, a 1.6 g bracket, rest at most 1.5 s: a pipeline "
+                           "check, not a result",)),
+}
+
+
+def get(config) -> Config:
+    if isinstance(config, Config):
+        return config
+    if config not in CONFIGS:
+        raise KeyError(f"unknown shape-study config {config!r} (known: {', '.join(CONFIGS)})")
+    return CONFIGS[config]
+
+
+# --- geometries -------------------------------------------------------------------------------------------
+def footprint(seed: int = 0) -> dict:
+    """Length, height, thickness (m) and material of the generated Sacsayhuaman section
+    (its stones' bounding box)."""
+    from drystone.geometry import blockfile as bf
+    from drystone.geometry import sacsayhuaman
+
+    d = sacsayhuaman.make(seed=seed)
+    bs = bf.parse(d, "sacsayhuaman section", check_overlaps=False)
+    pts = np.vstack([b.points for b in bs.blocks if b.role != "platform"])
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    mat = d["materials"]["stone"]
+    return {"length": float(hi[0] - lo[0]), "thickness": float(hi[1] - lo[1]), "height": float(hi[2] - lo[2]),
+            "x0": float(lo[0]), "material": dict(mat)}
+
+
+def hold_ends(d: dict, length: float, x0: float = 0.0, dofs: str = END_DOFS) -> dict:
+    """``d`` with ``dofs`` blocked on every free block that has a face on either end of the
+    wall (at least 3 corners of one part within 1e-9 x L of x = x0 or x = x0 + L)."""
+    tol = 1e-9 * length
+    out = dict(d, blocks=[])
+    for b in d["blocks"]:
+        b = dict(b)
+        if b.get("role", "free") == "free":
+            parts = b["parts"] if "parts" in b else [b["vertices"]]
+            for part in parts:
+                x = np.asarray(part, float)[:, 0]
+                if (np.abs(x - x0) < tol).sum() >= 3 or (np.abs(x - x0 - length) < tol).sum() >= 3:
+                    b["blocked_dofs"] = dofs
+                    break
+        out["blocks"].append(b)
+    return out
+
+
+def fix_bottom(d: dict, tol: float = 1e-9) -> dict:
+    """``d`` with every non-platform block on the platform (its lowest corner within ``tol``
+    m of z = 0) ``fixed`` and every other one ``free`` (the polygonal generator's
+    ``fix_bottom`` rule, applied again after a split: a part of a fixed stone that does not
+    reach the platform is then free); blocked dofs of a block made fixed are dropped."""
+    out = dict(d, blocks=[])
+    for b in d["blocks"]:
+        b = dict(b)
+        if b.get("role") != "platform":
+            pts = np.vstack([np.asarray(p, float) for p in (b["parts"] if "parts" in b else [b["vertices"]])])
+            b["role"] = "fixed" if pts[:, 2].min() <= tol else "free"
+            if b["role"] == "fixed":
+                b.pop("blocked_dofs", None)
+        out["blocks"].append(b)
+    return out
+
+
+def _polygonal(seed: int, reentrant: float, fp: dict) -> dict:
+    from drystone.geometry import polygonal_wall
+
+    m = fp["material"]
+    return polygonal_wall.make(length=fp["length"], height=fp["height"], thickness=fp["thickness"],
+                               stone_size=STONE_SIZE, seed=seed, reentrant=reentrant, typology="sacsayhuaman",
+                               lloyd=LLOYD, density=m["density"], kn=m["kn"], kt=m["kt"], mu=m["mu"],
+                               damping=m["damping"], name="shape_polygonal")
+
+
+def build_variant(variant: str, seed: int, fp: dict | None = None) -> dict:
+    """The block-file dict of one variant and seed (module docstring)."""
+    from drystone.geometry import sacsayhuaman, split
+
+    fp = fp or footprint()
+    if variant == "coursed":
+        d = sacsayhuaman.make(seed=seed)
+    elif variant == "polygonal":
+        d = hold_ends(_polygonal(seed, 0.0, fp), fp["length"], fp["x0"])
+    elif variant == "interlocking":
+        d = hold_ends(_polygonal(seed, REENTRANT, fp), fp["length"], fp["x0"])
+    elif variant == "interlocking_split":
+        d = split.split_parts(_polygonal(seed, REENTRANT, fp), f"interlocking seed {seed}")
+        d = hold_ends(fix_bottom(d), fp["length"], fp["x0"])
+    else:
+        raise KeyError(f"unknown variant {variant!r} (known: {', '.join(VARIANTS)})")
+    d = dict(d, name=f"shape_{variant}_s{seed}")
+    d["generator"] = dict(d.get("generator", {}), shape_study={"variant": variant, "seed": seed})
+    return d
+
+
+#: variant -> (label, one-line description)
+VARIANTS = {
+    "coursed": ("(a) coursed", "today's coursed irregular stones (sacsayhuaman generator)"),
+    "polygonal": ("(b) polygonal, convex", "polygonal masonry of convex stones (polygonal_wall, reentrant 0)"),
+    "interlocking": ("(c) interlocking", f"polygonal masonry, {REENTRANT:g} re-entrant stones as single "
+                                         "multi-part bodies (polygonal_wall, reentrant > 0)"),
+    "interlocking_split": ("(c') interlocking, split", "the stones of (c), every convex part its own block "
+                                                       "(geometry/split.py)"),
+}
+
+
+def stats(d: dict) -> dict:
+    """Counts, volume (m^3) and weight (N) of a block-file dict's non-platform stones."""
+    from drystone.geometry import blockfile as bf
+    from drystone.units import G_STANDARD
+
+    bs = bf.parse(d, d.get("name", "<geometry>"), check_overlaps=False)
+    st = [b for b in bs.blocks if b.role != "platform"]
+    vol = sum(b.volume for b in st)
+    weight = sum(bs.mass(b.id) for b in st) * G_STANDARD
+    free = [b for b in st if b.role == "free"]
+    return {"stones": len(st), "free": len(free), "fixed": len(st) - len(free),
+            "multi_part": sum(len(b.parts) > 1 for b in st), "parts": sum(len(b.parts) for b in st),
+            "held_ends": sum(bool(b.blocked_dofs) for b in free), "volume_m3": vol, "weight_N": weight,
+            "free_weight_N": sum(bs.mass(b.id) for b in free) * G_STANDARD}
+
+
+def geometry_file(cfg: Config, variant: str, seed: int) -> Path:
+    return cfg.out_dir / "geometry" / f"{variant}_s{seed}.json"
+
+
+def _write_if_changed(path: Path, text: str) -> Path:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if not path.exists() or path.read_text() != text:
+        tmp = path.with_suffix(".tmp")
+        tmp.write_text(text)
+        os.replace(tmp, path)
+    return path
+
+
+def geometries(cfg: Config) -> dict:
+    """Write every variant x seed block file (validated; rewritten only when different);
+    returns {"<variant>_s<seed>": {"file", "sha256", **stats}} and checks the weights of
+    one seed's variants agree within WEIGHT_REL_TOL (ValueError otherwise)."""
+    from drystone.geometry import blockfile as bf
+
+    fp = footprint()
+    out = {}
+    for seed in cfg.seeds:
+        for v in cfg.variants:
+            d = build_variant(v, seed, fp)
+            bf.parse(d, f"shape study {v} seed {seed}")  # with the overlap check
+            path = _write_if_changed(geometry_file(cfg, v, seed), json.dumps(d, indent=1) + "\n")
+            out[f"{v}_s{seed}"] = {"variant": v, "seed": seed, "file": str(path),
+                                   "sha256": hashlib.sha256(path.read_bytes()).hexdigest(), **stats(d)}
+        w = [out[f"{v}_s{seed}"]["weight_N"] for v in cfg.variants]
+        if max(w) - min(w) > WEIGHT_REL_TOL * max(w):
+            raise ValueError(f"shape study seed {seed}: the variants' weights differ beyond {WEIGHT_REL_TOL:g}: "
+                             + ", ".join(f"{v} {x:.6g} N" for v, x in zip(cfg.variants, w)))
+    return out
+
+
+# --- records ----------------------------------------------------------------------------------------------
+def record_file(name: str, folder: Path) -> Path:
+    return Path(folder) / f"{name}_window.txt"
+
+
+def strong_motion(r, window=WINDOW, pad_s: float = PAD_S, max_core_s: float | None = MAX_CORE_S):
+    """The record cut to [ta - pad, tb + pad], [ta, tb] the times at ``window`` fractions of
+    its Arias intensity or, where that is longer than ``max_core_s``, the ``max_core_s``
+    window holding the most Arias intensity; within the record, the pads Hann-tapered.
+    Returns (record, info: the window, its share of the Arias intensity, the PGAs)."""
+    from drystone.motions import processing
+
+    e = np.cumsum(r.acc ** 2)
+    e = e / e[-1]
+    t = r.time
+    ta, tb = float(np.interp(window[0], e, t)), float(np.interp(window[1], e, t))
+    capped = False
+    if max_core_s is not None and tb - ta > max_core_s:
+        n = int(round(max_core_s / r.dt))
+        gain = e[n:] - e[:-n]
+        i = int(np.argmax(gain))
+        ta, tb, capped = float(t[i]), float(t[i + n]), True
+    share = float(np.interp(tb, t, e) - np.interp(ta, t, e))
+    t0, t1 = max(t[0], ta - pad_s), min(t[-1], tb + pad_s)
+    w = processing.trim(r, t0, t1)
+    n_pad = max(1, int(round(pad_s / w.dt)))
+    ramp = np.ones(w.n)
+    k = np.arange(n_pad)
+    half = 0.5 * (1.0 - np.cos(np.pi * k / n_pad))  # 0 -> 1 over the pad
+    if ta - pad_s >= t[0]:
+        ramp[:n_pad] = half
+    if tb + pad_s <= t[-1]:
+        ramp[-n_pad:] = np.minimum(ramp[-n_pad:], half[::-1])
+    w = w.replaced(f"Hann taper over the first and last {pad_s:g} s", acc=w.acc * ramp)
+    ipk = int(np.argmax(np.abs(r.acc)))
+    info = {"arias_window": list(window), "t_arias_s": [ta, tb], "core_capped_to_s": max_core_s if capped else None,
+            "arias_share": share, "pad_s": pad_s, "window_s": [float(w.time[0]), float(w.time[-1])],
+            "duration_s": float(w.duration), "full_duration_s": float(r.duration), "pga_g": float(r.pga_g),
+            "window_pga_g": float(w.pga_g), "t_pga_s": float(t[ipk]),
+            "pga_inside": bool(np.isclose(w.pga_g, r.pga_g, rtol=1e-12))}
+    return w, info
+
+
+def write_records(names, folder: Path) -> dict:
+    """Each catalogue record's strong-motion window as a plain text file in g; returns
+    {name: {file, sha256, event, station, component, source, window...}}."""
+    from drystone.motions import catalogue
+    from drystone.motions.record import G
+
+    out = {}
+    for name in names:
+        r = catalogue.get(name)
+        w, info = strong_motion(r)
+        cat = r.info.get("catalogue", {})
+        head = [f"# event = {r.event}", f"# station = {r.station}", f"# component = {r.component}",
+                f"# dt = {w.dt!r}", "# units = g",
+                f"# source = catalogue {name!r} ({cat.get('source_kind', '?')}), strong-motion window "
+                f"{info['window_s'][0]:.3f}-{info['window_s'][1]:.3f} s ("
+                + (f"the {MAX_CORE_S:g} s of most Arias intensity" if info["core_capped_to_s"] else "Arias 5-95 %")
+                + f" +- {PAD_S:g} s, Hann-tapered pads), written by drystone.studies.shape.plan"]
+        text = "\n".join(head + [repr(float(a / G)) for a in w.acc]) + "\n"
+        path = _write_if_changed(record_file(name, folder), text)
+        out[name] = {"file": str(path), "sha256": hashlib.sha256(path.read_bytes()).hexdigest(),
+                     "event": r.event, "station": r.station, "component": r.component,
+                     "source_kind": cat.get("source_kind"), "stands_for": cat.get("stands_for"),
+                     "fema": ({k: cat[k] for k in ("fema_set", "fema_record_id", "fema_component")}
+                              if cat.get("source_kind") == "analogue" else None), "dt_s": w.dt, **info}
+    return out
+
+
+# --- runs -------------------------------------------------------------------------------------------------
+def pga_name(pga_g: float) -> str:
+    return f"{pga_g:.2f}"
+
+
+def seismic_run_name(variant: str, seed: int, record: str, pga_g: float) -> str:
+    return f"{variant}-s{seed}-{record}-pga_{pga_name(pga_g)}"
+
+
+def tilt_run_name(variant: str, seed: int) -> str:
+    return f"{variant}-s{seed}"
+
+
+def _rel(path, start: Path) -> str:
+    return os.path.relpath(path, start)
+
+
+def common_overrides(cfg: Config) -> list[str]:
+    out = []
+    if cfg.record_duration_s:
+        out.append(f"stages.{EXCITATION_STAGE}.duration={tomlio.value(float(cfg.record_duration_s))}")
+    if cfg.rest_max_s:
+        out.append(f"stages.{REST_STAGE}.duration={tomlio.value(float(cfg.rest_max_s))}")
+    return out
+
+
+def seismic_overrides(cfg: Config, variant: str, seed: int, record: str, pga_g: float) -> list[str]:
+    """A seismic run's own overrides: the geometry and record files (relative to the base
+    case's folder, as a case file's paths) and the PGA."""
+    return [f"case.geometry={tomlio.value(_rel(geometry_file(cfg, variant, seed), RECORD_CASE.parent))}",
+            f"stages.{EXCITATION_STAGE}.record={tomlio.value(_rel(record_file(record, cfg.records_dir), RECORD_CASE.parent))}",
+            f"stages.{EXCITATION_STAGE}.pga_g={tomlio.value(float(pga_g))}"]
+
+
+def write_sweep(path: Path, name: str, case: Path, runs: list[tuple[str, list[str]]], common: list[str],
+                header: str) -> Path:
+    text = tomlio.sweep_file(name, _rel(case, path.parent), runs, common, header)
+    return _write_if_changed(path, text)
+
+
+def tilt_overrides(cfg: Config, variant: str, seed: int) -> list[str]:
+    """A tilt run's own override: the geometry file (relative to the base case's folder)."""
+    return [f"case.geometry={tomlio.value(_rel(geometry_file(cfg, variant, seed), TILT_CASE.parent))}"]
+
+
+def tilt_sweep(cfg: Config, variants=None) -> Path:
+    """``results/<out>/tilt.toml``: one tilt run per variant (default: the config's) and seed."""
+    runs = [(tilt_run_name(v, s), tilt_overrides(cfg, v, s)) for s in cfg.seeds for v in (variants or cfg.variants)]
+    return write_sweep(cfg.out_dir / "tilt.toml", cfg.tilt_runs, TILT_CASE, runs, [],
+                       f"generated by drystone/studies/shape (config {cfg.name!r}): do not edit; tilt collapse "
+                       f"angle of every variant x seed ({len(runs)} runs)")
+
+
+def build(cfg: Config) -> dict:
+    """Write the geometries and records; returns the plan (also written to plan.json)."""
+    cfg = get(cfg)
+    cfg.out_dir.mkdir(parents=True, exist_ok=True)
+    plan = {"format": "drystone.shape_plan", "version": 1, "config": asdict(cfg),
+            "record_case": str(RECORD_CASE), "tilt_case": str(TILT_CASE), "footprint": footprint(),
+            "variants": {v: {"label": VARIANTS[v][0], "description": VARIANTS[v][1]} for v in cfg.variants},
+            "polygonal": {"stone_size_m": list(STONE_SIZE), "reentrant": REENTRANT, "lloyd": LLOYD,
+                          "typology": "sacsayhuaman", "end_dofs": END_DOFS},
+            "geometries": geometries(cfg), "records": write_records(cfg.records, cfg.records_dir),
+            "common_overrides": common_overrides(cfg)}
+    if cfg.tilt:
+        plan["tilt_sweep"] = str(tilt_sweep(cfg))
+    (cfg.out_dir / "plan.json").write_text(json.dumps(plan, indent=1) + "\n")
+    return plan
+
+
+def load_plan(cfg: Config) -> dict:
+    p = get(cfg).out_dir / "plan.json"
+    if not p.is_file():
+        raise FileNotFoundError(f"{p}: no plan (python -m drystone.studies.shape plan --config {get(cfg).name})")
+    return json.loads(p.read_text())
