@@ -43,8 +43,9 @@ def main(argv=None) -> int:
                    help="run only these sections (bench.json keeps the others' earlier figures)")
     b.add_argument("--sizes", nargs="+", type=int, choices=(40, 500, 2000), default=[40, 500, 2000],
                    help="scale section: wall sizes (stones, about)")
-    b.add_argument("--walls", nargs="+", choices=("running_bond", "irregular"), default=["running_bond", "irregular"],
-                   help="scale section: wall kinds")
+    walls = ("running_bond", "irregular", "polygonal")  # drystone.bench.WALLS (not imported here: a quick CLI)
+    b.add_argument("--walls", nargs="+", choices=walls, default=list(walls),
+                   help="scale section: wall kinds (polygonal: 500 stones only)")
     b.add_argument("--steps", type=int, default=300, help="scale section: steps per run (300)")
     b.add_argument("--engines", nargs="+", choices=("compiled", "python"), default=None,
                    help="scale section: step engines (default: the runner's default)")

@@ -212,3 +212,13 @@ def test_running_bond_section_prints_every_row_and_the_goal(monkeypatch, capsys,
     assert len(rows) == 8 and out.count("thread(s):") == 8
     assert "(fastest of 0.200, 0.200, 0.200)" in out
     assert f"goal: {bench.goal(rows)['text']}" in out
+
+
+def test_cli_offers_every_scale_wall():
+    """``python -m drystone bench --walls`` offers and defaults to every wall of the scale section."""
+    import inspect
+
+    from drystone import cli
+
+    src = inspect.getsource(cli)
+    assert f'walls = {bench.WALLS!r}'.replace("'", '"') in src
