@@ -220,3 +220,21 @@ def test_modal_model_refuses_a_multi_part_stone(outdir):
     run_case(gravity_then([], write(outdir, stone_file([L_FOOT, L_LEG]))), outdir)
     with pytest.raises(ValueError, match="block 7 has 2 parts: the modal model"):
         identification.wall_assembly(outdir / "case")
+
+
+def test_named_contact_of_a_multi_part_stone_is_the_sum_of_its_parts(outdir):
+    """A recorded joint between a platform and a stone of two parts standing on it is two
+    contacts; the joint's history is their sum: the same normal force, area and volume as
+    the uncut box's one contact (to round-off: K_n V and the areas are additive)."""
+    whole = stone_file(vertices=box((0, 0, 0), (0.4, 0.2, 0.2)))
+    halves = stone_file([box((0, 0, 0), (0.2, 0.2, 0.2)), box((0.2, 0, 0), (0.4, 0.2, 0.2))])
+    out = {"interval": 0.01, "contacts": [{"name": "base", "blocks": [0, 7]}]}
+    hs = [run_case(gravity_then([], write(outdir, d, f"{n}.json"), output=out, contact={"damping": 0.0},
+                                time={"step": 2e-5}), outdir, name=n)[1]
+          for n, d in (("whole", whole), ("halves", halves))]
+    a, b = hs
+    w = RHO * G * 0.4 * 0.2 * 0.2
+    assert a["contacts"]["base"]["fn"][-1] == pytest.approx(w, rel=0.05)  # the weight, give or take the undamped bounce after the ramp
+    for k in ("fn", "area", "volume"):
+        assert np.allclose(a["contacts"]["base"][k], b["contacts"]["base"][k], rtol=tol.CUT_BLOCK_CONTACT_REL, atol=0)
+    assert np.allclose(a["contacts"]["base"]["normal"], b["contacts"]["base"]["normal"], atol=tol.CUT_BLOCK_CONTACT_REL)

@@ -595,3 +595,6 @@ ENGINES_MULTIPART_M = 1e-9
 #: 0.5 x 0.05 x 0.7 x 9.81 x 0.6^2 m = 6 cm along its path, 1 cm asserted
 PUSH_STAYED_M = 1e-3
 PUSH_MOVED_M = 1e-2
+#: the same two runs' recorded joint (normal force, area, volume, normal): sums over two
+#: contacts against one, round-off of the same order as the positions' (relative); 1e-9
+CUT_BLOCK_CONTACT_REL = 1e-9

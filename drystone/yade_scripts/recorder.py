@@ -79,18 +79,24 @@ class Recorder:
                              ("slipping", False), ("area", 0.0), ("volume", 0.0)):
                     hc[k].append(v)
                 continue
-            r = int(row[0])
-            sign = 1.0 if st.id1[r] == ya else -1.0  # orient normal and force from a to b
-            n = sign * st.normal[r]
-            f = sign * fb[r]
+            sign = np.where(st.id1[row] == ya, 1.0, -1.0)[:, None]  # orient normal and force from a to b
+            if len(row) == 1:
+                r = int(row[0])
+                n, f, point = sign[0] * st.normal[r], sign[0] * fb[r], st.point[r].copy()
+            else:  # stones of several parts: the joint is the sum of its contacts (one per pair of parts)
+                f = (sign * fb[row]).sum(axis=0)
+                n = (sign * st.normal[row] * st.area[row][:, None]).sum(axis=0)  # area-weighted normal
+                n = n / np.linalg.norm(n)
+                w = st.fn[row] if st.fn[row].sum() > 0 else np.ones(len(row))
+                point = (st.point[row] * w[:, None]).sum(axis=0) / w.sum()  # the normal forces' centre
             fn = float(f @ n)
             hc["fn"].append(fn)
             hc["ft"].append(f - fn * n)
             hc["normal"].append(n)
-            hc["point"].append(st.point[r].copy())
-            hc["slipping"].append(bool(st.slipping[r]))
-            hc["area"].append(float(st.area[r]))
-            hc["volume"].append(float(st.volume[r]))
+            hc["point"].append(point)
+            hc["slipping"].append(bool(st.slipping[row].any()))
+            hc["area"].append(float(st.area[row].sum()))
+            hc["volume"].append(float(st.volume[row].sum()))
 
     def save(self, folder: Path) -> None:
         """Write histories.npz into ``folder`` (under a temporary name, renamed when complete)."""
