@@ -51,3 +51,10 @@ def to_toml(d: dict) -> str:
             lines += [f"{k} = {scalar(v)}" for k, v in body.items()]
             lines.append("")
     return "\n".join(lines)
+
+
+def stage_durations(durations: dict) -> list[str]:
+    """Case overrides setting stage durations, ``stages.K.duration=V`` (s), for each stage
+    index K of ``durations`` whose value is given (None or 0 leaves that stage as it is):
+    the studies' shortened records and rests."""
+    return [f"stages.{k}.duration={value(float(d))}" for k, d in durations.items() if d]

@@ -248,12 +248,8 @@ def build(cfg: Config, records_dir: Path = RECORDS, write_records: bool = True) 
 
 
 def common_overrides(cfg: Config) -> list[str]:
-    out = []
-    if cfg.record_duration_s:
-        out.append(f"stages.{EXCITATION_STAGE}.duration={tomlio.value(float(cfg.record_duration_s))}")
-    if cfg.rest_max_s:
-        out.append(f"stages.{REST_STAGE}.duration={tomlio.value(float(cfg.rest_max_s))}")
-    return out
+    """Every run's overrides: the record and the rest cut to the config's durations."""
+    return tomlio.stage_durations({EXCITATION_STAGE: cfg.record_duration_s, REST_STAGE: cfg.rest_max_s})
 
 
 def overrides(run: dict) -> list[str]:
