@@ -3,6 +3,8 @@ SHELL   := /bin/bash
 VENV    := .venv
 PY      := $(VENV)/bin/python
 JOBS    ?= 2
+# YADE threads of one run: 1 is bitwise reproducible (docs: reproducibility); JOBS is the number of parallel runs
+THREADS ?= 1
 PYTEST_ARGS ?= -n $(JOBS)
 SUDO    := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 DEB_PKGS := yade python3-matplotlib python3-venv
@@ -17,7 +19,7 @@ help:
 	@echo "make setup        install Debian's YADE, make .venv, install PyPI dependencies"
 	@echo "make demo         the main job: verification cases + the 40-stone wall under one record at two PGAs (~3 min)"
 	@echo "make test         the test suite"
-	@echo "make run CASE=cases/x.toml [SET='key=value ...']   run any case file"
+	@echo "make run CASE=cases/x.toml [SET='key=value ...'] [THREADS=1]   run any case file (one thread: bitwise reproducible)"
 	@echo "make gravity4 | settlement4   the paper's four-block verification cases"
 	@echo "make bench [BENCH='--only scale --sizes 500']   speed figures (not a test; all sections ~15 min on 2 cores)"
 	@echo "make reference    regenerate tests/data/reference/ (stored histories of test_regression.py) after an intended change"
@@ -32,15 +34,18 @@ help:
 	@echo "make tilt         tilt-table validation: 5 generated walls + the same 5 with a constant section (~20 min) + report"
 	@echo "make tilt-rate    the paper's 0.2 deg/s protocol on wall seed 0 (~10 min) + report"
 	@echo "make tilt-sensitivity   mu, K_n and Table 1's DEM calibration on wall seed 0 (7 runs) + report"
+	@echo "make tilt-report  rewrite results/tilt/ from the tilt runs made so far"
 	@echo "make sacsayhuaman [DASK=...]   40-stone wall: white noise, sine sweeps, resonance PGAs, Table 3 (~1 h on 2 cores)"
 	@echo "make sacsayhuaman-report       rewrite results/sacsayhuaman/ from the runs made so far"
 	@echo "make vtk DIR=results/<run> [EVERY=5]   VTK files of a finished run for ParaView (<run>/vtk/blocks.pvd)"
 	@echo "make fragility [DASK=...]      fragility curves: FEMA P695 far field (22 records) x PGA 0.1-1.0 g, mu and K_n drawn per run (220 runs; cost in results/fragility/report.md)"
 	@echo "make fragility-small           the fragility pipeline on 4 short runs (~2 min on 2 cores; not a result)"
+	@echo "make fragility-report          rewrite results/fragility/ from the runs made so far"
 	@echo "make shape-study [DASK=...]     stone shape: coursed, polygonal, interlocking (multi-part) and split walls of the Sacsayhuaman section's size, 3 seeds: tilt angle + PGA at collapse under 3 records by bisection (cost in results/shape/report.md)"
 	@echo "make shape-study-small          the shape study's pipeline on 2 variants, 1 seed, 1 short record (~1-2 min; not a result)"
 	@echo "make shape-study-report         rewrite results/shape/ from the runs made so far"
 	@echo "make crosscheck [XC=all]   LMGC90 (rigid) vs this package: toppling block + half-sine pulse (~3 min); XC=all adds the 40-block wall (~10 min) and the 5 tilt walls (hours); skipped without compas_lmgc90"
+	@echo "make clean        delete results/ and .numba_cache/ (everything the package wrote there)"
 
 setup: system-deps $(STAMP)
 
@@ -66,13 +71,13 @@ test: setup
 
 run: setup
 	@test -n "$(CASE)" || { echo "usage: make run CASE=path/to/case.toml [SET='key=value ...']"; exit 2; }
-	$(RUN) run $(CASE) -j $(JOBS) $(foreach s,$(SET),--set $(s))
+	$(RUN) run $(CASE) -j $(THREADS) $(foreach s,$(SET),--set $(s))
 
 gravity4: setup
-	$(RUN) run cases/gravity4.toml -j $(JOBS)
+	$(RUN) run cases/gravity4.toml -j $(THREADS)
 
 settlement4: setup
-	$(RUN) run cases/settlement4.toml -j $(JOBS)
+	$(RUN) run cases/settlement4.toml -j $(THREADS)
 
 ogawa: setup
 	$(PY) -m drystone.studies.ogawa insitu
@@ -91,8 +96,8 @@ readme: setup
 	$(PY) -m drystone.studies.readme_tables README.md
 
 demo: setup
-	$(RUN) run cases/gravity4.toml -j $(JOBS)
-	$(RUN) run cases/settlement4.toml -j $(JOBS)
+	$(RUN) run cases/gravity4.toml -j $(THREADS)
+	$(RUN) run cases/settlement4.toml -j $(THREADS)
 	$(RUN) compare results/gravity4 results/settlement4
 	$(PY) -m drystone.studies.sacsayhuaman demo --workers $(JOBS)
 

@@ -20,7 +20,10 @@ def interrupt_on_sigterm() -> None:
 
 
 def main(argv=None) -> int:
+    import drystone
+
     ap = argparse.ArgumentParser(prog="drystone", description=__doc__)
+    ap.add_argument("--version", action="version", version=f"drystone {drystone.__version__}")
     sub = ap.add_subparsers(dest="cmd", required=True)
     r = sub.add_parser("run", help="run a case file")
     r.add_argument("case")

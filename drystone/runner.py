@@ -12,6 +12,7 @@ import shutil
 import time
 from pathlib import Path
 
+import drystone
 from drystone.model import case as casemod
 from drystone import paths, provenance
 from drystone.model.resolve import AXES, TOWARDS, fingerprint, initial_relative_velocity, resolve  # noqa: F401
@@ -59,6 +60,9 @@ def run(case_path, overrides=None, out_dir=None, threads=1, quiet=False, check_o
             print(f"[{spec['name']}] dt = {spec['dt']:.3g} s (critical {spec['dt_critical']:.3g} s), "
                   f"{len(spec['blocks'])} blocks, {spec['stages'][-1]['end']:.2f} s simulated, law {spec['law']}, "
                   f"{spec['stages'][-1]['end'] / spec['dt']:.0f} steps", flush=True)
+            if not drystone.kernels_cached():
+                print(f"[{spec['name']}] first run of the contact kernels since they changed: numba compiles them "
+                      f"(30-60 s, once; cached in .numba_cache/)", flush=True)
         try:
             simulate(spec, stage, threads, quiet, where, engine)
             summary = summ.build(spec, stage)

@@ -216,17 +216,35 @@ class Progress:
     """Every step: a progress line every ``every_s`` s of wall time (simulated time, percent,
     stage, tilt, contacts, ETA; a sweep reads the last one from the run's log)."""
 
+    #: a pause longer than this (s of wall time) between two Python steps is not simulation pace
+    #: but numba compiling a kernel on its first call (30-60 s): the ETA clock restarts after it
+    STALL_S = 10.0
+
     def __init__(self, every_s: float = 5.0):
         self.every_s = every_s
-        self.t_wall0 = self.t_print = time.time()
+        self.t_wall0 = self.t_print = self.t_last = self.frac0 = None
+
+    def eta(self, now: float, frac: float) -> float | None:
+        """Seconds left at the pace since the clock started (s), None before any progress."""
+        if self.t_wall0 is None or frac <= self.frac0 or now - self.t_wall0 < 1.0:  # no pace measured yet
+            return None
+        return (now - self.t_wall0) * (1 - frac) / (frac - self.frac0)
 
     def on_step(self, run, t: float, k: int) -> None:
         now = time.time()
+        prog = run.prog
+        frac = t / prog.end
+        stalled = self.t_last is not None and now - self.t_last > self.STALL_S
+        self.t_last = now
+        if self.t_wall0 is None or stalled:  # the clock starts after the first step and after a compilation
+            self.t_wall0 = now
+            self.frac0 = frac
+            self.t_print = self.t_print or now
+            return
         if now - self.t_print > self.every_s:
             self.t_print = now
-            prog = run.prog
-            frac = t / prog.end
-            eta = (now - self.t_wall0) * (1 - frac) / max(frac, 1e-9)
+            eta = self.eta(now, frac)
+            eta = "   ?" if eta is None else f"{eta:6.0f}"
             print(f"[{run.spec_name}] t = {t:7.3f} / {prog.end:.3f} s ({100 * frac:5.1f} %)  "
                   f"stage {k + 1}/{len(prog.stages)} {prog.stages[k].type}  tilt {prog.tilt_deg(t):6.2f} deg  "
-                  f"contacts {len(run.engine.contacts().fn)}  ETA {eta:6.0f} s", flush=True)
+                  f"contacts {len(run.engine.contacts().fn)}  ETA {eta} s", flush=True)
