@@ -12,8 +12,8 @@ STAMP   := $(VENV)/.setup-stamp
 RUN     := $(PY) -m drystone
 
 .PHONY: setup system-deps test demo run gravity4 settlement4 bench clean help records spectrum ogawa3d ogawa \
-        reference sweep tilt tilt-rate tilt-sensitivity tilt-report sacsayhuaman sacsayhuaman-report vtk ogawa-pga readme free-decay \
-        fragility fragility-small fragility-report crosscheck shape-study shape-study-small shape-study-report
+        reference sweep tilt tilt-rate tilt-sensitivity tilt-report sacsayhuaman sacsayhuaman-report vtk ogawa-pga readme docs free-decay \
+        fragility fragility-small fragility-report crosscheck shape-study shape-study-small shape-study-report report
 
 help:
 	@echo "make setup        install Debian's YADE, make .venv, install PyPI dependencies"
@@ -23,13 +23,14 @@ help:
 	@echo "make gravity4 | settlement4   the paper's four-block verification cases"
 	@echo "make bench [BENCH='--only scale --sizes 500']   speed figures (not a test; all sections ~15 min on 2 cores)"
 	@echo "make reference    regenerate tests/data/reference/ (stored histories of test_regression.py) after an intended change"
-	@echo "make free-decay   damping ratio per mode of one block, both contact geometries (~1 min)"
+	@echo "make free-decay   damping ratio per mode of one block, both contact geometries, and a slender block's rocking restitution per impact vs Housner at 3 K_n x 4 dampings (~3 min)"
 	@echo "make ogawa        Ogawa et al.: Tables 1-3 check and figure, 1D friction studies and report (~15 min)"
 	@echo "make ogawa3d      the same five blocks in 3D (YADE) for the named friction sets (~4 min per set) + make ogawa-pga"
 	@echo "make ogawa-pga    3D: both block readings, PGA sweep (end-block overturning), reset vs cumulative (~30 min on 2 cores)"
-	@echo "make readme       regenerate README.md's result tables from results/*/ (skips missing reports)"
+	@echo "make docs         regenerate the result tables of README.md and docs/*.md from results/*/ (skips missing reports), the case keys and layout tables"
+	@echo "make readme       the same as make docs"
 	@echo "make records      papers' records (user files or FEMA P695 analogues) -> results/records/catalogue.json"
-	@echo "make spectrum FILE=path [ARGS=...]   PGA, step, duration, predominant frequencies (JSON) + PNG"
+	@echo "make spectrum FILE=path [ARGS=...]   PGA, PGV, Arias, Sa(T), duration, predominant frequencies (JSON) + PNG"
 	@echo "make sweep SWEEP=cases/sweeps/x.toml [DASK=tcp://host:8786|local]   a sweep, parallel and resumable"
 	@echo "make tilt         tilt-table validation: 5 generated walls + the same 5 with a constant section (~20 min) + report"
 	@echo "make tilt-rate    the paper's 0.2 deg/s protocol on wall seed 0 (~10 min) + report"
@@ -37,6 +38,7 @@ help:
 	@echo "make tilt-report  rewrite results/tilt/ from the tilt runs made so far"
 	@echo "make sacsayhuaman [DASK=...]   40-stone wall: white noise, sine sweeps, resonance PGAs, Table 3 (~1 h on 2 cores)"
 	@echo "make sacsayhuaman-report       rewrite results/sacsayhuaman/ from the runs made so far"
+	@echo "make report DIR=results/<run>   one self-contained HTML page of a finished run: <run>/report.html (a study's folder: report.md as HTML)"
 	@echo "make vtk DIR=results/<run> [EVERY=5]   VTK files of a finished run for ParaView (<run>/vtk/blocks.pvd)"
 	@echo "make fragility [DASK=...]      fragility curves: FEMA P695 far field (22 records) x PGA 0.1-1.0 g, mu and K_n drawn per run (220 runs; cost in results/fragility/report.md)"
 	@echo "make fragility-small           the fragility pipeline on 4 short runs (~2 min on 2 cores; not a result)"
@@ -92,8 +94,12 @@ ogawa-pga: setup
 	$(RUN) sweep cases/sweeps/ogawa_cumulative.toml --workers $(JOBS)
 	$(PY) -m drystone.studies.ogawa refresh
 
-readme: setup
-	$(PY) -m drystone.studies.readme_tables README.md
+docs: setup
+	$(PY) -m drystone.studies.readme_tables
+	$(RUN) keys --update-docs
+	$(RUN) layout --update-docs
+
+readme: docs
 
 demo: setup
 	$(RUN) run cases/gravity4.toml -j $(THREADS)
@@ -142,6 +148,10 @@ sacsayhuaman-report: setup
 
 tilt-report: setup
 	$(PY) -m drystone.studies.tilt
+
+report: setup
+	@test -n "$(DIR)" || { echo "usage: make report DIR=results/<run folder>"; exit 2; }
+	$(RUN) report "$(DIR)"
 
 vtk: setup
 	@test -n "$(DIR)" || { echo "usage: make vtk DIR=results/<run folder> [EVERY=5]"; exit 2; }

@@ -1,4 +1,4 @@
-"""Command line: python -m drystone {run, sweep, keys, layout, compare, bench, free-decay}."""
+"""Command line: python -m drystone {run, report, sweep, keys, layout, compare, bench, free-decay}."""
 from __future__ import annotations
 
 import argparse
@@ -6,6 +6,7 @@ import json
 import os
 import signal
 import sys
+from pathlib import Path
 
 from drystone.model import case as casemod
 
@@ -35,10 +36,15 @@ def main(argv=None) -> int:
                    help="step engine of the project's law (compiled: numba, default; python: numpy law with "
                         "YADE's integrator, the reference)")
     r.add_argument("-q", "--quiet", action="store_true")
+    r.add_argument("--json", action="store_true",
+                   help="print the summary's penetration, slip and collapse-angle keys as JSON (machine output) "
+                        "instead of the summary lines")
     k = sub.add_parser("keys", help="print the table of case-file keys (Markdown)")
-    k.add_argument("--update-readme", action="store_true", help="write the table into README.md")
+    k.add_argument("--update-docs", "--update-readme", dest="update_docs", action="store_true",
+                   help="write the table into docs/case-keys.md (--update-readme: the old name)")
     lay = sub.add_parser("layout", help="print the table of the package's layers (Markdown)")
-    lay.add_argument("--update-readme", action="store_true", help="write the table into README.md")
+    lay.add_argument("--update-docs", "--update-readme", dest="update_docs", action="store_true",
+                     help="write the table into docs/maintainers-guide.md (--update-readme: the old name)")
     c = sub.add_parser("compare", help="compare finished verification runs with the paper")
     c.add_argument("folders", nargs="+")
     b = sub.add_parser("bench", help="speed figures: 40-block wall, 500/2000-stone walls, threads, Sacsayhuaman")
@@ -52,7 +58,8 @@ def main(argv=None) -> int:
     b.add_argument("--steps", type=int, default=300, help="scale section: steps per run (300)")
     b.add_argument("--engines", nargs="+", choices=("compiled", "python"), default=None,
                    help="scale section: step engines (default: the runner's default)")
-    sub.add_parser("free-decay", help="damping ratio per mode of one block (both contact geometries) -> "
+    sub.add_parser("free-decay", help="damping ratio per mode of one block (both contact geometries) and rocking "
+                   "restitution per impact against Housner's -> "
                    "results/free_decay/report.md")
     w = sub.add_parser("sweep", help="run a sweep file (many overrides of one case) in parallel, resumably")
     w.add_argument("sweep")
@@ -62,11 +69,21 @@ def main(argv=None) -> int:
                    help="Dask scheduler address (tcp://host:8786); 'local' starts a LocalCluster (implies --backend dask)")
     w.add_argument("--only", nargs="*", default=None, metavar="RUN", help="run only these runs of the sweep")
     w.add_argument("-j", "--threads", type=int, default=1, help="YADE threads per run (1)")
+    rep = sub.add_parser("report", help="write RUN_DIR/report.html: one self-contained page of a finished run "
+                         "(a study's folder: its report.md as report.html)")
+    rep.add_argument("run_dir", metavar="RUN_DIR")
     a = ap.parse_args(argv)
     try:
         if a.cmd == "run":
             from drystone import runner
             s = runner.run(a.case, a.set, a.out, a.threads, a.quiet, engine=a.engine)
+            if not a.json:  # the summary lines by kind of run (drystone/postprocess/console.py)
+                from drystone import paths
+                from drystone.postprocess import console
+                out = Path(a.out).expanduser().resolve() if a.out else paths.RESULTS / s["name"]
+                spec = json.loads((out / "spec.json").read_text())
+                print("\n".join(console.lines(s, spec, out)))
+                return 0
             keys = [k for k in s if k.startswith(("penetration", "slip", "collapse_angle"))]
             print(json.dumps({k: s[k] for k in keys}, indent=1))
             left = (s.get("run") or {}).get("left_model") or {}
@@ -76,12 +93,12 @@ def main(argv=None) -> int:
                       "and has no residual (summary.json run.left_model)", file=sys.stderr)
         elif a.cmd in ("keys", "layout"):
             from drystone import layers
-            table, into_readme = ((casemod.describe, casemod.readme_with_keys) if a.cmd == "keys"
-                                  else (layers.readme_block, layers.readme_with_layout))
-            if a.update_readme:
-                from drystone import paths
-                p = paths.ROOT / "README.md"
-                p.write_text(into_readme(p.read_text()))
+            from drystone import paths
+            table, into_doc, p = ((casemod.describe, casemod.readme_with_keys, paths.DOCS / "case-keys.md")
+                                  if a.cmd == "keys" else
+                                  (layers.readme_block, layers.readme_with_layout, paths.DOCS / "maintainers-guide.md"))
+            if a.update_docs:
+                p.write_text(into_doc(p.read_text()))
                 print(f"updated {p}")
             else:
                 print(table())
@@ -93,6 +110,13 @@ def main(argv=None) -> int:
             backend = "dask" if a.dask else a.backend
             res = sweep.run(a.sweep, a.workers, backend, a.dask, a.threads, a.only)
             return 130 if res["interrupted"] else 1 if res["failed"] else 0
+        elif a.cmd == "report":
+            from drystone.postprocess import report
+            try:
+                print(report.write(a.run_dir))
+            except report.NotARun as exc:
+                print(f"error: {exc}", file=sys.stderr)
+                return 2
         elif a.cmd == "free-decay":
             from drystone import free_decay
             print(free_decay.report().read_text())

@@ -13,7 +13,8 @@ rings freely about its rest state:
 Each modal coordinate is read from the recorded velocities (no static offset) and its
 damping ratio taken from the logarithmic decrement of successive peaks. ``python -m
 drystone free-decay`` runs every mode for both contact geometries and two damping inputs
-and writes results/free_decay/report.md and free_decay.json. Units SI.
+and writes results/free_decay/report.md and free_decay.json, with the rocking restitution per
+impact of a slender block (drystone/restitution.py) beside them. Units SI.
 """
 from __future__ import annotations
 
@@ -24,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from drystone.mechanics.contact import DETECTIONS
+from drystone.postprocess import markdown
 from drystone.units import GRAVITY as G  # the runs' gravity (the case default), m/s^2
 B, D, H, RHO, KN, KT, MU = 0.2, 0.2, 0.4, 2300.0, 2e8, 1e8, 0.7
 MASS = RHO * B * D * H
@@ -113,7 +115,7 @@ def measure(outdir: Path, detection: str, xi: float) -> dict:
 def report(out: Path | None = None, dampings=(0.05, 0.3)) -> Path:
     """Run every mode, both geometries, and write report.md + free_decay.json."""
     import drystone
-    from drystone import paths, provenance
+    from drystone import paths, provenance, restitution
 
     out = Path(out) if out is not None else paths.RESULTS / "free_decay"
     out.mkdir(parents=True, exist_ok=True)
@@ -126,9 +128,10 @@ def report(out: Path | None = None, dampings=(0.05, 0.3)) -> Path:
                 m = measure(Path(tmp) / f"{det}_{xi:g}", det, xi)
                 rows.append({"detection": det, "damping": xi, **m})
                 print(f"free decay {det} xi = {xi:g}: " + ", ".join(f"{k} {v:.3f}" for k, v in m.items()), flush=True)
+        rest_data, rest_lines = restitution.report_section(Path(tmp))  # the rocking block's impacts
     data = {"frequencies_hz": freqs, "rows": rows, "block_m": [B, D, H], "density": RHO, "kn": KN, "kt": KT,
             "package_version": drystone.__version__, "git": provenance.git_commit(),
-            "yade": provenance.yade_version()}
+            "yade": provenance.yade_version(), "restitution": rest_data}
     (out / "free_decay.json").write_text(json.dumps(data, indent=1))
     lines = ["# Free decay of one block: damping ratio per mode (logarithmic decrement)", "",
              f"Block {B} x {D} x {H} m, {RHO:g} kg/m^3, K_n {KN:g}, K_t {KT:g} N/m^3 on the platform "
@@ -139,5 +142,5 @@ def report(out: Path | None = None, dampings=(0.05, 0.3)) -> Path:
     for r in rows:
         lines.append(f"| {r['detection']} | {r['damping']:g} | {r['bouncing']:.3f} | {r['mode_1']:.3f} | "
                      f"{r['mode_2']:.3f} |")
-    (out / "report.md").write_text("\n".join(lines) + "\n")
-    return out / "report.md"
+    lines += rest_lines
+    return markdown.write(out / "report.md", "\n".join(lines) + "\n")  # and report.html beside it

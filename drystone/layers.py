@@ -1,6 +1,6 @@
 """The package's layers, the one list of them: each module belongs to one layer and imports
 only from its own layer or those below (tests/test_layers.py checks every import against
-``layer_of``; README's Layout table is generated from ``LAYERS`` by ``readme_block``:
+``layer_of``; the Layout table of docs/maintainers-guide.md is generated from ``LAYERS`` by ``readme_block``:
 ``python -m drystone layout --update-readme``). A leaf module: it imports nothing.
 
 Why one namespace: the design's folders (``geometry/``, ``motions/``, the core,
@@ -52,9 +52,10 @@ LAYERS = (
     Layer(4, "postprocess", (), ("drystone.postprocess",), "`drystone/postprocess/`",
           "`summary.json` from histories, figures, comparison with the papers, identification, VTK"),
     Layer(5, "applications", ("drystone.runner", "drystone.sweep", "drystone.cli", "drystone.bench",
-                              "drystone.free_decay", "drystone.__main__"), (),
-          "`drystone/` (`runner.py`, `sweep.py`, `cli.py`, `bench.py`, `free_decay.py`)",
-          "run a case, sweeps (local or Dask), the command line, speed figures, the free-decay check"),
+                              "drystone.free_decay", "drystone.restitution", "drystone.__main__"), (),
+          "`drystone/` (`runner.py`, `sweep.py`, `cli.py`, `bench.py`, `free_decay.py`, `restitution.py`)",
+          "run a case, sweeps (local or Dask), the command line, speed figures, the free-decay check and the "
+          "rocking restitution"),
     Layer(6, "studies", (), ("drystone.studies",), "`drystone/studies/`",
           "the papers and beyond, one package each: `tilt/`, `ogawa/`, `sacsayhuaman/`, `fragility/`, `shape/`, "
           "`crosscheck/` (LMGC90); `readme_tables.py`"),
@@ -70,7 +71,7 @@ def layer_of(module: str) -> Layer:
 
 
 def readme_block() -> str:
-    """README's Layout table (Markdown)."""
+    """The Layout table of docs/maintainers-guide.md (Markdown)."""
     rows = ["| layer | folders | what | imports YADE |", "|---|---|---|---|"]
     rows += [f"| {k.rank} {k.name} | {k.folders} | {k.what} | {'**yes (only here)**' if k.yade else 'no'} |"
              for k in LAYERS]

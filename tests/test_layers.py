@@ -1,4 +1,4 @@
-"""The package's layers depend one way (README, Layout): geometry and motions -> core ->
+"""The package's layers depend one way (docs/maintainers-guide.md, Layout): geometry and motions -> core ->
 yade_scripts -> postprocess -> studies, with runner, sweep, cli, bench and free_decay on top.
 Checked on the import statements of every module (ast), wherever they are in the module."""
 from __future__ import annotations
@@ -160,10 +160,11 @@ if __name__ == "__main__":
 
 
 def test_every_module_has_a_layer_and_the_readme_shows_them():
-    """The layers are listed once, in drystone/layers.py; README's Layout table is generated
-    from that list (python -m drystone layout --update-readme)."""
+    """The layers are listed once, in drystone/layers.py; the maintainer's guide's Layout table
+    is generated from that list (python -m drystone layout --update-docs)."""
     for mod, _ in _modules():
         layer_of(mod)
     assert [k.rank for k in LAYERS] == list(range(len(LAYERS)))
-    readme = (paths.ROOT / "README.md").read_text()
-    assert readme_with_layout(readme) == readme, "README's Layout table is stale: python -m drystone layout --update-readme"
+    guide = (paths.DOCS / "maintainers-guide.md").read_text()
+    assert readme_with_layout(guide) == guide, \
+        "docs/maintainers-guide.md's Layout table is stale: python -m drystone layout --update-docs"

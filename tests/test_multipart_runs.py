@@ -200,6 +200,7 @@ def test_joint_share_keeps_one_contact_and_splits_equal_halves():
 # --- figures and VTK draw every part ----------------------------------------------------------
 
 def test_figures_and_vtk_draw_each_part(outdir):
+    import meshio
     from conftest import assert_figure
     from drystone.postprocess import snapshots, vtk
 
@@ -210,8 +211,11 @@ def test_figures_and_vtk_draw_each_part(outdir):
     case = gravity_then([], write(outdir, data))
     run_case(case, outdir)
     pvd = vtk.write(outdir / "case", every=10)
-    last = sorted(pvd.parent.glob("blocks_*.vtp"))[-1].read_text()
-    assert 'NumberOfPolys="18"' in last  # the platform's 6 faces and the L's 12
+    last = meshio.read(sorted(pvd.parent.glob("blocks_*.vtu"))[-1])
+    ids = np.concatenate(last.cell_data["block_id"])
+    assert len(ids) == 18 and (ids == 7).sum() == 12  # the platform's 6 faces and the L's 12
+    assert len(last.points) == 8 + 16  # the platform's corners and both parts'
+    assert_figure(snapshots.render(outdir / "case", [0.0, 1e9], outdir / "final.png"), (8.4, 4.2), dpi=110)
 
 
 def test_modal_model_refuses_a_multi_part_stone(outdir):

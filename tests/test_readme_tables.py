@@ -1,4 +1,8 @@
-"""README.md's generated tables (drystone/studies/readme_tables.py) on synthetic results."""
+"""The documentation's generated tables (drystone/studies/readme_tables.py) on synthetic results,
+and the repository's README.md and docs/*.md: every block known, closed and placed once, the
+maintainer's guide listing every block, README's summary table quoting only generated numbers."""
+import re
+
 import json
 
 import pytest
@@ -68,14 +72,77 @@ def test_cli_check_and_write(tmp_path, capsys):
     assert rt.main([str(readme), "--results", str(tmp_path), "--check"]) == 0
 
 
-def test_repository_readme_blocks_are_known_and_closed():
-    """The README's marked blocks all have a generator and an end marker; every result
-    table named in the issue is one of them."""
-    text = (paths.ROOT / "README.md").read_text()
-    names = rt.BEGIN.findall(text)
-    assert {"verification", "tilt", "ogawa"} <= set(names)
-    assert set(names) <= set(rt.BLOCKS)
-    assert [m.group(2) for m in rt.MARK.finditer(text)] == names
+def test_repository_blocks_are_known_closed_and_each_placed_once():
+    """README.md and docs/*.md: every marked block has a generator and an end marker, and
+    every block of BLOCKS is in exactly one file (make docs warns about a block in none)."""
+    placed = []
+    for path in rt.documents():
+        text = path.read_text()
+        names = rt.BEGIN.findall(text)
+        assert set(names) <= set(rt.BLOCKS), path
+        assert [m.group(2) for m in rt.MARK.finditer(text)] == names, f"{path}: a block without its end"
+        placed += names
+    twice = sorted({n for n in placed if placed.count(n) > 1})
+    nowhere = sorted(set(rt.BLOCKS) - set(placed))
+    assert not twice and not nowhere, f"each generated block belongs in exactly one page: in two {twice}, in none {nowhere}"
+    assert rt.unplaced([p.read_text() for p in rt.documents()]) == []
+
+
+def test_maintainers_guide_lists_every_block():
+    """The "Generated tables" section names every block of BLOCKS (derived, so the list cannot
+    fall behind the code again: it once named 5 of 10)."""
+    text = (paths.DOCS / "maintainers-guide.md").read_text()
+    section = text.split("\n## Generated tables\n", 1)[1].split("\n## ", 1)[0]
+    listed = set(re.findall(r"^\| `([a-z_0-9]+)` \|", section, re.M))
+    assert listed == set(rt.BLOCKS)
+
+
+def _generated_text() -> str:
+    return "\n".join(m.group(3) for p in rt.documents() for m in rt.MARK.finditer(p.read_text()))
+
+
+def test_readme_summary_quotes_generated_numbers():
+    """README's "What the papers' comparison shows" table types no number of its own: every
+    number in its paper and package columns appears in a generated block of the docs."""
+    readme = (paths.ROOT / "README.md").read_text()
+    section = readme.split("\n## What the papers' comparison shows\n", 1)[1].split("\n## ", 1)[0]
+    rows = [ln for ln in section.splitlines() if ln.startswith("| ") and not ln.startswith("| what")]
+    generated = set(re.findall(r"-?\d+(?:\.\d+)?(?:e-?\d+)?", _generated_text()))
+    numbers = []
+    for row in rows:
+        cells = [c.strip() for c in row.strip("|").split("|")]
+        for cell in cells[1:3]:
+            cell = re.sub(r"atan\([^)]*\)|W/\(K_n A\)|K_n|F_t/F_n|\(one core\)|8 cores", "", cell)
+            numbers += re.findall(r"-?\d+(?:\.\d+)?(?:e-?\d+)?", cell)
+    assert len(numbers) >= 15
+    missing = sorted(set(numbers) - generated)
+    assert not missing, f"README summary numbers found in no generated block: {missing}"
+
+
+def test_generated_blocks_speak_to_users():
+    """No generated block refers to internal issue numbers (bench.json's goal sentence did)."""
+    assert not re.search(r"\bissue", _generated_text(), re.I)
+    said = rt._plain("compiled step 0.21 ms/step, 7.6x the issue's 1.6 ms/step (goal >= 6x: met)")
+    assert "issue" not in said and "the 1.6 ms/step of the uncompiled step it replaced" in said
+
+
+def test_cli_updates_every_document_and_warns_about_unplaced_blocks(tmp_path, capsys, monkeypatch):
+    """Without file arguments the command updates README.md and docs/*.md; a block of BLOCKS
+    in none of them is named in a warning; --check looks at every file."""
+    _tilt_results(tmp_path)
+    root = tmp_path / "repo"
+    (root / "docs").mkdir(parents=True)
+    (root / "README.md").write_text("front page\n")
+    (root / "docs" / "page.md").write_text(README)
+    monkeypatch.setattr(rt.paths, "ROOT", root)
+    assert rt.documents() == [root / "README.md", root / "docs" / "page.md"]
+    assert rt.main(["--results", str(tmp_path), "--check"]) == 1
+    assert rt.main(["--results", str(tmp_path)]) == 0
+    out, err = capsys.readouterr()
+    assert "page.md: tilt: generated" in out and "15.30, 15.10: mean 15.20" in (root / "docs" / "page.md").read_text()
+    assert "warning: block 'verification' is in none of README.md, docs/page.md" in err
+    assert (root / "README.md").read_text() == "front page\n"
+    assert rt.main(["--results", str(tmp_path), "--check"]) == 0
 
 
 def test_fragility_block_keeps_the_preliminary_warning(tmp_path):

@@ -81,9 +81,11 @@ OGAWA_UNIFORM_SPREAD = 0.02
 QUOTED_3_DIGITS_REL = 1e-2
 #: a value compared with its rounding to 2 decimals (50.01 mm): one unit of the last digit
 LAST_DIGIT_2_DECIMALS = 0.01
-#: VTK files write coordinates with 9 significant digits: half a unit of the ninth digit on
-#: coordinates of order 1 m is 5e-10 m; 1e-9 m
-VTK_COORDINATE_M = 1e-9
+#: a pixel of a snapshot (drystone/postprocess/snapshots.py) is stone colour when its red
+#: exceeds its blue by this much: the stone colour #d9b38c has red - blue = 77/255 = 0.302,
+#: times the darkest flat shading 0.62 (SHADE_RANGE) 0.187; the platform's and fixed
+#: blocks' greys have red = blue (0 after 8-bit rounding); midway, 0.09
+SNAPSHOT_STONE_RED_MINUS_BLUE = 0.09
 #: Cusco 2023 analogue: the test states its PGA as 0.5489 g, 4 significant digits; the
 #: scale factor to 0.3 g is within 2e-3 of 0.3 / 0.5489 (measured 5e-5)
 CUSCO_SCALE_REL = 2e-3
@@ -598,3 +600,64 @@ PUSH_MOVED_M = 1e-2
 #: the same two runs' recorded joint (normal force, area, volume, normal): sums over two
 #: contacts against one, round-off of the same order as the positions' (relative); 1e-9
 CUT_BLOCK_CONTACT_REL = 1e-9
+
+# ---------------------------------------------------------------------------------------
+# Intensity measures and the response spectrum (test_intensity.py, test_fragility_measures.py)
+# ---------------------------------------------------------------------------------------
+
+#: our Sa (exact for the samples joined by straight lines: first-order hold) against pyrotd's
+#: (frequency domain: the samples' band-limited, trigonometric interpolation). Everything else
+#: is the same: the peak is read at the same sample instants (pyrotd refines its grid only for
+#: oscillators above Nyquist / 5, none here), and pyrotd's circular response is made linear by
+#: padding the record with zeros (the wrap-around term is an expression in the test). The
+#: straight-line input is the band-limited one filtered by sinc^2(f dt): a component at f
+#: loses eps(f) = 1 - sinc^2(f dt) ~ (pi f dt)^2 / 3 of its amplitude. Through an oscillator at
+#: f_n a component f <= f_n loses at most eps(f_n); a component f >> f_n acts on omega_n^2 u
+#: by (f_n / f)^2 of its size, so it loses eps(f) (f_n / f)^2 ~ eps(f_n) of a contribution
+#: bounded by the PGA. The resonant part (at most Sa) and the rest (at most the PGA) each lose
+#: at most eps(f_n): |Sa_ours - Sa_pyrotd| <= PSA_FOH_FACTOR x eps(f_n) x max(Sa, PGA) with
+#: the factor 2 for the two parts. Measured on the Nishi-Akashi record (dt 0.01 s, 20 periods
+#: 0.1-4 s): ours lower by 1.01 % at 0.1 s (eps 3.2 %), 0.33 % at 0.32 s (eps 0.32 %, Sa > PGA),
+#: 0.13 % at 0.57 s (eps 0.10 %: the closest to the bound, 0.65 of it), 0.010 % at 4 s
+#: (eps 0.002 %, PGA / Sa = 15)
+PSA_FOH_FACTOR = 2.0
+#: PGV of a PEER record (trapezoid from rest, no correction) against the FEMA P695 table's
+#: PGVmax, the larger component's PGV rounded to 1 cm/s: half the rounding, 0.005 m/s, plus
+#: 0.0005 m/s for the integration rule's difference (trapezoid at 100-200 Hz on a velocity
+#: whose content is below 10 Hz: (pi f dt)^2 / 12 < 3e-3 relative of a 0.1-0.2 m/s pulse, not
+#: more than 0.0005 m/s). 20 of the 22 far-field records are within it (largest 0.0044 m/s);
+#: Landers/Yermo (0.0061 m/s) and Manjil/Abbar (0.019 m/s) are not: the table's value is
+#: PEER's own processing of another version of those records (not explained further here)
+PGV_TABLE_ABS_M_S = 0.0055
+#: every record, those two included: the larger difference (Manjil, 1.9 cm/s of 54 cm/s =
+#: 3.6 %) rounded up
+PGV_TABLE_REL = 0.04
+
+# ---------------------------------------------------------------------------------------
+# Rocking restitution (tests/test_restitution.py, drystone/restitution.py)
+# ---------------------------------------------------------------------------------------
+
+#: restitution read from a synthetic rigid rocking history (DOP853 at relative tolerance
+#: 1e-12, sampled every 1e-3 s): the amplitude is the vertex of a parabola through three
+#: samples; at an extreme theta''' = p^2 cos(alpha - theta) theta' = 0, so the error is the
+#: quartic term, theta'''' dt^4 / 24 ~ p^4 alpha dt^4 / 24 = 3e-13 rad (p = 4.2 rad/s) on
+#: amplitudes of 0.01-0.15 rad (3e-11 relative), plus the integration's 1e-12: 1e-9
+#: leaves a margin of 30 (measured 2.4e-11)
+ROCKING_AMPLITUDE_REL = 1e-9
+#: the rigid-energy measure against the block's own energy on its penalty contact: the
+#: loaded corner sinks delta = sqrt(2 theta W / (K_n d)) and E loses 2 W delta / 3
+#: (drystone.restitution.sunk_rocking_energy). At K_n 2e8 N/m^3 for the 0.2 x 0.2 x 0.8 m
+#: block this is 15 % of E at theta = 0.6 alpha, 18.5 % at 0.25 alpha and 27 % at 0.1 alpha,
+#: so r across an impact from 0.6 to 0.25 alpha changes by sqrt(0.815 / 0.85) - 1 = -2.1 %,
+#: from 0.25 to 0.1 alpha by sqrt(0.73 / 0.815) - 1 = -5.4 % (make free-decay, damping 0.8:
+#: -1.8 % and -4.3 %; -12 % for the next impact, to 0.03 alpha, which the test leaves out).
+#: For impacts whose amplitude after is at least 0.1 alpha: 6 %
+ROCKING_SUNK_BIAS_REL = 0.06
+#: the smallest amplitude after an impact (fraction of alpha) for which the bias above holds
+ROCKING_SUNK_MIN_AMPLITUDE = 0.1
+#: how fast the penalty contact's restitution approaches the rigid (Housner) impact as K_n
+#: grows, heavily damped: the impact lasts ~ pi / omega_c with omega_c ~ sqrt(K_n), and the
+#: rigid-impact picture (an instantaneous change of pivot) is wrong to first order in the
+#: rotation during the impact, omega tau ~ K_n^-1/2. So ten times K_n at least divides
+#: |r - r_Housner| by sqrt(10) (measured: by 13 from 2e9 to 2e10 N/m^3 at damping 0.8)
+ROCKING_KN_DECADE_FACTOR = 10 ** 0.5

@@ -21,7 +21,7 @@ stiffness per unit contact area in N/m^3)::
 Materials: ``density`` kg/m^3; ``kn``, ``kt`` N/m^3 (normal and tangential penalty
 stiffness per unit contact area, the paper's K_n, K_t); friction as ``mu`` or
 ``friction_angle_deg`` (one of them); ``damping`` the contact damping as a fraction of
-critical (the paper's mu_0, see README). Between two materials, kn and kt combine in
+critical (the paper's mu_0, see docs/physics.md). Between two materials, kn and kt combine in
 series (2 k1 k2 / (k1 + k2), equal materials give k), mu is the smaller and damping the
 mean. ``joints`` override mu and/or damping for one pair of blocks.
 

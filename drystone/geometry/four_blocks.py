@@ -4,7 +4,7 @@ Blocks 0.220 x 0.105 x 0.050 m at 2200 kg/m^3 (24.93 N each); K_n = 1.96e7 N/m^3
 K_t = 0.82e7 N/m^3, friction angle 38 deg, damping 0.08 (paper §3.1). Blocks 3 and 4 are
 fixed side by side, block 1 lies on 3 and 4, block 2 on block 1.
 
-Figure 6 is not available, so the layout is ours (README, "four-block cases"): blocks 3
+Figure 6 is not available, so the layout is ours (docs/assumed-inputs.md and docs/validation-sacsayhuaman.md): blocks 3
 and 4 stand on end (0.050 along x, 0.105 along y, 0.220 high, tops at z = 0) with no gap
 between them; block 1 lies flat across both with its centre of mass over block 3
 (x = -0.025 m), block 2 flat on block 1. When block 3 settles by s, block 1 pivots on the

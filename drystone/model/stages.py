@@ -1,6 +1,6 @@
 """Stage types: one class per ``type`` of a case's [[stages]], registered in ``REGISTRY``.
 
-Each type declares its case keys (``keys``; the README's key table is generated from
+Each type declares its case keys (``keys``; the key table of docs/case-keys.md is generated from
 them), checks a filled case stage (``validate``), turns it into its duration and the
 ``params`` of spec.json (``resolve``), and says what a resolved stage imposes at time t
 (the load hooks that drystone/model/loading.py's ``LoadProgramme`` composes). A hook of a type

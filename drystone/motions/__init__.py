@@ -11,6 +11,7 @@ SI inside: accelerations in m/s^2, times in s; ``_g``/``_hz`` in names where not
 * ``motions.processing``          baseline, taper, band-pass, resample, integrate, scale, trim
 * ``motions.generators``          Eq. 9 sine and band-limited white noise
 * ``motions.analysis``            PGA, durations, predominant frequencies of a record
+* ``motions.intensity``           PGA, PGV, PGD, Arias intensity, D5-95, Sa(T) of a record
 * ``motions.excitation.for_stage`` what the runner calls for an excitation stage
 * ``python -m drystone.motions records | spectrum FILE``  (``motions.cli``)
 

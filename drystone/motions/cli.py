@@ -7,8 +7,10 @@ gives the frozen analogues of ``motions.catalogue.ANALOGUES``.
 
 ``spectrum FILE [--format F] [--component C] [--dt S] [--units U] [--out DIR]`` reads any
 supported record (FILE may also be a catalogue name), prints a JSON object (PGA in g,
-step, duration, predominant frequencies and band in Hz, ...) and writes the record plus
-spectrum PNG to ``results/spectra/``.
+step, duration, predominant frequencies and band in Hz, ..., and the intensity measures of
+``motions.intensity``: PGV in m/s, PGD in m, Arias intensity in m/s, 5 %-damped Sa in g at
+``intensity.REPORT_PERIODS_S``) and writes the record, its Fourier spectrum and Sa(T) as a
+PNG to ``results/spectra/``.
 """
 from __future__ import annotations
 
@@ -18,8 +20,10 @@ import re
 import sys
 from pathlib import Path
 
+import numpy as np
+
 import drystone
-from drystone.motions import analysis, catalogue, readers
+from drystone.motions import analysis, catalogue, intensity, readers
 
 from drystone.paths import RESULTS, ROOT  # noqa: E402
 
@@ -75,14 +79,22 @@ def cmd_spectrum(args) -> int:
         r = readers.read(p, format=fmt, component=args.component, dt=args.dt, units=args.units)
         stem = p.stem
     d = analysis.describe(r)
+    im = intensity.measures(r)
+    # the figure's Sa(T): 100 periods from 0.02 s (or two steps) to 5 s, log-spaced
+    per = np.geomspace(max(0.02, 2 * r.dt), 5.0, 100)
+    curve = {"periods_s": per, "psa_g": intensity.psa_g(r, per), "damping": intensity.DAMPING}
     out = Path(args.out) if args.out else RESULTS / "spectra"
     comp = re.sub(r"[^A-Za-z0-9._-]+", "_", r.component)
-    png = plot_record(r, out / f"{stem}_{comp}.png", summary=d)
+    png = plot_record(r, out / f"{stem}_{comp}.png", summary=d, response=curve)
     obj = {"file": str(args.file), "format": fmt, "event": r.event, "station": r.station, "component": r.component,
            "units_in_file": r.units_in_file, "pga_g": d["pga_g"], "pga_m_s2": d["pga_m_s2"], "dt_s": r.dt,
            "n_samples": r.n, "duration_s": r.duration, "predominant_frequencies_hz": d["predominant_frequencies_hz"],
            "predominant_band_hz": d["predominant_band_hz"], "significant_duration_s": d["significant_duration_s"],
-           "onset_s": d["onset_s"], "spectrum_settings": analysis.SETTINGS, "history": r.history, "png": str(png)}
+           "onset_s": d["onset_s"], "pgv_m_s": im["pgv_m_s"], "pgd_m": im["pgd_m"], "arias_m_s": im["arias_m_s"],
+           "sa_periods_s": im["sa"]["periods_s"], "sa_g": im["sa"]["psa_g"], "sa_damping": im["sa"]["damping"],
+           "intensity_notes": "PGV, PGD: trapezoid integrals of the samples from rest, no baseline correction; "
+                              "Arias pi/(2 g) int a^2 dt; Sa: pseudo-spectral acceleration omega^2 max|u|",
+           "spectrum_settings": analysis.SETTINGS, "history": r.history, "png": str(png)}
     print(json.dumps(_round(obj), indent=1))
     return 0
 
@@ -93,7 +105,8 @@ def main(argv=None) -> int:
     a = sub.add_parser("records", help="resolve the papers' records, write results/records/catalogue.json")
     a.add_argument("--user-dir", default=None, help=f"folder of the user's record files (default {catalogue.USER_DIR})")
     a.add_argument("--out", default=None, help="output folder (default results/records)")
-    b = sub.add_parser("spectrum", help="PGA, step, duration and predominant frequencies of a record file")
+    b = sub.add_parser("spectrum", help="PGA, PGV, Arias, Sa(T), step, duration and predominant frequencies of "
+                                        "a record file")
     b.add_argument("file", help="record file (or a catalogue name)")
     b.add_argument("--format", choices=readers.FORMATS, default=None, help="file format (default: guessed)")
     b.add_argument("--component", default=None, help="component of a multi-component file (default NS)")

@@ -2,7 +2,10 @@
 Figures 25, 28 and 31): acceleration (m/s^2) against time on top, Fourier amplitude
 (m/s) against frequency below, raw in grey and Konno-Ohmachi smoothed in black, with the
 predominant band shaded and the predominant frequencies marked (settings of
-``motions.analysis``). Matplotlib with the Agg backend (no display needed).
+``motions.analysis``). With ``response`` (``motions.intensity.measures(r)["sa"]`` or any
+dict with ``periods_s``, ``psa_g`` and ``damping``) the lower row shows the Fourier spectrum
+beside the pseudo-acceleration response spectrum Sa(T) (g against period in s).
+Matplotlib with the Agg backend (no display needed).
 """
 from __future__ import annotations
 
@@ -14,15 +17,20 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 
-def plot_record(record, path, spec: dict | None = None, summary: dict | None = None, title: str | None = None) -> Path:
-    """Write the record-plus-spectrum PNG to ``path``; returns the path."""
+def plot_record(record, path, spec: dict | None = None, summary: dict | None = None, title: str | None = None,
+                response: dict | None = None) -> Path:
+    """Write the record-plus-spectrum PNG to ``path`` (8 x 6 in, 120 dpi); returns the path."""
     from drystone.motions import analysis
 
     spec = spec or analysis.smoothed_spectrum(record)
     summary = summary or analysis.describe(record, spec)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8.0, 6.0), constrained_layout=True)
+    if response is None:
+        fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8.0, 6.0), constrained_layout=True)
+    else:
+        fig, ax = plt.subplot_mosaic([["t", "t"], ["f", "s"]], figsize=(8.0, 6.0), constrained_layout=True)
+        ax1, ax2, ax3 = ax["t"], ax["f"], ax["s"]
     ax1.plot(record.time, record.acc, lw=0.6, color="k")
     ax1.set_xlabel("time (s)")
     ax1.set_ylabel("acceleration (m/s$^2$)")
@@ -45,6 +53,16 @@ def plot_record(record, path, spec: dict | None = None, summary: dict | None = N
     ax2.set_xlim(spec["fmin_hz"], spec["fmax_hz"])
     ax2.grid(alpha=0.3, which="both")
     ax2.legend(fontsize=7, loc="lower left")
+    if response is not None:
+        per, psa = response["periods_s"], response["psa_g"]
+        ax3.plot(per, psa, lw=1.2, color="k")
+        ax3.set_xscale("log")
+        ax3.set_xlabel("period T (s)")
+        ax3.set_ylabel(f"Sa(T), {100 * response['damping']:g} % damped (g)")
+        ax3.set_title("pseudo-acceleration response spectrum", fontsize=8)
+        ax3.set_xlim(min(per), max(per))
+        ax3.set_ylim(bottom=0)
+        ax3.grid(alpha=0.3, which="both")
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path

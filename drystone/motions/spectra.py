@@ -157,20 +157,29 @@ def predominant_band(freq, amp, level: float = 0.5, fmin: float | None = None,
     return lo, hi
 
 
+def oscillator_response(acc, dt: float, period: float, damping: float = 0.05) -> np.ndarray:
+    """Relative displacement u (m for ``acc`` in m/s^2) at the sample times of a linear
+    oscillator u'' + 2 zeta w u' + w^2 u = -a_g(t), w = 2 pi / period (s), from rest, for
+    base acceleration samples ``acc`` at step dt (s) joined by straight lines: the exact
+    discrete-time solution (scipy ``cont2discrete`` with first-order hold, i.e. the
+    piecewise-linear recurrence of Nigam and Jennings 1969) run by ``lfilter``."""
+    w = 2 * np.pi / float(period)
+    A = np.array([[0.0, 1.0], [-w * w, -2 * damping * w]])   # state (u, u')
+    B = np.array([[0.0], [-1.0]])
+    C = np.array([[1.0, 0.0]])
+    Ad, Bd, Cd, Dd, _ = signal.cont2discrete((A, B, C, np.zeros((1, 1))), dt, method="foh")
+    num, den = signal.ss2tf(Ad, Bd, Cd, Dd)
+    return signal.lfilter(num[0], den, np.asarray(acc, float))
+
+
 def response_spectrum(acc, dt: float, periods, damping: float = 0.05) -> np.ndarray:
     """Pseudo-acceleration spectrum omega^2 max|u| (unit of ``acc``) of a linear oscillator
     (periods in s, damping ratio) under base acceleration samples ``acc`` at step dt (s),
-    exact for linear interpolation between samples."""
+    exact for linear interpolation between samples; the peak is taken at the samples
+    (``oscillator_response``). About 0.6 ms per period for 10^4 samples."""
     acc = np.asarray(acc, float)
     out = np.empty(len(periods))
     for k, T in enumerate(periods):
         w = 2 * np.pi / float(T)
-        # u'' + 2 zeta w u' + w^2 u = -a_g ; state (u, u')
-        A = np.array([[0.0, 1.0], [-w * w, -2 * damping * w]])
-        B = np.array([[0.0], [-1.0]])
-        C = np.array([[1.0, 0.0]])
-        Ad, Bd, Cd, Dd, _ = signal.cont2discrete((A, B, C, np.zeros((1, 1))), dt, method="foh")
-        num, den = signal.ss2tf(Ad, Bd, Cd, Dd)
-        u = signal.lfilter(num[0], den, acc)
-        out[k] = w * w * np.abs(u).max()
+        out[k] = w * w * np.abs(oscillator_response(acc, dt, T, damping)).max()
     return out

@@ -25,7 +25,7 @@ def four_block_rows(summaries: dict[str, dict]) -> list[tuple]:
         a = p["block_size_m"][0] * p["block_size_m"][1]
         rows.append(("penetration 1-2 (m)", g.get("penetration_1_2_m"), p["penetration_1_2_m"],
                      f"W/(K_n A) = {w / (p['kn_N_m3'] * a):.4g}"))
-        rows.append(("run time (s)", g["run"]["wall_time_s"], None, "Abaqus time not given for gravity"))
+        rows.append(("run time, gravity case (s)", g["run"]["wall_time_s"], None, "Abaqus time not given for gravity"))
     s = summaries.get("settlement4")
     if s:
         rows.append(("slip time (s)", s.get("slip_time_s"), p["slip_time_s"],
@@ -37,7 +37,7 @@ def four_block_rows(summaries: dict[str, dict]) -> list[tuple]:
         ratio = s.get("slip_force_ratio")
         rows.append(("F_t/F_n at slip", ratio, math.tan(phi), "tan 38 deg"))
         rows.append(("block 1 tilt at slip (deg)", s.get("slip_tilt_deg"), p["friction_angle_deg"], "= friction angle"))
-        rows.append(("run time (s)", s["run"]["wall_time_s"], p["run_time_settlement_s"], "Abaqus: 8 cores"))
+        rows.append(("run time, settlement case (s)", s["run"]["wall_time_s"], p["run_time_settlement_s"], "Abaqus: 8 cores"))
     return rows
 
 

@@ -64,7 +64,7 @@ TOPPLE_SIZE = (0.2, 0.2, 0.4)  # m: x, y (along the tilt), z
 TOPPLE_MU = 0.7
 #: contact damping of the package's side (fraction of critical): light, as in
 #: tests/test_tilt_block.py's 1 deg/s check; with 0.8 the damped run-away dates the onset
-#: later (README, issue 11). LMGC90's rigid contact has restitution 0 and no damping while
+#: later (docs/physics.md). LMGC90's rigid contact has restitution 0 and no damping while
 #: rocking. ASSUMED for the comparison.
 TOPPLE_DAMPING = 0.08
 

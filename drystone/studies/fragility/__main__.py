@@ -3,7 +3,8 @@
 plan     FEMA P695 far-field records (component a out of plane) x PGA stripes 0.1-1.0 g with per-run
          draws of mu and K_n -> results/fragility/plan.toml (+ plan.json, records/)
 run      plan, then run the sweep (resumable: finished runs are skipped; local pool or Dask)
-fit      damage states of the finished runs, lognormal fragility curves -> fragility.json, runs.csv
+fit      damage states of the finished runs, lognormal fragility curves in PGA (default), PGV and Sa(T1)
+         -> fragility.json, runs.csv
 report   fit, then fragility.png and report.md
 all      run, then report
 --config small: 2 records x 2 stripes, records cut to 2 s (results/fragility_small/): a pipeline check."""
@@ -44,6 +45,13 @@ def main(argv=None) -> int:
         for n, e in d["fits"].items():
             f = e["fit"]
             print(f"{n}: " + (f"theta {f['theta']:.3g} g, beta {f['beta']:.3g}" if f else f"no fit: {e['reason']}"))
+        im = d["intensity_measures"]
+        for m in im["measures"]:
+            for n, e in im["fits"][m["key"]].items():
+                f = e["fit"]
+                print(f"{n} in {m['symbol']} ({m['unit']}): "
+                      + (f"theta {f['theta']:.3g}, beta {f['beta']:.3g}" if f else "no fit"))
+        print("smallest beta: " + ", ".join(f"{n} {v or '-'}" for n, v in im["most_efficient"].items()))
         print(json.dumps(d["runs"]))
         return 0
     path = study.report(cfg)

@@ -189,8 +189,9 @@ def fisher_information(x, n, theta: float, beta: float) -> np.ndarray:
     lx = np.log(np.asarray(x, float))
     n = np.asarray(n, float)
     u = (lx - math.log(theta)) / beta
-    p = stats.norm.cdf(u)
-    w = n * stats.norm.pdf(u) ** 2 / np.maximum(p * (1 - p), 1e-300)
+    # p (1 - p) as Phi(u) Phi(-u): 1 - Phi(u) rounds to 0 beyond u ~ 8.3 (a run far above the
+    # median, one run per IM value), which made the weight phi^2 / 1e-300 ~ 1e250
+    w = n * stats.norm.pdf(u) ** 2 / np.maximum(ndtr(u) * ndtr(-u), 1e-300)
     return np.array([[w.sum(), (w * lx).sum()], [(w * lx).sum(), (w * lx * lx).sum()]])
 
 
@@ -278,3 +279,33 @@ def bootstrap(x, n, z, n_boot: int = 1000, seed: int = 0, grid=None, level: floa
                beta_ci=[float(np.percentile(betas, lo)), float(np.percentile(betas, hi))],
                band_lo=np.percentile(curves, lo, axis=0).tolist(), band_hi=np.percentile(curves, hi, axis=0).tolist())
     return out
+
+
+def bootstrap_runs(im, exceeded, n_boot: int = 1000, seed: int = 0, level: float = 0.95) -> dict:
+    """Case-resampling bootstrap for runs that each have their own IM (PGV, Sa(T1) of a
+    scaled record: one run per "stripe", where ``bootstrap``'s within-stripe resampling
+    would leave every replicate equal to the data): each replicate draws len(im) runs with
+    replacement from all runs, refits (``fit_runs``), and the ``level`` percentile
+    intervals of theta and beta are returned, with the count of replicates that had no
+    finite maximum (``failed``, left out)."""
+    im = np.asarray(im, float)
+    ex = np.asarray(exceeded).astype(bool)
+    if im.shape != ex.shape or im.ndim != 1:
+        raise ValueError(f"im and exceeded must be 1-D arrays of one length, got {im.shape} and {ex.shape}")
+    rng = np.random.default_rng(seed)
+    thetas, betas, failed = [], [], 0
+    for _ in range(n_boot):
+        k = rng.integers(0, len(im), len(im))
+        try:
+            f = fit_runs(im[k], ex[k])
+        except FitError:
+            failed += 1
+            continue
+        thetas.append(f.theta)
+        betas.append(f.beta)
+    lo, hi = 50 * (1 - level), 50 * (1 + level)
+    out = {"n_boot": n_boot, "seed": seed, "level": level, "failed": failed, "method": "runs resampled"}
+    if not thetas:
+        return dict(out, theta_ci=None, beta_ci=None)
+    return dict(out, theta_ci=[float(np.percentile(thetas, lo)), float(np.percentile(thetas, hi))],
+                beta_ci=[float(np.percentile(betas, lo)), float(np.percentile(betas, hi))])

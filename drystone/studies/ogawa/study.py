@@ -44,6 +44,7 @@ import drystone
 from drystone import paths, sweep, tomlio
 from drystone.geometry import ogawa_blocks
 from drystone.model.spec import stage_type
+from drystone.postprocess import markdown
 from drystone.studies.ogawa import mrb1d
 from drystone.units import G_STANDARD
 
@@ -367,9 +368,7 @@ def report(summary: dict, out: Path) -> Path:
     else:
         lines += ["## 1D friction studies", "", "Not run: `make ogawa`.", ""]
     lines += report_orientation(summary.get("orientation_study"), summary)
-    p = out / "report.md"
-    p.write_text("\n".join(lines))
-    return p
+    return markdown.write(out / "report.md", "\n".join(lines))  # and report.html beside it
 
 
 def assumed_lines(summary: dict) -> list[str]:

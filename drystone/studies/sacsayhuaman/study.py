@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from drystone import paths, sweep, tomlio
-from drystone.postprocess import compare
+from drystone.postprocess import compare, markdown
 from drystone.model.spec import stage_type
 from drystone.studies.sacsayhuaman import analysis as an
 from drystone.studies.sacsayhuaman import figures as fig
@@ -124,7 +124,7 @@ def identification_report(out: Path = OUT) -> Path:
     p = paper()["identification"]
     k, res = idf.grid_indices(p["white_noise_peaks_hz"])
     df = idf.grid_step()
-    lines = ["# White-noise identification done both ways (paper §4.2; issue 11, item 3)", "",
+    lines = ["# White-noise identification done both ways (paper §4.2)", "",
              "## The paper's eight peaks are FFT bins", "",
              f"A 4096-point FFT of samples at 1000 Hz (a 4.096 s window) has frequencies k x {df:.9f} Hz only. "
              "Every peak the paper lists is such a bin:", "",
@@ -141,8 +141,7 @@ def identification_report(out: Path = OUT) -> Path:
     except FileNotFoundError as exc:
         lines += [f"Runs: not yet ({exc})."]
         path = out / "identification.md"
-        path.write_text("\n".join(lines) + "\n")
-        return path
+        return markdown.write(path, "\n".join(lines) + "\n")  # and its .html beside it
     results, modal, pp = st["results"], st["modal"], paper()
     lines += ["## Our runs", "", "| run | white in | peak base displacement (mm) | PGA (g) | rms acc. (m/s²) | "
               "max relative y of A (mm) |", "|---|---|---|---|---|---|"]
@@ -223,8 +222,7 @@ def identification_report(out: Path = OUT) -> Path:
                                                                                         "residual_hz": res.tolist()},
                                                                          "runs": results, "modal": modal}), indent=1))
     path = out / "identification.md"
-    path.write_text("\n".join(lines) + "\n")
-    return path
+    return markdown.write(path, "\n".join(lines) + "\n")  # and its .html beside it
 
 
 def _modal_gap(modal: dict, results: list[dict]) -> list[str]:
@@ -539,8 +537,7 @@ def report(out: Path = OUT) -> Path:
     else:
         lines.append("Not run: python -m drystone.studies.sacsayhuaman table3")
     path = out / "report.md"
-    path.write_text("\n".join(lines) + "\n")
-    return path
+    return markdown.write(path, "\n".join(lines) + "\n")  # and its .html beside it
 
 
 def _settled_text(settled) -> str:
@@ -587,8 +584,7 @@ def demo(workers=None) -> Path:
         lines += ["", f"![point A]({fig.point_a(rows, root / 'point_a.png', rows[0]['record']).name}) "
                       f"![final states]({fig.final_states(rows, 'pga_g', root / 'final_states.png').name})"]
     path = root / "report.md"
-    path.write_text("\n".join(lines) + "\n")
-    return path
+    return markdown.write(path, "\n".join(lines) + "\n")  # and its .html beside it
 
 
 def run_all(workers=None, backend="local", address=None) -> Path:

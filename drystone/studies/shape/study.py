@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from drystone import sweep
+from drystone.postprocess import markdown
 from drystone.studies.shape import bisect
 from drystone.studies.shape import plan as planmod
 
@@ -707,6 +708,4 @@ def report(config="full") -> Path:
           "spread (one friction coefficient and stiffness, Table 1's).",
           "* **ASSUMED**: the tilt rate (1 deg/s near collapse, the tilt study's faster protocol) is slow enough for "
           "these 4 m walls; the tilt study checked it (0.2 deg/s) on the 1.5 m Santa-Cruz wall only.", ""]
-    path = cfg.out_dir / "report.md"
-    path.write_text("\n".join(L) + "\n")
-    return path
+    return markdown.write(cfg.out_dir / "report.md", "\n".join(L) + "\n")  # and report.html beside it

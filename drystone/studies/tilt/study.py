@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from drystone import paths
-from drystone.postprocess import compare
+from drystone.postprocess import compare, markdown
 from drystone.model.spec import stage_type
 
 OUT = paths.RESULTS / "tilt"
@@ -420,7 +420,7 @@ def build(seeds=None, rate=None, sensitivity=None, out: Path = OUT, figures: boo
         show = next((r for r in rate_rows if r["finished"]), done[0])
         summary["figures"].append(str(snapshot_figure(show, out / "snapshots.png")))
     (out / "summary.json").write_text(json.dumps(summary, indent=1, default=_json_default))
-    (out / "report.md").write_text(report_md(summary))
+    markdown.write(out / "report.md", report_md(summary))  # and report.html beside it
     return summary
 
 
