@@ -661,3 +661,35 @@ ROCKING_SUNK_MIN_AMPLITUDE = 0.1
 #: rotation during the impact, omega tau ~ K_n^-1/2. So ten times K_n at least divides
 #: |r - r_Housner| by sqrt(10) (measured: by 13 from 2e9 to 2e10 N/m^3 at damping 0.8)
 ROCKING_KN_DECADE_FACTOR = 10 ** 0.5
+
+# ---------------------------------------------------------------------------------------
+# Site response (drystone/motions/site.py, tests/test_site.py)
+# ---------------------------------------------------------------------------------------
+
+#: a propagated sine against |H(f)| at steady state: the amplitude fitted over 10-50 s of a
+#: 60 s sine. The onset transient has decayed there by exp(-zeta_eff w0 t) (zeta_eff from the
+#: transfer function's half-power band, 0.24 for the test column: < 1e-15 at 10 s); the FFT's
+#: circular wrap is removed by the zero padding (down to 1e-4 of the free vibration, twice
+#: over); what remains is the precursor of the sine's END: pystrata's frequency-independent
+#: complex modulus G (sqrt(1 - 4 xi^2) + 2 i xi) is not causal, so the response starts to
+#: feel the end before it comes (measured: 6e-3 of the amplitude in the last second, 1e-5 at
+#: 1-5 s before it, < 1e-6 at 10 s before it and earlier). Fitted amplitudes measured within
+#: 4e-11 (at f0) and 8e-9 (at f0/20) of |H|; bound 1e-6, the precursor's level at the window's end
+SITE_SINE_STEADY_REL = 1e-6
+#: the example profile's amplification against Alva et al.'s 1.56, published to two
+#: decimals: half a unit of the last digit, 0.005 / 1.56 = 0.32 %
+ALVA_AMPLIFICATION_REL = 0.005 / 1.56
+
+# ---------------------------------------------------------------------------------------
+# Earth pressure (drystone/mechanics/earth_pressure.py, tests/test_earth_pressure.py)
+# ---------------------------------------------------------------------------------------
+
+#: a coefficient printed to 4 decimals (Smith's 0.4467, a calculator's 0.3797 and 0.2461) is
+#: within half a unit of its last digit: 5e-5
+PRINTED_4_DECIMALS = 5e-5
+#: Coulomb/Mononobe-Okabe against the trial-wedge maximum found numerically (Brent on the
+#: failure-plane angle): at the maximum the thrust is flat in the angle, so an angle error e
+#: (the search's tolerance, 1e-12 rad) costs ~e^2, nothing; the equilibrium solve and
+#: the trigonometry add a few ulp (condition ~10 near the limit phi - beta - theta -> 0):
+#: measured 4.4e-16 over the test's ten sets; 1e-12
+WEDGE_SEARCH_REL = 1e-12

@@ -240,20 +240,50 @@ def _record(where: str, record: str, base_dir: Path) -> str:
     return str(rp.resolve())
 
 
+def _site(where: str, site: str, base_dir: Path) -> str:
+    """A site-profile file resolved against the case file's folder (as 'record'), checked
+    (``motions.site.read_profile``) before any run, returned absolute."""
+    from drystone.motions import site as msite
+
+    sp = Path(site) if Path(site).is_absolute() else base_dir / site
+    if not sp.is_file():
+        raise CaseError(f"{where}: 'site' = {site!r}: {sp} not found (a path is relative to the case file's folder)")
+    try:
+        msite.read_profile(sp)
+    except msite.SiteError as exc:
+        raise CaseError(f"{where}: 'site': {exc}") from None
+    return str(sp.resolve())
+
+
 def _excitation(s: dict, where: str, out: Path, k: int) -> tuple[np.ndarray, float, dict]:
     """Acceleration samples (m/s^2), their step (s) and metadata for an excitation stage
-    (sine, white noise or record: drystone/motions/excitation.py), saved beside the run."""
+    (sine, white noise or record: drystone/motions/excitation.py), saved beside the run as
+    ``excitation_<k>.npy``; with a ``site``, that is the surface motion, and the record at
+    rock (``excitation_<k>_bedrock.npy``) and the site response's profile, info and
+    provenance (``excitation_<k>_site.json``) are saved beside it."""
+    import json
+
     from drystone.motions import excitation as mex
 
     try:
-        acc, dt, meta = mex.for_stage(s)
+        m = mex.motion_for_stage(s)
+        meta = mex.stage_meta(s, m)
     except (ValueError, FileNotFoundError, KeyError, OSError) as exc:
         raise CaseError(f"{where}: [[stages]] #{k + 1} ({s['motion']}): {exc}") from None
-    acc = np.asarray(acc, float)
+    acc, dt = np.asarray(m.applied.acc, float), m.applied.dt
     if not np.all(np.isfinite(acc)):
         raise CaseError(f"{where}: [[stages]] #{k + 1}: the excitation has non-finite samples")
     name = f"excitation_{k + 1}.npy"
     np.save(out / name, acc)
+    if m.site is not None:
+        rock, info = f"excitation_{k + 1}_bedrock.npy", f"excitation_{k + 1}_site.json"
+        np.save(out / rock, m.bedrock.acc)
+        (out / info).write_text(json.dumps({
+            "units": "accelerations m/s^2, dt s, frequencies Hz, lengths m, velocities m/s, stresses kPa",
+            "surface_acc_file": name, "bedrock_acc_file": rock, "dt_s": dt,
+            "bedrock_record": m.bedrock.metadata(), "surface_record": m.applied.metadata(),
+            "site_response": m.site}, indent=1))
+        meta["site"] = dict(meta["site"], bedrock_acc_file=rock, site_file=info)
     meta = dict(meta, acc_file=name, dt_s=dt, pga_m_s2=float(np.abs(acc).max()),
                 pga_g=float(np.abs(acc).max() / G_STANDARD), direction=s["direction"])
     return acc, dt, meta
@@ -296,6 +326,10 @@ class Excitation(StageType):
         "pga_g": Key(None, "g", "scale the motion to this peak ground acceleration", float, positive=True),
         "record": Key(None, "-", "catalogue name, or file of an acceleration record (relative to the case file)", str),
         "seed": Key(0, "-", "white-noise seed", int),
+        "site": Key(None, "-", "site-profile file (TOML, relative to the case file; docs/motions.md, Site response): "
+                    "the motion, scaled to pga_g AT ROCK, is propagated up the 1-D soil column (pystrata, equivalent "
+                    "linear) and the surface motion drives the platform; the rock record and the site response are "
+                    "saved beside the run (excitation_<k>_bedrock.npy, excitation_<k>_site.json)", str),
         "start": Key("rest", "-", "how a sine starts (motion = 'sine' only): 'rest' = the acceleration "
                      "a(t) = -A sin(wt) from a base at rest (the base velocity grows from 0); 'displacement' = the "
                      "paper's Eq. 9, base displacement d(t) = A/w^2 sin(wt), whose velocity A/w cos(wt) jumps from 0 "
@@ -317,6 +351,11 @@ class Excitation(StageType):
                             f"displacement); a {m!r} motion starts from rest")
         if m == "record":
             s["record"] = _record(where, s["record"], base_dir)
+        if s["site"] is not None:
+            if s["start"] != "rest":
+                raise CaseError(f"{where}: 'start' = {s['start']!r} cannot go with 'site': the surface motion is no "
+                                "longer the sine whose displacement Eq. 9 prescribes")
+            s["site"] = _site(where, s["site"], base_dir)
 
     def resolve(self, s, k, ctx):
         dt = ctx.dt

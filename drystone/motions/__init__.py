@@ -12,8 +12,10 @@ SI inside: accelerations in m/s^2, times in s; ``_g``/``_hz`` in names where not
 * ``motions.generators``          Eq. 9 sine and band-limited white noise
 * ``motions.analysis``            PGA, durations, predominant frequencies of a record
 * ``motions.intensity``           PGA, PGV, PGD, Arias intensity, D5-95, Sa(T) of a record
+* ``motions.site``                site response: a record at rock through a 1-D soil column
+  (pystrata, equivalent linear) to the surface; site-profile files (TOML)
 * ``motions.excitation.for_stage`` what the runner calls for an excitation stage
-* ``python -m drystone.motions records | spectrum FILE``  (``motions.cli``)
+* ``python -m drystone.motions records | spectrum FILE | site PROFILE``  (``motions.cli``)
 
 Spectral tools for any signal are in ``motions.spectra``; see docs/motions.md.
 """

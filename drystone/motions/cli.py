@@ -11,6 +11,13 @@ step, duration, predominant frequencies and band in Hz, ..., and the intensity m
 ``motions.intensity``: PGV in m/s, PGD in m, Arias intensity in m/s, 5 %-damped Sa in g at
 ``intensity.REPORT_PERIODS_S``) and writes the record, its Fourier spectrum and Sa(T) as a
 PNG to ``results/spectra/``.
+
+``site PROFILE [--record R] [--pga-g G] [--duration S] [--out DIR]`` propagates a record
+(catalogue name or file, scaled to G at rock) through a site-profile file
+(``motions.site``), prints f0 (Hz), the amplification, the PGA at rock and at the surface
+(g) and the iterations as JSON, and writes ``<stem>_site.json`` (everything, with the
+profile's provenance), ``<stem>_surface.npy`` and ``<stem>_bedrock.npy`` (m/s^2 at the
+record's step) and ``<stem>_site.png`` to ``results/site/``.
 """
 from __future__ import annotations
 
@@ -99,6 +106,36 @@ def cmd_spectrum(args) -> int:
     return 0
 
 
+def cmd_site(args) -> int:
+    from drystone.motions import excitation, site
+    from drystone.motions.plots import plot_site
+
+    sp = site.read_profile(args.profile)
+    rec = args.record if args.record in catalogue.names() or Path(args.record).is_absolute() \
+        else str(Path(args.record).resolve()) if Path(args.record).is_file() else args.record
+    rock = excitation.record_for_stage({"motion": "record", "record": rec, "pga_g": args.pga_g,
+                                        "duration": args.duration})
+    surface, info = site.propagate(rock, sp)
+    out = Path(args.out) if args.out else RESULTS / "site"
+    out.mkdir(parents=True, exist_ok=True)
+    stem = Path(args.profile).stem
+    np.save(out / f"{stem}_surface.npy", surface.acc)
+    np.save(out / f"{stem}_bedrock.npy", rock.acc)
+    (out / f"{stem}_site.json").write_text(json.dumps({
+        "units": "accelerations m/s^2, dt s, frequencies Hz, lengths m, velocities m/s, stresses kPa",
+        "drystone_version": drystone.__version__, "bedrock_record": rock.metadata(),
+        "surface_record": surface.metadata(), "site_response": info}, indent=1))
+    png = plot_site(rock, surface, info, info["tf_freqs_hz"], info["tf_linear_abs"], info["tf_compatible_abs"],
+                    out / f"{stem}_site.png")
+    obj = {k: info[k] for k in ("f0_linear_hz", "amplification_linear", "f0_quarter_wave_hz", "f0_compatible_hz",
+                                "amplification_compatible", "pga_rock_g", "pga_surface_g", "iterations",
+                                "converged", "input", "output")}
+    obj.update(profile=sp.path, sha256=sp.sha256, assumed=sp.assumed, record=rock.event,
+               json=str(out / f"{stem}_site.json"), png=str(png))
+    print(json.dumps(_round(obj), indent=1))
+    return 0
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m drystone.motions", description="ground-motion records and spectra")
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -113,9 +150,16 @@ def main(argv=None) -> int:
     b.add_argument("--dt", type=float, default=None, help="time step (s) when the file does not give it")
     b.add_argument("--units", default=None, help="units when the file does not declare them (gal, g, m/s^2)")
     b.add_argument("--out", default=None, help="output folder for the PNG (default results/spectra)")
+    c = sub.add_parser("site", help="propagate a record at rock through a site profile (1-D soil column, "
+                                    "equivalent linear) to the surface")
+    c.add_argument("profile", help="site-profile file (TOML; docs/motions.md, Site response)")
+    c.add_argument("--record", default="kobe1995", help="catalogue name or record file (default kobe1995)")
+    c.add_argument("--pga-g", type=float, default=None, help="scale the record to this PGA AT ROCK (g)")
+    c.add_argument("--duration", type=float, default=None, help="keep the first DURATION s of the record")
+    c.add_argument("--out", default=None, help="output folder (default results/site)")
     args = ap.parse_args(argv)
     try:
-        return cmd_records(args) if args.cmd == "records" else cmd_spectrum(args)
+        return {"records": cmd_records, "spectrum": cmd_spectrum, "site": cmd_site}[args.cmd](args)
     except (readers.RecordFormatError, FileNotFoundError, KeyError, ValueError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

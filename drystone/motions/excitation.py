@@ -10,7 +10,10 @@ file's path is relative to the case file's folder, made absolute by ``drystone.m
 called directly, a relative path is tried in the working directory, then the repository
 root),
 ``frequency_hz``/``amplitude`` (sine), ``seed`` (white noise), ``pga_g`` (scale to this
-PGA, exact) and ``duration`` (s; a longer record is trimmed to it, with a note). Bad
+PGA, exact) and ``duration`` (s; a longer record is trimmed to it, with a note), and
+``site`` (a site-profile file, ``motions.site``): the motion, scaled to ``pga_g`` as the
+motion AT ROCK (the outcrop motion of the bedrock), is then propagated up the soil column;
+the surface motion is what the platform gets (``motion_for_stage`` keeps both). Bad
 parameters (a sine too fast for its samples, too many samples) raise ValueError, which
 ``drystone.runner`` reports as a CaseError naming the case file and stage.
 """
@@ -19,6 +22,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+
+from dataclasses import dataclass
 
 from drystone.motions import catalogue, generators, processing, readers
 from drystone.motions.record import Record
@@ -58,8 +63,46 @@ def record_for_stage(s: dict) -> Record:
     return r
 
 
+@dataclass
+class StageMotion:
+    """What an excitation stage applies (``applied``, m/s^2) and, with a ``site``, the
+    record at rock it came from (``bedrock``) and ``motions.site.propagate``'s info."""
+
+    applied: Record
+    bedrock: Record | None = None
+    site: dict | None = None
+
+
+def motion_for_stage(s: dict) -> StageMotion:
+    """The stage's record (scaled and trimmed as it says), propagated through its ``site``
+    profile if it has one (scaling first: ``pga_g`` is the PGA at rock)."""
+    r = record_for_stage(s)
+    if not s.get("site"):
+        return StageMotion(r)
+    from drystone.motions import site
+
+    surface, info = site.propagate(r, site.read_profile(s["site"]))
+    return StageMotion(surface, r, info)
+
+
+def stage_meta(s: dict, m: StageMotion) -> dict:
+    """Provenance of a stage's motion: the applied record's ``metadata()``, ``motion``,
+    ``record`` and, with a site, ``site`` (profile file, hash, f0, amplification, PGA at rock
+    and at the surface, iterations)."""
+    meta = dict(m.applied.metadata(), motion=s.get("motion"), record=s.get("record"))
+    if m.site is not None:
+        i = m.site
+        meta["site"] = {"profile": i["profile"]["file"], "sha256": i["profile"]["sha256"],
+                        "name": i["profile"]["name"], "assumed": i["profile"]["assumed"],
+                        "pga_rock_g": i["pga_rock_g"], "pga_surface_g": i["pga_surface_g"],
+                        "f0_linear_hz": i["f0_linear_hz"], "amplification_linear": i["amplification_linear"],
+                        "f0_compatible_hz": i["f0_compatible_hz"], "iterations": i["iterations"],
+                        "converged": i["converged"], "method": i["method"],
+                        "scaling": "pga_g is the PGA at rock (before propagation); the surface PGA is the site's"}
+    return meta
+
+
 def for_stage(s: dict) -> tuple[np.ndarray, float, dict]:
     """(acc m/s^2, dt s, metadata) for ``drystone.runner``."""
-    r = record_for_stage(s)
-    meta = dict(r.metadata(), motion=s.get("motion"), record=s.get("record"))
-    return r.acc, r.dt, meta
+    m = motion_for_stage(s)
+    return m.applied.acc, m.applied.dt, stage_meta(s, m)

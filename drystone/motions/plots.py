@@ -66,3 +66,41 @@ def plot_record(record, path, spec: dict | None = None, summary: dict | None = N
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
+
+
+def plot_site(rock, surface, info: dict, freqs_hz, tf_linear, tf_compatible, path) -> Path:
+    """PNG of a site response (8 x 6 in, 120 dpi): the record at rock and at the surface
+    (m/s^2 against s) on top, |transfer function| surface / rock against frequency (Hz, log)
+    below, small-strain and strain-compatible, with f0 and the quarter-wave Vs/4H marked."""
+    import numpy as np
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8.0, 6.0), constrained_layout=True)
+    ax1.plot(surface.time, surface.acc, lw=0.6, color="k", label=f"surface (PGA {surface.pga_g:.3f} g)")
+    ax1.plot(rock.time, rock.acc, lw=0.5, color="tab:orange", alpha=0.8, label=f"rock (PGA {rock.pga_g:.3f} g)")
+    ax1.set_xlabel("time (s)")
+    ax1.set_ylabel("acceleration (m/s$^2$)")
+    ax1.set_xlim(rock.time[0], rock.time[-1])
+    ax1.grid(alpha=0.3)
+    ax1.legend(loc="upper right", fontsize=8)
+    ax1.set_title(f"{info['profile']['name']}: {rock.event[:60]}", fontsize=9)
+    ax2.semilogx(freqs_hz, np.abs(tf_linear), color="k", lw=1.0,
+                 label=f"small strain: f0 {info['f0_linear_hz']:.2f} Hz, |H| {info['amplification_linear']:.2f}")
+    ax2.semilogx(freqs_hz, np.abs(tf_compatible), color="tab:red", lw=1.0,
+                 label=f"strain-compatible: f0 {info['f0_compatible_hz']:.2f} Hz, "
+                       f"|H| {info['amplification_compatible']:.2f}")
+    ax2.axvline(info["f0_quarter_wave_hz"], color="0.5", ls=":", lw=1.0,
+                label=f"Vs/4H = {info['f0_quarter_wave_hz']:.2f} Hz")
+    target = info["profile"].get("target") or {}
+    if "f0_hz" in target:
+        ax2.axvspan(*target["f0_hz"], color="tab:blue", alpha=0.12, label="target f0 range")
+    if "amplification" in target:
+        ax2.axhline(target["amplification"], color="tab:blue", ls="--", lw=0.8, label="target amplification")
+    ax2.set_xlabel("frequency (Hz)")
+    ax2.set_ylabel("|surface / rock|")
+    ax2.grid(alpha=0.3, which="both")
+    ax2.legend(loc="lower left", fontsize=8)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
