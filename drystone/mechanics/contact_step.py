@@ -157,6 +157,16 @@ class NumpyStep:
                                          ia, ib, ov.TOL)
         return ia, ib, vol, n, c, law.contact_area(vol, hi - lo, e), pa, pc, pj, list(zip(ia.tolist(), ib.tolist()))
 
+    def peek(self, geometry, bodies_state, dt) -> tuple[float, float]:
+        """(elastic energy J, slip work J) of a step from ``geometry`` and ``bodies_state``
+        (as ``forces``), this object's state unchanged (``CompiledStep.peek``)."""
+        kept = (self._shear, self.state, self.elastic, self.last, self.max_omega_dt)
+        self.state = ContactState()
+        self.forces(geometry, bodies_state, dt)
+        out = self.elastic[1], self.last["slip"]
+        self._shear, self.state, self.elastic, self.last, self.max_omega_dt = kept
+        return out
+
     def native_geometry(self, bodies_state):
         """Overlaps computed here (drystone.mechanics.overlap): (ia, ib (bodies), volume, normal,
         point, area, patch area, patch centroid, patch second moment, the contacts' keys: their
@@ -497,6 +507,17 @@ class CompiledStep:
         self.energy[2] += 0.5 * slip
         self.last = {"Fd": Fd, "Td": Td, "slip": slip}
         return F, T
+
+    def peek(self, pos, rot, vel, angvel, dt) -> tuple[float, float]:
+        """(elastic energy J, slip work J) of the next step from the state given, the
+        state of this object unchanged: the last sample of a run, after its last step,
+        centres its energies at that step's end (drystone.mechanics.energy)."""
+        s = self.shapes
+        out = _contact_forces(
+            s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, self.owner, pos, rot, vel, angvel, self.moving,
+            self.inv_mass, self.inv_inertia_local, self.material, self.table, self.jkeys, self.jvals, self.keys,
+            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared)
+        return float(out[14]), float(out[17])
 
     def account(self, dt, g, F, T, F_ext, lin_free, v0, w0, v1, w1):
         """Add the step last computed by ``forces``, now integrated with the forces F, T

@@ -66,6 +66,25 @@ class Engine:
     def __init__(self, run):
         self.run = run
         self.step = None  # the contact law's step, where this engine has one of its own
+        #: after the loop: (elastic energy J, slip work J) of the step after the last one, so that
+        #: the run's last sample (taken after its last step) has its energies at that step's end
+        self.ahead = None
+        self._before = {}  # a moved block's velocity before a stage set it: what brought it to x_n
+
+    def _note_jump(self, i: int, v_old) -> None:
+        """A non-moving (kinematically moved) body's velocity is about to be set at a stage's
+        start: the step's displacement it is charged with (drystone.mechanics.energy) is
+        (v_old + v_new) dt / 2, v_old the velocity that brought it to the step's position."""
+        if not np.isfinite(self.run.mass[i]) and i not in self._before:
+            self._before[i] = np.array(v_old, float)
+
+    def _velocities_before(self) -> np.ndarray:
+        """The velocities (nb, 3) m/s before this step, a moved block's as it arrived."""
+        v0 = self.run.vel.copy()
+        for i, v in self._before.items():
+            v0[i] = v
+        self._before = {}
+        return v0
 
     @property
     def max_omega_dt(self) -> float:
@@ -203,27 +222,34 @@ class NumpyEngine(Engine):
         self._applied(t)
         last = self.step.last
         self.ledger.begin(run.O.dt, g, last["F"], np.zeros_like(last["F"]), last["Fd"], last["Td"], self._external(t),
-                          run.vel, run.angvel, last["slip"])
+                          self._velocities_before(), run.angvel, last["slip"])
 
     def set_velocity(self, i, v):
         if self.ledger.pending:  # the step before was integrated with the velocities YADE holds: charge it first
             self.read(self.run.moving)
             self.ledger.complete(self.run.vel, self.run.angvel)
+        self._note_jump(i, self.velocity(i))
         super().set_velocity(i, v)
 
     def finish(self):
         super().finish()
-        if self.run.failure is None:
-            self.ledger.complete(self.run.vel, self.run.angvel)
+        run = self.run
+        if run.failure is None:
+            self.ledger.complete(run.vel, run.angvel)
+            bs = (run.pos, run.vel, run.angvel, run.rot)
+            # (YADE's geometry: its interactions of the last step, the nearest it has)
+            geo = self.step.native_geometry(bs) if self.step.native else self.step.yade_geometry(self.step.gather(run.O), bs)
+            self.ahead = self.step.peek(geo, bs, run.O.dt)
 
     def contacts(self):
         return self.step.state
 
     def elastic_energy(self):
-        return 0.5 * sum(self.step.elastic)
+        return 0.5 * (self.step.elastic[1] + (self.step.elastic[0] if self.ahead is None else self.ahead[0]))
 
     def energy_terms(self):
-        return tuple(float(x) for x in self.ledger.acc)
+        acc = self.ledger.acc + (0.0, 0.0, 0.0 if self.ahead is None else 0.5 * self.ahead[1])
+        return tuple(float(x) for x in acc)
 
     def add_work(self, J):
         self.ledger.add_work(J)
@@ -364,7 +390,7 @@ class CompiledEngine(Engine):
     def _integrate(self, dt, g, F, T, F_ext):
         """One step of the motion (F, T: contact plus applied F_ext), then its energy terms."""
         run = self.run
-        v0, w0 = run.vel.copy(), run.angvel.copy()
+        v0, w0 = self._velocities_before(), run.angvel.copy()
         integration.integrate(dt, g, F, T, self.mass_int, self.inertia_int, self.lin_free, self.rot_free, self.aspherical,
                      run.pos, run.vel, run.angvel, self.angmom, run.quat, run.rot)
         self.step.account(dt, g, F, T, F_ext, self.lin_free, v0, w0, run.vel, run.angvel)
@@ -388,8 +414,10 @@ class CompiledEngine(Engine):
         self.run.kernel_time += time.perf_counter() - t_k
 
     def finish(self):
-        """Write the arrays' state into YADE's bodies."""
+        """Write the arrays' state into YADE's bodies; the energies of the step after the last (``ahead``)."""
         run = self.run
+        if run.failure is None:
+            self.ahead = self.step.peek(run.pos, run.rot, run.vel, run.angvel, run.O.dt)
         for i in np.flatnonzero(np.isfinite(run.mass) | np.any(run.vel != 0, axis=1)).tolist():
             st = run.states[i]
             st.pos = yade.Vector3(*run.pos[i])
@@ -400,6 +428,7 @@ class CompiledEngine(Engine):
 
     # -- state -----------------------------------------------------------------------
     def set_velocity(self, i, v):
+        self._note_jump(i, self.run.vel[i])
         self.run.vel[i] = v
 
     def velocity(self, i):
@@ -409,10 +438,11 @@ class CompiledEngine(Engine):
         return self.step.state
 
     def elastic_energy(self):
-        return 0.5 * sum(self.step.elastic)
+        return 0.5 * (self.step.elastic[1] + (self.step.elastic[0] if self.ahead is None else self.ahead[0]))
 
     def energy_terms(self):
-        return tuple(float(x) for x in self.step.energy)
+        acc = self.step.energy + (0.0, 0.0, 0.0 if self.ahead is None else 0.5 * self.ahead[1])
+        return tuple(float(x) for x in acc)
 
     def add_work(self, J):
         self.step.energy[0] += float(J)
