@@ -77,10 +77,12 @@ def test_normal_energy_of_a_wedge_is_its_winkler_potential():
     w = d * (np.tan(th) + 1 / np.tan(th))
     exact = KN * L * d * d * w / 6
     assert v == pytest.approx(L * d * w / 2, rel=tol.NUMERICAL_REL)
-    args = (KN, v, c, n, base, len(base), np.eye(3), np.zeros(3), local, len(local), R, pos)
+    s = ov.Shapes([base, local])  # face planes in each body's frame (the base's frame: global)
+    args = (KN, v, c, n, s.normals[0], s.offsets[0], s.nf[0], np.eye(3), np.zeros(3), s.normals[1], s.offsets[1],
+            s.nf[1], R, pos)
     assert energy.normal_energy(*args) == pytest.approx(exact, rel=tol.NUMERICAL_REL)
-    e_np = energy.normal_energies(np.array([KN]), np.array([v]), c[None], n[None], base[None], local[None],
-                                  np.eye(3)[None], R[None], np.zeros((1, 3)), pos[None])
+    e_np = energy.normal_energies(np.array([KN]), np.array([v]), c[None], n[None], s.normals[:1], s.offsets[:1],
+                                  s.normals[1:], s.offsets[1:], np.eye(3)[None], R[None], np.zeros((1, 3)), pos[None])
     assert e_np[0] == pytest.approx(exact, rel=tol.NUMERICAL_REL)
     assert KN * v * v / (2 * a) == pytest.approx(0.75 * exact, rel=tol.WEDGE_PATCH_REL)
 

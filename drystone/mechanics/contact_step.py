@@ -225,9 +225,10 @@ class NumpyStep:
         ok = area > 0
         sa, sb = (np.array([k[0] for k in keys], int), np.array([k[1] for k in keys], int)) if self.native else (ia, ib)
         sa, sb = sa[ok], sb[ok]
-        e_el = float(np.sum(energy.normal_energies(kn[ok], vol[ok], c[ok], n[ok], self.shapes.verts[sa],
-                                                   self.shapes.verts[sb], rot[ia[ok]], rot[ib[ok]], pos[ia[ok]],
-                                                   pos[ib[ok]]))
+        sh = self.shapes
+        e_el = float(np.sum(energy.normal_energies(kn[ok], vol[ok], c[ok], n[ok], sh.normals[sa], sh.offsets[sa],
+                                                   sh.normals[sb], sh.offsets[sb], rot[ia[ok]], rot[ib[ok]],
+                                                   pos[ia[ok]], pos[ib[ok]]))
                      + np.sum(np.sum(fs_new[ok] ** 2, axis=1) / (2.0 * kt[ok] * area[ok])))
         self.elastic = (self.elastic[1], e_el)
 
@@ -431,8 +432,8 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
         Td[a, 1] -= (pa[k, 2] * d0 - pa[k, 0] * d2) + md[k, 1]
         Td[a, 2] -= (pa[k, 0] * d1 - pa[k, 1] * d0) + md[k, 2]
         if area[k] > 0.0:
-            e_el += energy.normal_energy(kn[k], vol[k], c[k], n[k], verts[ia[k]], nv[ia[k]], rot[a], pos[a], verts[ib[k]],
-                                         nv[ib[k]], rot[b], pos[b]) + (
+            e_el += energy.normal_energy(kn[k], vol[k], c[k], n[k], normals[ia[k]], offsets[ia[k]], nf[ia[k]], rot[a],
+                                         pos[a], normals[ib[k]], offsets[ib[k]], nf[ib[k]], rot[b], pos[b]) + (
                 fs[k, 0] ** 2 + fs[k, 1] ** 2 + fs[k, 2] ** 2) / (2.0 * kt[k] * area[k])
             r = vol[k] / area[k] / min(size[ia[k]], size[ib[k]])
             if r > depth_ratio:

@@ -48,8 +48,10 @@ does not grow with the number of steps (leapfrog's shadow energy).
   (its in-plane position is the depth-weighted centroid). Its potential is
   U_n = K_n / 2 int d^2 dA = K_n V e, e the distance of c from the flat face the overlap
   presses into (a flat joint: half the depth; a block rocking on an edge: a third of the
-  deepest), exact for any shape pressing into a flat face (``normal_energy``; the
-  uniform-overlap energy V^2 K_n / (2 A) is 3/4 of a wedge's).
+  deepest), exact for any shape pressing into a flat face and, to first order in the
+  angle between them, for a thin wedge between two faces (``normal_energy``: the face of A
+  or of B most nearly across n; the uniform-overlap energy V^2 K_n / (2 A) is 3/4 of a
+  wedge's).
 * Shear spring: U_t = |F_t|^2 / (2 K_t A). The slip of step n (over t_{n-1}..t_n, with
   v_{n-1/2}) takes the rotated previous force f0 to the trial f* = f0 - K_t A v_t dt, and
   the Coulomb cap returns it to f = f* mu F_n / |f*|. With the trapezoid rule over the
@@ -99,46 +101,57 @@ def account(dt, g, F, T, Fd, Td, F_ext, moving, mass, lin_free, v0, w0, v1, w1, 
 
 
 @njit(cache=True)
-def normal_energy(kn, vol, c, n, va, nva, Ra, xa, vb, nvb, Rb, xb):
+def _face_depth(N, D, nf, R, x, c, d):
+    """(alignment, depth) of the face of one convex shape whose outward normal is closest to
+    the direction d (3,): the cosine between them and the distance (m) of the point c
+    inside the shape from that face's plane. N (nf, 3), D (nf,) the shape's face planes
+    N . x + D <= 0 in its body's frame; R, x the body's rotation and position."""
+    dl0 = R[0, 0] * d[0] + R[1, 0] * d[1] + R[2, 0] * d[2]  # R^T d
+    dl1 = R[0, 1] * d[0] + R[1, 1] * d[1] + R[2, 1] * d[2]
+    dl2 = R[0, 2] * d[0] + R[1, 2] * d[1] + R[2, 2] * d[2]
+    best = -2.0
+    f = 0
+    for k in range(nf):
+        a = N[k, 0] * dl0 + N[k, 1] * dl1 + N[k, 2] * dl2
+        if a > best:
+            best = a
+            f = k
+    r0, r1, r2 = c[0] - x[0], c[1] - x[1], c[2] - x[2]
+    cl0 = R[0, 0] * r0 + R[1, 0] * r1 + R[2, 0] * r2  # R^T (c - x)
+    cl1 = R[0, 1] * r0 + R[1, 1] * r1 + R[2, 1] * r2
+    cl2 = R[0, 2] * r0 + R[1, 2] * r1 + R[2, 2] * r2
+    return best, -(N[f, 0] * cl0 + N[f, 1] * cl1 + N[f, 2] * cl2 + D[f])
+
+
+@njit(cache=True)
+def normal_energy(kn, vol, c, n, Na, Da, nfa, Ra, xa, Nb, Db, nfb, Rb, xb):
     """Elastic energy (J) of one contact's normal spring, K_n V e (module docstring): kn
     N/m^3, vol m^3, c (3,) the overlap's centroid, n (3,) the unit normal from A to B; the
-    two convex shapes' vertices va (nva used), vb (nvb used) in their bodies' frames, the
-    bodies' rotation matrices Ra, Rb and positions xa, xb (m). e is the centroid's distance
-    from the nearer of the overlap's two supporting planes across n: A's face (the
-    largest n . x over A) and B's (the smallest over B)."""
-    na0 = Ra[0, 0] * n[0] + Ra[1, 0] * n[1] + Ra[2, 0] * n[2]  # R^T n: n in A's frame
-    na1 = Ra[0, 1] * n[0] + Ra[1, 1] * n[1] + Ra[2, 1] * n[2]
-    na2 = Ra[0, 2] * n[0] + Ra[1, 2] * n[1] + Ra[2, 2] * n[2]
-    top = -np.inf
-    for j in range(nva):
-        h = va[j, 0] * na0 + va[j, 1] * na1 + va[j, 2] * na2
-        if h > top:
-            top = h
-    nb0 = Rb[0, 0] * n[0] + Rb[1, 0] * n[1] + Rb[2, 0] * n[2]
-    nb1 = Rb[0, 1] * n[0] + Rb[1, 1] * n[1] + Rb[2, 1] * n[2]
-    nb2 = Rb[0, 2] * n[0] + Rb[1, 2] * n[1] + Rb[2, 2] * n[2]
-    bottom = np.inf
-    for j in range(nvb):
-        h = vb[j, 0] * nb0 + vb[j, 1] * nb1 + vb[j, 2] * nb2
-        if h < bottom:
-            bottom = h
-    nc = c[0] * n[0] + c[1] * n[1] + c[2] * n[2]
-    top += xa[0] * n[0] + xa[1] * n[1] + xa[2] * n[2]
-    bottom += xb[0] * n[0] + xb[1] * n[1] + xb[2] * n[2]
-    e = min(top - nc, nc - bottom)
+    two convex shapes' face planes (N (nf, 3), D (nf,): N . x + D <= 0 in their bodies'
+    frames), the bodies' rotation matrices Ra, Rb and positions xa, xb (m). e is the
+    distance of c from the face the overlap presses into: A's face whose outward normal is
+    closest to n, or B's closest to -n, whichever is closer in direction."""
+    sa, ea = _face_depth(Na, Da, nfa, Ra, xa, c, n)
+    sb, eb = _face_depth(Nb, Db, nfb, Rb, xb, c, -n)
+    e = ea if sa >= sb else eb
     return kn * vol * max(e, 0.0)
 
 
-def normal_energies(kn, vol, c, n, va, vb, Ra, Rb, xa, xb) -> np.ndarray:
-    """``normal_energy`` of m contacts in numpy (the reference): va, vb (m, k, 3) each
-    contact's two shapes' vertices in their bodies' frames (padded with repeated
-    vertices), Ra, Rb (m, 3, 3), xa, xb (m, 3); (m,) J."""
-    ga = np.einsum("kij,kvj->kvi", Ra, va) + xa[:, None, :]
-    gb = np.einsum("kij,kvj->kvi", Rb, vb) + xb[:, None, :]
-    top = np.einsum("kvi,ki->kv", ga, n).max(axis=1)
-    bottom = np.einsum("kvi,ki->kv", gb, n).min(axis=1)
-    nc = np.sum(c * n, axis=1)
-    return kn * vol * np.maximum(np.minimum(top - nc, nc - bottom), 0.0)
+def normal_energies(kn, vol, c, n, Na, Da, Nb, Db, Ra, Rb, xa, xb) -> np.ndarray:
+    """``normal_energy`` of m contacts in numpy (the reference): Na, Nb (m, F, 3) and Da, Db
+    (m, F) each contact's two shapes' face planes in their bodies' frames (padded with zero
+    normals), Ra, Rb (m, 3, 3), xa, xb (m, 3); (m,) J."""
+    k = np.arange(len(vol))
+
+    def face(N, D, R, x, d):
+        al = np.einsum("kfi,kji,kj->kf", N, R, d)  # N . R^T d
+        f = np.argmax(al, axis=1)
+        cl = np.einsum("kji,kj->ki", R, c - x)
+        return al[k, f], -(np.sum(N[k, f] * cl, axis=1) + D[k, f])
+
+    sa, ea = face(Na, Da, Ra, xa, n)
+    sb, eb = face(Nb, Db, Rb, xb, -n)
+    return kn * vol * np.maximum(np.where(sa >= sb, ea, eb), 0.0)
 
 
 def slip_work(f0, f_trial, f, kt, area) -> np.ndarray:
