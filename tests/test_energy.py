@@ -78,8 +78,8 @@ def test_normal_energy_of_a_wedge_is_its_winkler_potential():
     exact = KN * L * d * d * w / 6
     assert v == pytest.approx(L * d * w / 2, rel=tol.NUMERICAL_REL)
     s = ov.Shapes([base, local])  # face planes in each body's frame (the base's frame: global)
-    args = (KN, v, c, n, s.normals[0], s.offsets[0], s.nf[0], np.eye(3), np.zeros(3), s.normals[1], s.offsets[1],
-            s.nf[1], R, pos)
+    args = (KN, v, c[None], n[None], 0, s.normals, s.offsets, s.nf, np.stack([np.eye(3), R]),
+            np.stack([np.zeros(3), pos]), 0, 0, 1, 1)
     assert energy.normal_energy(*args) == pytest.approx(exact, rel=tol.NUMERICAL_REL)
     e_np = energy.normal_energies(np.array([KN]), np.array([v]), c[None], n[None], s.normals[:1], s.offsets[:1],
                                   s.normals[1:], s.offsets[1:], np.eye(3)[None], R[None], np.zeros((1, 3)), pos[None])

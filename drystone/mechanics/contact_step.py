@@ -432,8 +432,7 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
         Td[a, 1] -= (pa[k, 2] * d0 - pa[k, 0] * d2) + md[k, 1]
         Td[a, 2] -= (pa[k, 0] * d1 - pa[k, 1] * d0) + md[k, 2]
         if area[k] > 0.0:
-            e_el += energy.normal_energy(kn[k], vol[k], c[k], n[k], normals[ia[k]], offsets[ia[k]], nf[ia[k]], rot[a],
-                                         pos[a], normals[ib[k]], offsets[ib[k]], nf[ib[k]], rot[b], pos[b]) + (
+            e_el += energy.normal_energy(kn[k], vol[k], c, n, k, normals, offsets, nf, rot, pos, ia[k], a, ib[k], b) + (
                 fs[k, 0] ** 2 + fs[k, 1] ** 2 + fs[k, 2] ** 2) / (2.0 * kt[k] * area[k])
             r = vol[k] / area[k] / min(size[ia[k]], size[ib[k]])
             if r > depth_ratio:

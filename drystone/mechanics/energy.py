@@ -101,39 +101,42 @@ def account(dt, g, F, T, Fd, Td, F_ext, moving, mass, lin_free, v0, w0, v1, w1, 
 
 
 @njit(cache=True)
-def _face_depth(N, D, nf, R, x, c, d):
-    """(alignment, depth) of the face of one convex shape whose outward normal is closest to
-    the direction d (3,): the cosine between them and the distance (m) of the point c
-    inside the shape from that face's plane. N (nf, 3), D (nf,) the shape's face planes
-    N . x + D <= 0 in its body's frame; R, x the body's rotation and position."""
-    dl0 = R[0, 0] * d[0] + R[1, 0] * d[1] + R[2, 0] * d[2]  # R^T d
-    dl1 = R[0, 1] * d[0] + R[1, 1] * d[1] + R[2, 1] * d[2]
-    dl2 = R[0, 2] * d[0] + R[1, 2] * d[1] + R[2, 2] * d[2]
+def _face_depth(normals, offsets, nf, rot, pos, s, b, c, d, k, sign):
+    """(alignment, depth) of the face of convex shape s (of body b) whose outward normal is
+    closest to the direction sign x d[k] (sign +-1): the cosine between them and the
+    distance (m) of the point c[k] inside the shape from that face's plane. normals (ns,
+    F, 3), offsets (ns, F): the shapes' face planes N . x + D <= 0 in their bodies' frames;
+    rot, pos the bodies' rotation matrices and positions. Indices, not slices: no array
+    views to build per contact."""
+    dl0 = sign * (rot[b, 0, 0] * d[k, 0] + rot[b, 1, 0] * d[k, 1] + rot[b, 2, 0] * d[k, 2])  # R^T d
+    dl1 = sign * (rot[b, 0, 1] * d[k, 0] + rot[b, 1, 1] * d[k, 1] + rot[b, 2, 1] * d[k, 2])
+    dl2 = sign * (rot[b, 0, 2] * d[k, 0] + rot[b, 1, 2] * d[k, 1] + rot[b, 2, 2] * d[k, 2])
     best = -2.0
     f = 0
-    for k in range(nf):
-        a = N[k, 0] * dl0 + N[k, 1] * dl1 + N[k, 2] * dl2
+    for q in range(nf[s]):
+        a = normals[s, q, 0] * dl0 + normals[s, q, 1] * dl1 + normals[s, q, 2] * dl2
         if a > best:
             best = a
-            f = k
-    r0, r1, r2 = c[0] - x[0], c[1] - x[1], c[2] - x[2]
-    cl0 = R[0, 0] * r0 + R[1, 0] * r1 + R[2, 0] * r2  # R^T (c - x)
-    cl1 = R[0, 1] * r0 + R[1, 1] * r1 + R[2, 1] * r2
-    cl2 = R[0, 2] * r0 + R[1, 2] * r1 + R[2, 2] * r2
-    return best, -(N[f, 0] * cl0 + N[f, 1] * cl1 + N[f, 2] * cl2 + D[f])
+            f = q
+    r0, r1, r2 = c[k, 0] - pos[b, 0], c[k, 1] - pos[b, 1], c[k, 2] - pos[b, 2]
+    cl0 = rot[b, 0, 0] * r0 + rot[b, 1, 0] * r1 + rot[b, 2, 0] * r2  # R^T (c - x)
+    cl1 = rot[b, 0, 1] * r0 + rot[b, 1, 1] * r1 + rot[b, 2, 1] * r2
+    cl2 = rot[b, 0, 2] * r0 + rot[b, 1, 2] * r1 + rot[b, 2, 2] * r2
+    return best, -(normals[s, f, 0] * cl0 + normals[s, f, 1] * cl1 + normals[s, f, 2] * cl2 + offsets[s, f])
 
 
 @njit(cache=True)
-def normal_energy(kn, vol, c, n, Na, Da, nfa, Ra, xa, Nb, Db, nfb, Rb, xb):
-    """Elastic energy (J) of one contact's normal spring, K_n V e (module docstring): kn
-    N/m^3, vol m^3, c (3,) the overlap's centroid, n (3,) the unit normal from A to B; the
-    two convex shapes' face planes (N (nf, 3), D (nf,): N . x + D <= 0 in their bodies'
-    frames), the bodies' rotation matrices Ra, Rb and positions xa, xb (m). e is the
-    distance of c from the face the overlap presses into: A's face whose outward normal is
-    closest to n, or B's closest to -n, whichever is closer in direction."""
-    sa, ea = _face_depth(Na, Da, nfa, Ra, xa, c, n)
-    sb, eb = _face_depth(Nb, Db, nfb, Rb, xb, c, -n)
-    e = ea if sa >= sb else eb
+def normal_energy(kn, vol, c, n, k, normals, offsets, nf, rot, pos, sa, ba, sb, bb):
+    """Elastic energy (J) of contact k's normal spring, K_n V e (module docstring): kn
+    N/m^3, vol m^3, c (m, 3) the overlaps' centroids, n (m, 3) the unit normals from A to
+    B; its shapes sa (of body ba) and sb (of body bb) with their face planes ``normals``
+    (ns, F, 3), ``offsets`` (ns, F) (N . x + D <= 0 in their bodies' frames), ``nf``
+    (ns,); ``rot`` (nb, 3, 3), ``pos`` (nb, 3) the bodies'. e is the distance of c from the
+    face the overlap presses into: A's face whose outward normal is closest to n, or B's
+    closest to -n, whichever is closer in direction."""
+    sa_, ea = _face_depth(normals, offsets, nf, rot, pos, sa, ba, c, n, k, 1.0)
+    sb_, eb = _face_depth(normals, offsets, nf, rot, pos, sb, bb, c, n, k, -1.0)
+    e = ea if sa_ >= sb_ else eb
     return kn * vol * max(e, 0.0)
 
 
