@@ -3,8 +3,9 @@ and its leapfrog integrator against closed forms (no YADE).
 
 A 3-course running-bond wall is pressed into its joints, given small random rotations and
 velocities (seeded), and both steps are driven through 40 steps along the same motion, so
-that contacts form, stick, slip and carry shear history: forces, torques, stored shear and
-elastic energy agree to ``NUMERICAL_REL`` of their scale (the two differ only in the order
+that contacts form, stick, slip and carry shear history: forces, torques, stored shear,
+elastic energy and the energy balance's terms (damping wrenches, slip work) agree to
+``NUMERICAL_REL`` of their scale (the two differ only in the order
 of floating-point operations). The integrator is checked on motions it integrates exactly
 (uniform acceleration, torque-free spin) and against Fincham's scheme's invariants.
 """
@@ -61,6 +62,7 @@ def test_compiled_forces_equal_numpy_law(seed):
                            {(1, 5): [jprops[k] for k in ("kn", "kt", "mu", "damping")]})
     dt = 2e-4
     slipped = stuck = 0
+    slip_work = [0.0, 0.0]  # the energy balance's slip work (J), numpy and compiled
     for step in range(40):
         rot = rotations.to_matrix(quat)
         st = (pos, vel, angvel, rot)
@@ -76,6 +78,11 @@ def test_compiled_forces_equal_numpy_law(seed):
         np.testing.assert_array_equal(a.slipping, b.slipping)
         np.testing.assert_allclose(b.shear, a.shear, rtol=0, atol=tol.NUMERICAL_REL * fscale)
         assert fast.elastic[1] == pytest.approx(ref.elastic[1], rel=tol.NUMERICAL_REL)
+        # the energy balance's terms (drystone/mechanics/energy.py): damping wrenches on each body, slip work
+        np.testing.assert_allclose(fast.last["Fd"], ref.last["Fd"], rtol=0, atol=tol.NUMERICAL_REL * fscale)
+        np.testing.assert_allclose(fast.last["Td"], ref.last["Td"], rtol=0, atol=tol.NUMERICAL_REL * tscale)
+        slip_work[0] += ref.last["slip"]
+        slip_work[1] += fast.last["slip"]
         slipped += int(a.slipping.sum())
         stuck += int((~a.slipping).sum())
         # move along a prescribed path (the same for both laws)
@@ -84,6 +91,7 @@ def test_compiled_forces_equal_numpy_law(seed):
         quat /= np.linalg.norm(quat, axis=1)[:, None]
         vel = vel * 0.97
     assert slipped > 0 and stuck > 0  # both branches of the law were compared
+    assert slip_work[0] > 0 and slip_work[1] == pytest.approx(slip_work[0], rel=tol.NUMERICAL_REL)
 
 
 def _one(mass, inertia, blocked="", moving=True):

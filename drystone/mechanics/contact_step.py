@@ -9,7 +9,9 @@ pair of body indices and come out sorted, so one merge walk matches them), apply
 penalty–Coulomb law and the patch damping (``drystone.mechanics.contact``), and sum the forces and
 torques on every body. ``drystone.mechanics.integration.integrate`` then advances the
 bodies one leapfrog step as YADE's NewtonIntegrator does; ``CompiledStep.advance`` runs
-contact steps and integration one after another in one call.
+contact steps and integration one after another in one call. Every step also adds to the
+energy balance (``drystone.mechanics.energy``: the loads' work, the damping's and the slip's
+dissipation, the contacts' elastic energy), in both steps.
 
 Units SI; quaternions (x, y, z, w) like YADE's; body arrays indexed by YADE body id.
 """
@@ -19,6 +21,7 @@ import numpy as np
 from numba import njit
 
 from drystone.mechanics import contact as law
+from drystone.mechanics import energy
 from drystone.mechanics import overlap as ov
 from drystone.mechanics.integration import integrate
 from drystone.geometry import polyhedron as ph
@@ -99,6 +102,11 @@ class NumpyStep:
         self._props: dict[tuple[int, int], tuple] = {}
         self.state = ContactState()
         self.elastic = (0.0, 0.0)  # elastic energy (J) at the previous and current step
+        #: the last step's terms of the energy balance (drystone.mechanics.energy): the damping
+        #: wrenches summed on each body ``Fd``, ``Td`` (nb, 3), every contact force ``F`` on
+        #: each body (nb, 3, YADE's normal force too) and the slip work ``slip`` (J)
+        nb = len(self.mass)
+        self.last = {"Fd": np.zeros((nb, 3)), "Td": np.zeros((nb, 3)), "F": np.zeros((nb, 3)), "slip": 0.0}
         #: largest omega dt of any contact mode so far (central differences are stable
         #: below 2 (sqrt(1 + xi^2) - xi))
         self.max_omega_dt = 0.0
@@ -149,6 +157,16 @@ class NumpyStep:
                                          ia, ib, ov.TOL)
         return ia, ib, vol, n, c, law.contact_area(vol, hi - lo, e), pa, pc, pj, list(zip(ia.tolist(), ib.tolist()))
 
+    def peek(self, geometry, bodies_state, dt) -> tuple[float, float]:
+        """(elastic energy J, slip work J) of a step from ``geometry`` and ``bodies_state``
+        (as ``forces``), this object's state unchanged (``CompiledStep.peek``)."""
+        kept = (self._shear, self.state, self.elastic, self.last, self.max_omega_dt)
+        self.state = ContactState()
+        self.forces(geometry, bodies_state, dt)
+        out = self.elastic[1], self.last["slip"]
+        self._shear, self.state, self.elastic, self.last, self.max_omega_dt = kept
+        return out
+
     def native_geometry(self, bodies_state):
         """Overlaps computed here (drystone.mechanics.overlap): (ia, ib (bodies), volume, normal,
         point, area, patch area, patch centroid, patch second moment, the contacts' keys: their
@@ -172,6 +190,7 @@ class NumpyStep:
             st.clear()
             self._shear = {}
             self.elastic = (self.elastic[1], 0.0)
+            self.last = {"Fd": np.zeros((nb, 3)), "Td": np.zeros((nb, 3)), "F": np.zeros((nb, 3)), "slip": 0.0}
             return np.zeros((nb, 3)), np.zeros((nb, 3))
         pos, vel, angvel, rot = bodies_state
         kn, kt, mu, xi = self._props_arrays(list(zip(ia.tolist(), ib.tolist())))
@@ -185,6 +204,10 @@ class NumpyStep:
         fs_prev = np.array([self._shear.get(k, (0.0, 0.0, 0.0)) for k in keys], float).reshape(-1, 3)
         fs_new, slipping = law.shear_spring(n, v_rel, fs_prev, area, kt, mu, fn, dt)
         self._shear = dict(zip(keys, fs_new))
+        # the slip's plastic work: the elastic trial of shear_spring against its capped force
+        f0 = law.rotate_into_plane(fs_prev, n)
+        f_trial = f0 - (kt * area)[:, None] * (v_rel - law.dot(v_rel, n)[:, None] * n) * dt
+        slip = float(np.sum(energy.slip_work(f0, f_trial, fs_new, kt, area)))
 
         # damping distributed over the patch, at its centroid p
         pa_, pb_ = pc - pos[ia], pc - pos[ib]
@@ -200,7 +223,12 @@ class NumpyStep:
         st.id1, st.id2, st.normal, st.point, st.volume = ia, ib, n, c, vol
         st.area, st.fn, st.f_extra, st.shear, st.slipping = area, fn, f_b, fs_new + fd - law.dot(fd, n)[:, None] * n, slipping
         ok = area > 0
-        e_el = float(np.sum(0.5 * fn[ok] * vol[ok] / area[ok])
+        sa, sb = (np.array([k[0] for k in keys], int), np.array([k[1] for k in keys], int)) if self.native else (ia, ib)
+        sa, sb = sa[ok], sb[ok]
+        sh = self.shapes
+        e_el = float(np.sum(energy.normal_energies(kn[ok], vol[ok], c[ok], n[ok], sh.normals[sa], sh.offsets[sa],
+                                                   sh.normals[sb], sh.offsets[sb], rot[ia[ok]], rot[ib[ok]],
+                                                   pos[ia[ok]], pos[ib[ok]]))
                      + np.sum(np.sum(fs_new[ok] ** 2, axis=1) / (2.0 * kt[ok] * area[ok])))
         self.elastic = (self.elastic[1], e_el)
 
@@ -212,6 +240,15 @@ class NumpyStep:
         T = np.concatenate([law.cross(rb, f_c) + law.cross(pb_, fd) + md, -law.cross(ra, f_c) - law.cross(pa_, fd) - md])
         Fs = np.stack([np.bincount(idx, F[:, k], nb) for k in range(3)], 1)
         Ts = np.stack([np.bincount(idx, T[:, k], nb) for k in range(3)], 1)
+
+        def on_bodies(x):
+            return np.stack([np.bincount(idx, x[:, k], nb) for k in range(3)], 1)
+
+        md_b = law.cross(pb_, fd) + md
+        md_a = law.cross(pa_, fd) + md
+        F_all = Fs if self.native else Fs + on_bodies(np.concatenate([fn[:, None] * n, -fn[:, None] * n]))
+        self.last = {"Fd": on_bodies(np.concatenate([fd, -fd])), "Td": on_bodies(np.concatenate([md_b, -md_a])),
+                     "F": F_all, "slip": slip}
         return Fs, Ts
 
 
@@ -298,6 +335,7 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
     twist = np.empty((m, 6))
     lever = np.empty((m, 3))
     vr = np.empty(3)
+    slip = 0.0  # plastic work of Coulomb slip over the step, J (energy.slip_work)
     # each body's inverse inertia in the global frame, once per body (a body has several
     # contacts), then each contact's two
     inv_glob = np.empty((nb, 3, 3))
@@ -341,6 +379,11 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
         if fm > fmax:
             slipping[k] = True
             s = fmax / fm
+            # the return mapping's plastic work (energy.slip_work): (f0 + f) . (f* - f) / (2 K_t A)
+            # with f = s f*: (1 - s) (f0 . f* + s |f*|^2)
+            if kta > 0.0:
+                f0t = p0 * sc * fs[k, 0] + p1 * sc * fs[k, 1] + p2 * sc * fs[k, 2]
+                slip += (1.0 - s) * (f0t + s * fm * fm) / (2.0 * kta)
             for q in range(3):
                 fs[k, q] *= s
         # relative twist at the patch centroid
@@ -356,6 +399,8 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
                                            iia, iib, twist, fn, fs, mu, lever, basis, warm)
     F = np.zeros((nb, 3))
     T = np.zeros((nb, 3))
+    Fd = np.zeros((nb, 3))  # the damping wrenches alone, summed on each body (energy.account)
+    Td = np.zeros((nb, 3))
     e_el = 0.0
     om_max = 0.0
     depth_ratio = 0.0  # largest depth V/A over the smaller shape's size
@@ -377,15 +422,24 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
         T[a, 0] -= (ra[k, 1] * fc2 - ra[k, 2] * fc1) + (pa[k, 1] * d2 - pa[k, 2] * d1) + md[k, 0]
         T[a, 1] -= (ra[k, 2] * fc0 - ra[k, 0] * fc2) + (pa[k, 2] * d0 - pa[k, 0] * d2) + md[k, 1]
         T[a, 2] -= (ra[k, 0] * fc1 - ra[k, 1] * fc0) + (pa[k, 0] * d1 - pa[k, 1] * d0) + md[k, 2]
+        for q in range(3):
+            Fd[b, q] += fd[k, q]
+            Fd[a, q] -= fd[k, q]
+        Td[b, 0] += (pb[k, 1] * d2 - pb[k, 2] * d1) + md[k, 0]
+        Td[b, 1] += (pb[k, 2] * d0 - pb[k, 0] * d2) + md[k, 1]
+        Td[b, 2] += (pb[k, 0] * d1 - pb[k, 1] * d0) + md[k, 2]
+        Td[a, 0] -= (pa[k, 1] * d2 - pa[k, 2] * d1) + md[k, 0]
+        Td[a, 1] -= (pa[k, 2] * d0 - pa[k, 0] * d2) + md[k, 1]
+        Td[a, 2] -= (pa[k, 0] * d1 - pa[k, 1] * d0) + md[k, 2]
         if area[k] > 0.0:
-            e_el += 0.5 * fn[k] * vol[k] / area[k] + (fs[k, 0] ** 2 + fs[k, 1] ** 2 + fs[k, 2] ** 2) / (
-                2.0 * kt[k] * area[k])
+            e_el += energy.normal_energy(kn[k], vol[k], c, n, k, normals, offsets, nf, rot, pos, ia[k], a, ib[k], b) + (
+                fs[k, 0] ** 2 + fs[k, 1] ** 2 + fs[k, 2] ** 2) / (2.0 * kt[k] * area[k])
             r = vol[k] / area[k] / min(size[ia[k]], size[ib[k]])
             if r > depth_ratio:
                 depth_ratio = r
         if om[k] > om_max:
             om_max = om[k]
-    return ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, basis, F, T, e_el, om_max, depth_ratio
+    return ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, basis, F, T, e_el, om_max, depth_ratio, slip, Fd, Td
 
 
 class CompiledStep:
@@ -429,13 +483,19 @@ class CompiledStep:
         self._state = None
         self.elastic = (0.0, 0.0)
         self.max_omega_dt = 0.0
+        #: the energy accumulators (W_loads, D_damp, D_fric), J from the start (drystone.mechanics.energy)
+        self.energy = np.zeros(3)
+        #: the last step's damping wrenches summed on each body ``Fd``, ``Td`` (nb, 3) and slip work ``slip`` (J)
+        self.last = {"Fd": np.zeros((nb, 3)), "Td": np.zeros((nb, 3)), "slip": 0.0}
 
     def forces(self, pos, rot, vel, angvel, dt):
         """Contact forces and torques (nb, 3) on every body (N, N m) for the state given;
-        updates the shear history, ``state``, ``elastic`` and ``max_omega_dt``."""
+        updates the shear history, ``state``, ``elastic``, ``max_omega_dt`` and half of the
+        step's slip work in ``energy`` (the rest and the work: ``account`` once the step is
+        integrated)."""
         s = self.shapes
         (ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, basis, F, T, e_el, om_max,
-         self.depth_ratio) = _contact_forces(
+         self.depth_ratio, slip, Fd, Td) = _contact_forces(
             s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, self.owner, pos, rot, vel, angvel, self.moving,
             self.inv_mass, self.inv_inertia_local, self.material, self.table, self.jkeys, self.jvals, self.keys,
             self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared)
@@ -444,7 +504,29 @@ class CompiledStep:
         self.max_omega_dt = max(self.max_omega_dt, om_max * dt)
         self._raw = (ia, ib, vol, c, n, area, fn, fs, fd, slipping)
         self._state = None
+        self.energy[2] += 0.5 * slip
+        self.last = {"Fd": Fd, "Td": Td, "slip": slip}
         return F, T
+
+    def peek(self, pos, rot, vel, angvel, dt) -> tuple[float, float]:
+        """(elastic energy J, slip work J) of the next step from the state given, the
+        state of this object unchanged: the last sample of a run, after its last step,
+        centres its energies at that step's end (drystone.mechanics.energy)."""
+        s = self.shapes
+        out = _contact_forces(
+            s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, self.owner, pos, rot, vel, angvel, self.moving,
+            self.inv_mass, self.inv_inertia_local, self.material, self.table, self.jkeys, self.jvals, self.keys,
+            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared)
+        return float(out[14]), float(out[17])
+
+    def account(self, dt, g, F, T, F_ext, lin_free, v0, w0, v1, w1):
+        """Add the step last computed by ``forces``, now integrated with the forces F, T
+        (nb, 3) (contact plus applied F_ext) and body acceleration g (3,), to ``energy``:
+        the velocities (nb, 3) before (v0, w0) and after it (v1, w1), lin_free (nb, 3) the
+        free directions (drystone.mechanics.energy.account)."""
+        Fd, Td, slip = self.last["Fd"], self.last["Td"], self.last["slip"]
+        energy.account(dt, np.asarray(g, float), F, T, Fd, Td, F_ext, self.moving, np.where(self.moving, self.mass, 1.0),
+                       lin_free, v0, w0, v1, w1, 0.5 * slip, self.energy)
 
     def advance(self, pos, rot, vel, angvel, dt, g, F_ext, motion):
         """Steps one after another, each as ``forces`` then ``integrate`` (in place), with
@@ -454,13 +536,16 @@ class CompiledStep:
         quat). Stops before integrating a step whose contact depth ratio exceeds 1 (the
         caller checks it). Returns (steps completed, F, T of the last step computed, that
         step integrated?); ``state``, ``elastic``, ``max_omega_dt``, ``depth_ratio`` and the
-        shear history as after the same calls of ``forces``."""
+        shear history as after the same calls of ``forces``, and ``energy`` as after those of
+        ``forces`` and ``account`` (a step not integrated: half its slip work, as ``forces``)."""
         s = self.shapes
         (done, ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, basis, F, T, e_prev, e_last, om_max,
-         self.depth_ratio) = _advance(
+         self.depth_ratio, slip, Fd, Td) = _advance(
             s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, self.owner, pos, rot, vel, angvel, self.moving,
             self.inv_mass, self.inv_inertia_local, self.material, self.table, self.jkeys, self.jvals, self.keys,
-            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared, g, F_ext, self.elastic[1], *motion)
+            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared, g, F_ext, self.elastic[1],
+            self.energy, *motion)
+        self.last = {"Fd": Fd, "Td": Td, "slip": slip}
         self.keys, self.shear_store, self.basis_store = keys, fs, basis
         self.elastic = (e_prev, e_last)
         self.max_omega_dt = max(self.max_omega_dt, om_max * dt)
@@ -487,28 +572,36 @@ class CompiledStep:
 
 @njit(cache=True)
 def _advance(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving, inv_mass, inv_inertia_local,
-             mat, table, jkeys, jvals, keys, shear, basis, dt, tol, size, shared, g, F_ext, e_last, mass, inertia, lin_free,
-             rot_free, aspherical, angmom, quat):
-    """``CompiledStep.advance``: len(g) steps of ``_contact_forces`` + ``integrate``
-    without leaving compiled code; the arithmetic of each step is that of one call of
-    each (the same results bit for bit)."""
+             mat, table, jkeys, jvals, keys, shear, basis, dt, tol, size, shared, g, F_ext, e_last, acc, mass, inertia,
+             lin_free, rot_free, aspherical, angmom, quat):
+    """``CompiledStep.advance``: len(g) steps of ``_contact_forces`` + ``integrate`` (+
+    ``energy.account`` into ``acc``) without leaving compiled code; the arithmetic of each
+    step is that of one call of each (the same results bit for bit)."""
     n = len(g)
     e_prev = e_last
     om_max = 0.0
     s = 0
+    v0 = np.empty_like(vel)
+    w0 = np.empty_like(angvel)
     while True:
-        (ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, basis, F, T, e_el, om, depth) = _contact_forces(
-            verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving, inv_mass,
-            inv_inertia_local, mat, table, jkeys, jvals, keys, shear, basis, dt, tol, size, shared)
+        (ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, basis, F, T, e_el, om, depth, slip, Fd,
+         Td) = _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving, inv_mass,
+                               inv_inertia_local, mat, table, jkeys, jvals, keys, shear, basis, dt, tol, size, shared)
         shear = fs
         e_prev = e_last
         e_last = e_el
         if om > om_max:
             om_max = om
         F += F_ext
+        acc[2] += 0.5 * slip
         if depth > 1.0:  # the caller checks it before this step is integrated
-            return s, ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, basis, F, T, e_prev, e_last, om_max, depth
+            return (s, ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, basis, F, T, e_prev, e_last, om_max, depth,
+                    slip, Fd, Td)
+        v0[:] = vel
+        w0[:] = angvel
         integrate(dt, g[s], F, T, mass, inertia, lin_free, rot_free, aspherical, pos, vel, angvel, angmom, quat, rot)
+        energy.account(dt, g[s], F, T, Fd, Td, F_ext, moving, mass, lin_free, v0, w0, vel, angvel, 0.5 * slip, acc)
         s += 1
         if s == n:
-            return s, ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, basis, F, T, e_prev, e_last, om_max, depth
+            return (s, ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, basis, F, T, e_prev, e_last, om_max, depth,
+                    slip, Fd, Td)

@@ -267,7 +267,53 @@ def build(spec, out: Path) -> dict:
         s.update(slip(spec, h, an["slip"], an.get("tilt_block")))
     rv = h["reaction"][-1]
     s["final_reaction_N"] = rv.tolist()
+    s["energy"] = energy_balance(h)
     return s
+
+
+#: what summary.json's ``energy`` section says about its terms
+ENERGY_CONVENTION = (
+    "J, cumulative from the run's start; kinetic, elastic and potential at each sample's half step. "
+    "work_loads > 0: the loads (gravity, tilt and base excitation as the body force m g_eff, applied forces, "
+    "velocity jumps, settling blocks through their contacts) put energy into the free blocks; dissipated_* >= 0: "
+    "energy taken out by the contacts' damping and by Coulomb slip. Balance B = kinetic + elastic + "
+    "dissipated_damping + dissipated_friction - work_loads is constant; balance_error_J = max |B(t) - B(t0)| over "
+    "the samples (t0 the first), balance_error_rel = that / the largest magnitude any term reached "
+    "(docs/energy.md)")
+
+
+def energy_balance(h: dict) -> dict:
+    """summary.json's ``energy`` section from the histories (drystone/mechanics/energy.py):
+    the final value of each term (J), the balance error B(t) - B(t0) at its largest
+    (``balance_error_J``, and when) and relative to the largest magnitude of any term
+    (``balance_error_rel``); B = kinetic + elastic + dissipated_damping +
+    dissipated_friction - work_loads (``ENERGY_CONVENTION``). Histories without the terms
+    (older runs) or with NaN (the stock YADE law keeps no shear history nor damping to
+    account) give None with a ``note``."""
+    from drystone.mechanics.energy import TERMS
+
+    keys = ("kinetic", "elastic", "potential") + TERMS
+    out = {"units": "J", "convention": ENERGY_CONVENTION,
+           "final": {f"{k}_J": None for k in keys}, "balance_error_J": None, "balance_error_rel": None,
+           "balance_error_time_s": None, "scale_J": None}
+    t = np.asarray(h.get("t", []), float)
+    if not len(t) or any(k not in h for k in keys):
+        out["note"] = "histories.npz has no energy terms (a run of an older version)"
+        return out
+    v = {k: np.asarray(h[k], float) for k in keys}
+    for k in keys:
+        out["final"][f"{k}_J"] = float(v[k][-1]) if np.isfinite(v[k][-1]) else None
+    if not all(np.all(np.isfinite(v[k])) for k in ("kinetic", "elastic") + TERMS):
+        out["note"] = ("not accounted: this run's engine (the stock YADE law) keeps no elastic shear history nor "
+                       "damping of the project's law; its histories hold NaN")
+        return out
+    b = v["kinetic"] + v["elastic"] + v["dissipated_damping"] + v["dissipated_friction"] - v["work_loads"]
+    err = np.abs(b - b[0])
+    i = int(np.argmax(err))
+    scale = max(float(np.abs(v[k]).max()) for k in ("kinetic", "elastic") + TERMS)
+    out.update(balance_error_J=float(err[i]), balance_error_time_s=float(t[i]), scale_J=scale,
+               balance_error_rel=float(err[i] / scale) if scale > 0 else 0.0)
+    return out
 
 
 def left_model_report(spec: dict, h: dict, left: dict, info: dict) -> dict:

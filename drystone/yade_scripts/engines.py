@@ -14,9 +14,16 @@ The interface, the same for each: ``loop`` (advance to the run's end, calling th
 driver's ``step`` at every step that needs Python: a recorded sample, a stage's start, an
 applied force switched), and inside a step ``forces`` (this step's contact and applied
 forces), ``before_sample`` (the state arrays made current), ``finish_step`` (the motion,
-where the engine integrates it); ``contacts`` and ``elastic_energy`` for recording,
-``set_velocity`` / ``velocity`` for the stages, ``finish`` (the state written back or
-read). A new engine is one class here and a name in ``ENGINES``.
+where the engine integrates it); ``contacts``, ``elastic_energy`` and ``energy_terms``
+for recording, ``set_velocity`` / ``velocity`` for the stages, ``add_work`` for a load's
+energy given at once (a velocity jump), ``finish`` (the state written back or read). A new
+engine is one class here and a name in ``ENGINES``.
+
+The energy balance (drystone/mechanics/energy.py) is accumulated at every step by the
+engines with the project's law: ``compiled`` in its compiled step, ``python`` in an
+``energy.Ledger`` that charges step n when YADE has integrated it (the velocities read at
+step n + 1); the stock law keeps no shear history nor damping of its own to account: its
+``energy_terms`` are None (NaN in the histories).
 """
 from __future__ import annotations
 
@@ -28,7 +35,7 @@ import yade
 
 from drystone.mechanics import contact as law
 from drystone.mechanics import contact_step as cs
-from drystone.mechanics import integration, monitors, rotations, stability
+from drystone.mechanics import energy, integration, monitors, rotations, stability
 from drystone.yade_scripts import contact_engine as ce
 
 
@@ -59,6 +66,25 @@ class Engine:
     def __init__(self, run):
         self.run = run
         self.step = None  # the contact law's step, where this engine has one of its own
+        #: after the loop: (elastic energy J, slip work J) of the step after the last one, so that
+        #: the run's last sample (taken after its last step) has its energies at that step's end
+        self.ahead = None
+        self._before = {}  # a moved block's velocity before a stage set it: what brought it to x_n
+
+    def _note_jump(self, i: int, v_old) -> None:
+        """A non-moving (kinematically moved) body's velocity is about to be set at a stage's
+        start: the step's displacement it is charged with (drystone.mechanics.energy) is
+        (v_old + v_new) dt / 2, v_old the velocity that brought it to the step's position."""
+        if not np.isfinite(self.run.mass[i]) and i not in self._before:
+            self._before[i] = np.array(v_old, float)
+
+    def _velocities_before(self) -> np.ndarray:
+        """The velocities (nb, 3) m/s before this step, a moved block's as it arrived."""
+        v0 = self.run.vel.copy()
+        for i, v in self._before.items():
+            v0[i] = v
+        self._before = {}
+        return v0
 
     @property
     def max_omega_dt(self) -> float:
@@ -100,6 +126,21 @@ class Engine:
             if start <= t < end:
                 self.run.O.forces.addF(y, f)
 
+    def _external(self, t: float) -> np.ndarray:
+        """The applied forces (nb, 3) N at t, on the bodies they act on."""
+        F_ext = np.zeros_like(self.run.pos)
+        for y, f, start, end in self.run.forces:
+            if start <= t < end:
+                F_ext[y] += tuple(f)
+        return F_ext
+
+    def _free_directions(self) -> tuple[np.ndarray, np.ndarray]:
+        """(translations, rotations) (nb, 3): 1.0 on the directions each body may use."""
+        run = self.run
+        free = [integration.free_directions(run.states[i].blockedDOFs or "", bool(np.isfinite(run.mass[i])))
+                for i in range(len(run.mass))]
+        return np.array([f[0] for f in free]).reshape(-1, 3), np.array([f[1] for f in free]).reshape(-1, 3)
+
     # -- state -----------------------------------------------------------------------
     def read(self, ids) -> None:
         """Positions, velocities, angular velocities, orientations of bodies ``ids`` from YADE."""
@@ -121,6 +162,14 @@ class Engine:
     def elastic_energy(self) -> float:
         """Elastic energy stored in the contacts (J) at the half step; NaN where the law keeps none."""
         return np.nan
+
+    def energy_terms(self) -> tuple[float, float, float] | None:
+        """(work of the loads, dissipated by damping, dissipated by friction), J from the
+        run's start (drystone/mechanics/energy.py); None where the engine cannot account."""
+        return None
+
+    def add_work(self, J: float) -> None:
+        """Work of a load given at once (J): a velocity jump's kinetic energy."""
 
     def check_depth(self) -> None:
         """Stop the run on a contact deeper than stability.TUNNEL_FRACTION x the smaller
@@ -161,20 +210,49 @@ class NumpyEngine(Engine):
         super().__init__(run)
         self.step = ce.PenaltyCoulomb(lambda a, b: pair_properties(run, a, b), run.mass, run.local_v,
                                       run.spec.detection, run.inertia, run.owner)
+        self.ledger = energy.Ledger(run.mass, self._free_directions()[0])
 
     def forces(self, t, g):
         run = self.run
         run.newton.gravity = yade.Vector3(*g)
         self.read(run.moving)
+        self.ledger.complete(run.vel, run.angvel)  # the previous step, now that YADE has integrated it
         self.step.step(run.O, (run.pos, run.vel, run.angvel, run.rot))
         self.check_depth()
         self._applied(t)
+        last = self.step.last
+        self.ledger.begin(run.O.dt, g, last["F"], np.zeros_like(last["F"]), last["Fd"], last["Td"], self._external(t),
+                          self._velocities_before(), run.angvel, last["slip"])
+
+    def set_velocity(self, i, v):
+        if self.ledger.pending:  # the step before was integrated with the velocities YADE holds: charge it first
+            self.read(self.run.moving)
+            self.ledger.complete(self.run.vel, self.run.angvel)
+        self._note_jump(i, self.velocity(i))
+        super().set_velocity(i, v)
+
+    def finish(self):
+        super().finish()
+        run = self.run
+        if run.failure is None:
+            self.ledger.complete(run.vel, run.angvel)
+            bs = (run.pos, run.vel, run.angvel, run.rot)
+            # (YADE's geometry: its interactions of the last step, the nearest it has)
+            geo = self.step.native_geometry(bs) if self.step.native else self.step.yade_geometry(self.step.gather(run.O), bs)
+            self.ahead = self.step.peek(geo, bs, run.O.dt)
 
     def contacts(self):
         return self.step.state
 
     def elastic_energy(self):
-        return 0.5 * sum(self.step.elastic)
+        return 0.5 * (self.step.elastic[1] + (self.step.elastic[0] if self.ahead is None else self.ahead[0]))
+
+    def energy_terms(self):
+        acc = self.ledger.acc + (0.0, 0.0, 0.0 if self.ahead is None else 0.5 * self.ahead[1])
+        return tuple(float(x) for x in acc)
+
+    def add_work(self, J):
+        self.ledger.add_work(J)
 
 
 class CompiledEngine(Engine):
@@ -208,7 +286,7 @@ class CompiledEngine(Engine):
         self.inertia_int = np.where(np.isfinite(run.mass)[:, None], run.inertia, 1.0)
         self.step = ce.Compiled(run.mass, run.inertia, run.local_v, material, table, joints,
                                 run.shape_size * stability.TUNNEL_FRACTION, run.owner)
-        self.F = self.T = None
+        self.F = self.T = self.F_ext = None
         self._normalise_orientations()
 
     def _normalise_orientations(self):
@@ -299,7 +377,7 @@ class CompiledEngine(Engine):
             self.check_depth()
             if run.failure is not None:
                 return
-            self._integrate(dt, g[done], F, T)
+            self._integrate(dt, g[done], F, T, F_ext)
             done += 1
         run.g_integral += float(np.sum(np.linalg.norm(g[:done], axis=1))) * dt  # the speed bound
         run.iter += done
@@ -309,10 +387,13 @@ class CompiledEngine(Engine):
             run.done = True
         run.progress.on_step(run, run.t, run.stage)
 
-    def _integrate(self, dt, g, F, T):
+    def _integrate(self, dt, g, F, T, F_ext):
+        """One step of the motion (F, T: contact plus applied F_ext), then its energy terms."""
         run = self.run
+        v0, w0 = self._velocities_before(), run.angvel.copy()
         integration.integrate(dt, g, F, T, self.mass_int, self.inertia_int, self.lin_free, self.rot_free, self.aspherical,
                      run.pos, run.vel, run.angvel, self.angmom, run.quat, run.rot)
+        self.step.account(dt, g, F, T, F_ext, self.lin_free, v0, w0, run.vel, run.angvel)
 
     # -- inside a step ---------------------------------------------------------------
     def forces(self, t, g):
@@ -325,15 +406,18 @@ class CompiledEngine(Engine):
         for y, f, start, end in run.forces:
             if start <= t < end:
                 self.F[y] += tuple(f)
+        self.F_ext = self._external(t)  # for the loads' work
 
     def finish_step(self, g):
         t_k = time.perf_counter()
-        self._integrate(self.run.O.dt, g, self.F, self.T)
+        self._integrate(self.run.O.dt, g, self.F, self.T, self.F_ext)
         self.run.kernel_time += time.perf_counter() - t_k
 
     def finish(self):
-        """Write the arrays' state into YADE's bodies."""
+        """Write the arrays' state into YADE's bodies; the energies of the step after the last (``ahead``)."""
         run = self.run
+        if run.failure is None:
+            self.ahead = self.step.peek(run.pos, run.rot, run.vel, run.angvel, run.O.dt)
         for i in np.flatnonzero(np.isfinite(run.mass) | np.any(run.vel != 0, axis=1)).tolist():
             st = run.states[i]
             st.pos = yade.Vector3(*run.pos[i])
@@ -344,6 +428,7 @@ class CompiledEngine(Engine):
 
     # -- state -----------------------------------------------------------------------
     def set_velocity(self, i, v):
+        self._note_jump(i, self.run.vel[i])
         self.run.vel[i] = v
 
     def velocity(self, i):
@@ -353,7 +438,14 @@ class CompiledEngine(Engine):
         return self.step.state
 
     def elastic_energy(self):
-        return 0.5 * sum(self.step.elastic)
+        return 0.5 * (self.step.elastic[1] + (self.step.elastic[0] if self.ahead is None else self.ahead[0]))
+
+    def energy_terms(self):
+        acc = self.step.energy + (0.0, 0.0, 0.0 if self.ahead is None else 0.5 * self.ahead[1])
+        return tuple(float(x) for x in acc)
+
+    def add_work(self, J):
+        self.step.energy[0] += float(J)
 
 
 #: the step engines by name (``ContactLaw.engines`` in drystone/mechanics/laws.py names them)

@@ -1,6 +1,9 @@
 """The histories of a run (histories.npz): what the driver records at every sample, from
 the state arrays and the engine's contacts (no YADE import of its own). SI units; the
-energies at the half step t - dt/2, where leapfrog velocities live.
+energies at the half step t - dt/2, where leapfrog velocities live. The energy balance's
+cumulative terms (J from the run's start; drystone/mechanics/energy.py): ``work_loads``,
+``dissipated_damping``, ``dissipated_friction``, accumulated by the engine at every step
+up to the same half step; NaN for an engine that cannot account (the stock YADE law).
 """
 from __future__ import annotations
 
@@ -9,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from drystone.mechanics import energy
 from drystone.mechanics.monitors import Sample
 
 #: histories.npz's format name and version (arrays ``format`` and ``version``)
@@ -28,7 +32,8 @@ class Recorder:
         self.cp_local = [run.rot[b].T @ (p - run.pos0[b]) for _, b, p in self.cp]
         self.named = [(c["name"], y[c["blocks"][0]], y[c["blocks"][1]]) for c in run.spec.output["contacts"]]
         self.h = {k: [] for k in ("t", "tilt_deg", "g_eff", "base_acc", "pos", "quat", "vel", "angvel",
-                                  "cp", "reaction", "n_contacts", "kinetic", "potential", "elastic")}
+                                  "cp", "reaction", "n_contacts", "kinetic", "potential", "elastic",
+                                  *energy.TERMS)}
         self.hc = {name: {k: [] for k in CONTACT_KEYS} for name, _, _ in self.named}
         self.max_contacts = 0
 
@@ -66,6 +71,9 @@ class Recorder:
         x_half = run.pos[d] - 0.5 * run.O.dt * run.vel[d]
         h["potential"].append(-float(np.sum(m * (x_half @ g))))
         h["elastic"].append(run.engine.elastic_energy())
+        terms = run.engine.energy_terms()
+        for k, v in zip(energy.TERMS, terms if terms is not None else (np.nan,) * len(energy.TERMS)):
+            h[k].append(v)
         self._contacts(st, fb)
         return Sample(t, g, ke, ke_b, h["elastic"][-1], st, R)
 

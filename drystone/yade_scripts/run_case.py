@@ -164,7 +164,9 @@ class Driver:
                 free = np.array([c not in (state.blockedDOFs or "") for c in "xyz"], float)
                 v0 = self.engine.velocity(int(i))
                 self.engine.set_velocity(int(i), v0 + dv * free)
-                self.stability.energy.inject(0.5 * self.mass[i] * (np.sum((v0 + dv * free) ** 2) - np.sum(v0 ** 2)))
+                gained = 0.5 * self.mass[i] * (np.sum((v0 + dv * free) ** 2) - np.sum(v0 ** 2))
+                self.stability.energy.inject(gained)
+                self.engine.add_work(gained)  # the base's impulse: work of the excitation (energy balance)
             self.jumps.append({"stage": k + 1, "time_s": float(self.t), "relative_velocity_m_s": dv.tolist()})
             self.jump_dvs.append(np.asarray(dv, float))
             print(f"[{self.spec_name}] stage {k + 1}: base velocity jump, free blocks get {dv.tolist()} m/s "
