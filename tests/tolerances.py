@@ -694,6 +694,7 @@ PRINTED_4_DECIMALS = 5e-5
 #: measured 4.4e-16 over the test's ten sets; 1e-12
 WEDGE_SEARCH_REL = 1e-12
 
+# ---------------------------------------------------------------------------------------
 # Energy balance (test_energy.py, drystone/mechanics/energy.py)
 # ---------------------------------------------------------------------------------------
 
