@@ -21,8 +21,10 @@ import sys
 import pytest
 
 from conftest import assert_figure, requires_yade
+from tolerances import EXACT_ABS
 from drystone import cli, paths
 from drystone.postprocess import console, markdown, report
+from drystone.postprocess import summary as summ
 
 GRAVITY4 = paths.ROOT / "cases" / "gravity4.toml"
 ONE_BLOCK = paths.ROOT / "cases" / "examples" / "one_block.json"
@@ -228,8 +230,13 @@ def test_energy_terms_and_balance_when_recorded(tmp_path):
     import numpy as np
 
     t = np.linspace(0.0, 1.0, 11)
-    h = {"t": t, "kinetic": t ** 2, "potential": -t, "elastic": 0 * t, "work_loads": t ** 2 - t + 0.5 * t,
+    # a closed balance: the loads' work (gravity's included: the potential is not a term) is
+    # the kinetic energy plus what damping and friction took out
+    h = {"t": t, "kinetic": t ** 2, "potential": -t, "elastic": 0 * t, "work_loads": t ** 2 + 0.5 * t,
          "dissipated_damping": 0.25 * t, "dissipated_friction": 0.25 * t}
+    assert np.abs(summ.balance_history(h)).max() == pytest.approx(0.0, abs=EXACT_ABS)
+    h_open = dict(h, work_loads=h["work_loads"] - 0.1 * t)  # 0.1 J/s unaccounted
+    assert summ.balance_history(h_open)[-1] == pytest.approx(0.1)
     p = report.energy_figure(h, tmp_path / "e.png", {"name": "x", "stages": []})
     assert_figure(p, report.ENERGY_FIGSIZE, report.ENERGY_DPI)
     html = report.energy_table({"energy": {"balance_error_J": 1e-3, "balance_error_rel": 1e-4}}, h)

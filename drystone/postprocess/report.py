@@ -31,6 +31,7 @@ import numpy as np  # noqa: E402
 from drystone.model.spec import stage_type  # noqa: E402
 from drystone.postprocess import console, markdown, plots, snapshots  # noqa: E402
 from drystone.postprocess import summary as summ  # noqa: E402
+from drystone.postprocess import summary as summ  # noqa: E402
 from drystone.postprocess.html import esc, image, page, table  # noqa: E402
 
 #: the files a complete run has (summary.json last: the marker of a complete run)
@@ -265,8 +266,9 @@ def energy_figure(h: dict, path: Path, spec: dict) -> Path | None:
     have (the potential as its change since t = 0) and their balance when present, then
     the kinetic and elastic energies and the balance on their own scale (a ramped gravity's
     potential change would flatten them). The balance: the histories' own
-    ``energy_balance`` or, with every BALANCE_TERMS term recorded,
-    dE_k + dE_p + dE_el + D_damping + D_friction - W_loads (zero for an exact integration)."""
+    ``energy_balance`` or, with every BALANCE_TERMS term recorded, summary.balance_history:
+    dE_k + dE_el + D_damping + D_friction - W_loads (zero for an exact integration; the
+    potential is drawn for reference only: gravity's work is in W_loads)."""
     terms = {k: np.asarray(h[k], float) for k in ENERGY_TERMS if k in h and np.size(h[k]) == np.size(h["t"])}
     if not terms or not len(h["t"]):
         return None
@@ -274,10 +276,9 @@ def energy_figure(h: dict, path: Path, spec: dict) -> Path | None:
     bal, label = None, None
     if "energy_balance" in h and np.size(h["energy_balance"]) == np.size(t):
         bal, label = np.asarray(h["energy_balance"], float), "balance (histories.npz energy_balance)"
-    elif all(k in terms for k in BALANCE_TERMS + ("kinetic", "potential", "elastic")):
-        stored = terms["kinetic"] + terms["potential"] + terms["elastic"]
-        bal = stored - stored[0] + terms["dissipated_damping"] + terms["dissipated_friction"] - terms["work_loads"]
-        label = "balance: ΔE_k + ΔE_p + ΔE_el + D_damp + D_fric − W_loads"
+    elif all(k in terms for k in BALANCE_TERMS + ("kinetic", "elastic")):
+        bal = summ.balance_history(terms)  # summary.json's balance_error_J is its largest magnitude
+        label = "balance error: ΔE_k + ΔE_el + D_damp + D_fric − W_loads (W_loads holds gravity's work)"
     fig, (a1, a2) = plt.subplots(2, 1, figsize=ENERGY_FIGSIZE, sharex=True)
     for k, v in terms.items():
         a1.plot(t, v - v[0] if k == "potential" else v, label=ENERGY_TERMS[k])

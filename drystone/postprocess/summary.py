@@ -282,6 +282,15 @@ ENERGY_CONVENTION = (
     "(docs/energy.md)")
 
 
+def balance_history(h: dict) -> np.ndarray:
+    """B(t) - B(t0) (J) at every sample, B = kinetic + elastic + dissipated_damping +
+    dissipated_friction - work_loads (``ENERGY_CONVENTION``: the potential is not a term, the
+    work of gravity is in work_loads); zero for an exact integration."""
+    b = (np.asarray(h["kinetic"], float) + np.asarray(h["elastic"], float) + np.asarray(h["dissipated_damping"], float)
+         + np.asarray(h["dissipated_friction"], float) - np.asarray(h["work_loads"], float))
+    return b - b[0]
+
+
 def energy_balance(h: dict) -> dict:
     """summary.json's ``energy`` section from the histories (drystone/mechanics/energy.py):
     the final value of each term (J), the balance error B(t) - B(t0) at its largest
@@ -307,8 +316,7 @@ def energy_balance(h: dict) -> dict:
         out["note"] = ("not accounted: this run's engine (the stock YADE law) keeps no elastic shear history nor "
                        "damping of the project's law; its histories hold NaN")
         return out
-    b = v["kinetic"] + v["elastic"] + v["dissipated_damping"] + v["dissipated_friction"] - v["work_loads"]
-    err = np.abs(b - b[0])
+    err = np.abs(balance_history(v))
     i = int(np.argmax(err))
     scale = max(float(np.abs(v[k]).max()) for k in ("kinetic", "elastic") + TERMS)
     out.update(balance_error_J=float(err[i]), balance_error_time_s=float(t[i]), scale_J=scale,
