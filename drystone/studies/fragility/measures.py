@@ -26,11 +26,11 @@ from dataclasses import dataclass
 from drystone.motions import excitation, intensity, processing
 
 #: f1 (Hz) when no identification run is present: the transfer-function peak of seed_0,
-#: control point A (2.60 Hz, half-power damping 12.9 %) in the identification table of the
-#: README (generated from results/sacsayhuaman/identification.md by an earlier
+#: control point A (2.60 Hz, half-power damping 12.9 %) in the identification table of
+#: docs/validation-sacsayhuaman.md (generated from results/sacsayhuaman/identification.md by an earlier
 #: `python -m drystone.studies.sacsayhuaman identify`); the other amplitudes gave 2.59-2.63 Hz
 DEFAULT_F1_HZ = 2.60
-DEFAULT_F1_SOURCE = ("README identification table (transfer function base -> control point A, run seed_0: 2.60 Hz; "
+DEFAULT_F1_SOURCE = ("identification table of docs/validation-sacsayhuaman.md (transfer function base -> control point A, run seed_0: 2.60 Hz; "
                      "2.59-2.63 Hz at the other white-noise amplitudes), from an earlier "
                      "`python -m drystone.studies.sacsayhuaman identify`; not measured in this checkout")
 
