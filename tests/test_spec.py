@@ -58,7 +58,7 @@ def test_fingerprint_is_pinned_for_every_version(tmp_path):
 
 def test_spec_json_is_version_2_with_type(tmp_path):
     d = json.loads(json.dumps(_spec(tmp_path).to_dict()))
-    assert (d["format"], d["version"]) == ("drystone-spec", SPEC_VERSION) and SPEC_VERSION == 3
+    assert (d["format"], d["version"]) == ("drystone-spec", SPEC_VERSION) and SPEC_VERSION == 4
     assert [st["type"] for st in d["stages"]] == [s["type"] for s in PIN_CASE["stages"]]
     assert all(list(st) == ["type", "start", "end", "params"] for st in d["stages"])
     assert list(d)[:3] == ["format", "version", "name"] and "provenance" not in d

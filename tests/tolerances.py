@@ -694,6 +694,21 @@ PRINTED_4_DECIMALS = 5e-5
 #: measured 4.4e-16 over the test's ten sets; 1e-12
 WEDGE_SEARCH_REL = 1e-12
 
+#: a block at rest under the earth pressure (test_earth_pressure_runs.py, contact damping 0.2,
+#: 0.3 s after the gravity ramp): the platform's reaction differs from the applied load and
+#: the weight by m a, a the block's residual ringing on its joint; measured 2.4e-6 of P_A; 1e-4
+RESTING_REACTION_REL = 1e-4
+#: the loads' work over a slide (test_earth_pressure_runs.py) against its constant force and
+#: moment times the centred displacement and rotation: exact for leapfrog (the mean-velocity
+#: sums telescope) but for the rotation taken as 2 q (small angles: a relative error ~theta^2
+#: of the moment's work, theta ~1e-4 rad, itself 2e-5 of the total) and the round-off of sums
+#: over ~500 steps: measured 7.7e-14 (leaving the moment's work out: 2e-5); 1e-10
+SLIDE_WORK_REL = 1e-10
+#: the loads' work (J) in the compiled and the python engine: the same products summed in
+#: another order (a compiled loop against numpy's sums and YADE's integrator) on motions that
+#: agree to ENGINE_AGREEMENT_M: relative to its largest value, 1e-9
+ENGINE_WORK_REL = 1e-9
+
 # ---------------------------------------------------------------------------------------
 # Energy balance (test_energy.py, drystone/mechanics/energy.py)
 # ---------------------------------------------------------------------------------------
@@ -715,3 +730,18 @@ BALANCE_SHADOW = 0.5
 #: a ratio of 4; the next order's share moves it by up to a quarter: 3-5
 SECOND_ORDER_RATIO_MIN = 3.0
 SECOND_ORDER_RATIO_MAX = 5.0
+
+# ---------------------------------------------------------------------------------------
+# Site study (drystone/studies/site/, tests/test_site_study.py)
+# ---------------------------------------------------------------------------------------
+
+#: the hand check's margins (drystone/studies/site/hand.py: the soil's load integrated over
+#: the stones' back faces, summed, its moment about the toe from per-stone forces and
+#: moments) against ep.block_limits' closed forms for one box stone: the same sums in another
+#: order (the face integration is exact in z, docs/earth-pressure.md: to 1e-12), relative to
+#: the weight (N) or the weight times the block's height (N m); measured 1.0e-16; 1e-12
+HAND_MARGIN_REL = 1e-12
+#: a root of a margin (tilt in rad, water level in m) found by Brent to xtol 1e-12 and
+#: compared with block_limits at the root: the margin's slope is O(W) per rad or per m, so the
+#: margin at the root is O(1e-12 W); 1e-9 of W leaves room for the closed form's round-off
+HAND_ROOT_REL = 1e-9

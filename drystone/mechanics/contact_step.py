@@ -519,19 +519,26 @@ class CompiledStep:
             self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared)
         return float(out[14]), float(out[17])
 
-    def account(self, dt, g, F, T, F_ext, lin_free, v0, w0, v1, w1):
+    def account(self, dt, g, F, T, F_ext, lin_free, v0, w0, v1, w1, loads=None):
         """Add the step last computed by ``forces``, now integrated with the forces F, T
-        (nb, 3) (contact plus applied F_ext) and body acceleration g (3,), to ``energy``:
-        the velocities (nb, 3) before (v0, w0) and after it (v1, w1), lin_free (nb, 3) the
-        free directions (drystone.mechanics.energy.account)."""
+        (nb, 3) (contact plus applied F_ext, plus the loads' wrench) and body acceleration g
+        (3,), to ``energy``: the velocities (nb, 3) before (v0, w0) and after it (v1, w1),
+        lin_free (nb, 3) the free directions (drystone.mechanics.energy.account); ``loads``:
+        None or (c (J,), Fb, Tb, rot_free) of the wrench added to F, T (``applied_wrench``),
+        whose work is added too (drystone.mechanics.energy.load_work)."""
         Fd, Td, slip = self.last["Fd"], self.last["Td"], self.last["slip"]
         energy.account(dt, np.asarray(g, float), F, T, Fd, Td, F_ext, self.moving, np.where(self.moving, self.mass, 1.0),
                        lin_free, v0, w0, v1, w1, 0.5 * slip, self.energy)
+        if loads is not None and len(loads[0]):
+            c, Fb, Tb, rot_free = loads
+            self.energy[0] += energy.load_work(dt, c, Fb, Tb, self.moving, lin_free, rot_free, v0, w0, v1, w1)
 
-    def advance(self, pos, rot, vel, angvel, dt, g, F_ext, motion):
+    def advance(self, pos, rot, vel, angvel, dt, g, F_ext, motion, loads=None):
         """Steps one after another, each as ``forces`` then ``integrate`` (in place), with
         the body accelerations ``g`` (n, 3) m/s^2 of the steps and the external forces
-        ``F_ext`` (nb, 3) N added to the contact forces of each. ``motion``: the remaining
+        ``F_ext`` (nb, 3) N added to the contact forces of each; ``loads``: None or (c (n, J),
+        Fb (J, nb, 3) N, Tb (J, nb, 3) N m), the wrench sum_j c[s, j] (Fb[j], Tb[j]) added at
+        step s (``applied_wrench``) and its work to the energy balance. ``motion``: the remaining
         arguments of ``integrate`` (mass, inertia, lin_free, rot_free, aspherical, angmom,
         quat). Stops before integrating a step whose contact depth ratio exceeds 1 (the
         caller checks it). Returns (steps completed, F, T of the last step computed, that
@@ -539,12 +546,13 @@ class CompiledStep:
         shear history as after the same calls of ``forces``, and ``energy`` as after those of
         ``forces`` and ``account`` (a step not integrated: half its slip work, as ``forces``)."""
         s = self.shapes
+        coef, Fb, Tb = self._no_loads(len(g)) if loads is None else loads
         (done, ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, basis, F, T, e_prev, e_last, om_max,
          self.depth_ratio, slip, Fd, Td) = _advance(
             s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, self.owner, pos, rot, vel, angvel, self.moving,
             self.inv_mass, self.inv_inertia_local, self.material, self.table, self.jkeys, self.jvals, self.keys,
-            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared, g, F_ext, self.elastic[1],
-            self.energy, *motion)
+            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared, g, F_ext, coef, Fb, Tb,
+            self.elastic[1], self.energy, *motion)
         self.last = {"Fd": Fd, "Td": Td, "slip": slip}
         self.keys, self.shear_store, self.basis_store = keys, fs, basis
         self.elastic = (e_prev, e_last)
@@ -552,6 +560,11 @@ class CompiledStep:
         self._raw = (ia, ib, vol, c, n, area, fn, fs, fd, slipping)
         self._state = None
         return done, F, T, done == len(g)
+
+    def _no_loads(self, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The ``loads`` of ``advance`` when there are none (no column: nothing is added)."""
+        nb = len(self.mass)
+        return np.zeros((n, 0)), np.zeros((0, nb, 3)), np.zeros((0, nb, 3))
 
     @property
     def state(self) -> ContactState:
@@ -571,13 +584,33 @@ class CompiledStep:
 # -- many steps in one call ----------------------------------------------------------
 
 @njit(cache=True)
+def applied_wrench(c, Fb, Tb, F, T):
+    """Add the loads' wrench sum_j c[j] Fb[j] to F and sum_j c[j] Tb[j] to T (nb, 3), in
+    place: c (J,) the step's coefficients, Fb (J, nb, 3) N and Tb (J, nb, 3) N m their
+    vectors (drystone/model/loads.py). The same arithmetic in ``advance`` and in a step
+    taken from Python."""
+    nj = len(c)
+    for i in range(F.shape[0]):
+        for q in range(3):
+            f = 0.0
+            t = 0.0
+            for j in range(nj):
+                f += c[j] * Fb[j, i, q]
+                t += c[j] * Tb[j, i, q]
+            F[i, q] += f
+            T[i, q] += t
+
+
+@njit(cache=True)
 def _advance(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving, inv_mass, inv_inertia_local,
-             mat, table, jkeys, jvals, keys, shear, basis, dt, tol, size, shared, g, F_ext, e_last, acc, mass, inertia,
-             lin_free, rot_free, aspherical, angmom, quat):
+             mat, table, jkeys, jvals, keys, shear, basis, dt, tol, size, shared, g, F_ext, coef, Fb, Tb, e_last, acc,
+             mass, inertia, lin_free, rot_free, aspherical, angmom, quat):
     """``CompiledStep.advance``: len(g) steps of ``_contact_forces`` + ``integrate`` (+
     ``energy.account`` into ``acc``) without leaving compiled code; the arithmetic of each
-    step is that of one call of each (the same results bit for bit)."""
+    step is that of one call of each (the same results bit for bit). The loads' wrench of
+    step s is ``applied_wrench(coef[s], Fb, Tb)`` (nothing when coef has no column)."""
     n = len(g)
+    loaded = coef.shape[1] > 0
     e_prev = e_last
     om_max = 0.0
     s = 0
@@ -593,6 +626,8 @@ def _advance(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, a
         if om > om_max:
             om_max = om
         F += F_ext
+        if loaded:
+            applied_wrench(coef[s], Fb, Tb, F, T)
         acc[2] += 0.5 * slip
         if depth > 1.0:  # the caller checks it before this step is integrated
             return (s, ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, basis, F, T, e_prev, e_last, om_max, depth,
@@ -601,6 +636,8 @@ def _advance(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, a
         w0[:] = angvel
         integrate(dt, g[s], F, T, mass, inertia, lin_free, rot_free, aspherical, pos, vel, angvel, angmom, quat, rot)
         energy.account(dt, g[s], F, T, Fd, Td, F_ext, moving, mass, lin_free, v0, w0, vel, angvel, 0.5 * slip, acc)
+        if loaded:
+            acc[0] += energy.load_work(dt, coef[s], Fb, Tb, moving, lin_free, rot_free, v0, w0, vel, angvel)
         s += 1
         if s == n:
             return (s, ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, basis, F, T, e_prev, e_last, om_max, depth,

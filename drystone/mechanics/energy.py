@@ -8,8 +8,9 @@ The balance. With E_k the kinetic energy of the free blocks, E_el the elastic en
 stored in the contacts (normal and shear springs), D_damp the work done against the
 contacts' damping forces and moments, D_fric the plastic work of Coulomb slip and W_loads
 the work of the loads on the free blocks (the body force m g_eff(t): gravity, tilt and
-base excitation; applied forces; the velocity jumps of a sine started as a displacement;
-the contact forces of kinematically moved blocks, settlements),
+base excitation; applied forces and [[loads]] such as the earth pressure; the velocity
+jumps of a sine started as a displacement; the contact forces of kinematically moved
+blocks, settlements),
 
     E_k + E_el + D_damp + D_fric - W_loads = constant.
 
@@ -31,7 +32,8 @@ So each force held over step n is charged with the mean velocity
 v_bar = (v_{n-1/2} + v_{n+1/2}) / 2 (``account``, after the step is integrated):
 
 * W_loads += sum over free blocks (m g_n + F_ext) . v_bar dt on their free directions,
-  and - F_c . v dt for every kinematically moved block (F_c the contact force on it: the
+  plus the loads' moments M_ext . w_bar dt (earth pressure: a force on a face, its moment
+  about the centroid; ``load_work``), and - F_c . v dt for every kinematically moved block (F_c the contact force on it: the
   driver that moves it supplies -F_c);
 * D_damp -= sum over all bodies (F_d . v_bar + M_d . w_bar) dt, F_d and M_d the damping
   wrenches summed on each body (their pairs act on two bodies: the sum is the relative
@@ -98,6 +100,28 @@ def account(dt, g, F, T, Fd, Td, F_ext, moving, mass, lin_free, v0, w0, v1, w1, 
     acc[0] += wl * dt
     acc[1] += dd * dt
     acc[2] += fric_half
+
+
+@njit(cache=True)
+def load_work(dt, c, Fb, Tb, moving, lin_free, rot_free, v0, w0, v1, w1):
+    """Work (J) of the loads' wrench over one integrated step: sum over the moving bodies of
+    F . v_bar dt on their free directions and M . w_bar dt on their free rotations (the
+    work of a force on a face of a rigid body, F . v + M . w, M about its centroid), with
+    F = sum_j c[j] Fb[j], M = sum_j c[j] Tb[j] (c (J,), Fb, Tb (J, nb, 3) N, N m:
+    contact_step.applied_wrench) and the mean velocities of the step as in ``account``."""
+    nj = len(c)
+    w = 0.0
+    for i in range(len(moving)):
+        if not moving[i]:
+            continue
+        for a in range(3):
+            f = 0.0
+            t = 0.0
+            for j in range(nj):
+                f += c[j] * Fb[j, i, a]
+                t += c[j] * Tb[j, i, a]
+            w += lin_free[i, a] * f * (0.5 * (v0[i, a] + v1[i, a])) + rot_free[i, a] * t * (0.5 * (w0[i, a] + w1[i, a]))
+    return w * dt
 
 
 @njit(cache=True)
@@ -183,18 +207,22 @@ class Ledger:
         """A step's forces wait for the velocities after it."""
         return self._pending is not None
 
-    def begin(self, dt, g, F, T, Fd, Td, F_ext, vel, angvel, slip_J):
-        """Step n's forces (arrays (nb, 3), as ``account``), the velocities before it and its
-        slip work (J): half of it now."""
+    def begin(self, dt, g, F, T, Fd, Td, F_ext, vel, angvel, slip_J, T_ext=None):
+        """Step n's forces (arrays (nb, 3), as ``account``; F_ext the applied forces, the
+        loads' included, T_ext (nb, 3) N m the loads' moments or None), the velocities before
+        it and its slip work (J): half of it now."""
         self.acc[2] += 0.5 * slip_J
-        self._pending = (dt, np.asarray(g, float), F, T, Fd, Td, F_ext, vel.copy(), angvel.copy(), 0.5 * slip_J)
+        self._pending = (dt, np.asarray(g, float), F, T, Fd, Td, F_ext, vel.copy(), angvel.copy(), 0.5 * slip_J, T_ext)
 
     def complete(self, vel, angvel):
         """The velocities after the pending step: its work and dissipation are added."""
         if self._pending is None:
             return
-        dt, g, F, T, Fd, Td, F_ext, v0, w0, half = self._pending
+        dt, g, F, T, Fd, Td, F_ext, v0, w0, half, T_ext = self._pending
         account(dt, g, F, T, Fd, Td, F_ext, self.moving, self.mass, self.lin_free, v0, w0, vel, angvel, half, self.acc)
+        if T_ext is not None:  # the moments' work M . w_bar dt (blocked rotations keep w = 0)
+            w_bar = 0.5 * (w0 + angvel)
+            self.acc[0] += dt * float(np.sum(T_ext[self.moving] * w_bar[self.moving]))
         self._pending = None
 
     def add_work(self, J: float) -> None:

@@ -11,7 +11,7 @@ No YADE import. ``run`` is the driver as the monitors see it: ``spec_name``, ``p
 (drystone.model.loading.LoadProgramme), the arrays ``pos``, ``vel`` (bodies, m, m/s) and
 ``dyn`` (the free bodies' indices), ``pos0``, ``mass`` (kg, inf for non-moving), ``bid``
 (index -> block id), ``w_free`` (the free blocks' weight, N), ``forces`` (applied forces:
-(index, force, start, end)), ``g_integral`` (integral of |g_eff| dt so far, m/s),
+(index, force, start, end)), ``loads`` (drystone.model.loads.AppliedLoads or None), ``g_integral`` (integral of |g_eff| dt so far, m/s),
 ``jump_dvs``, ``collapse_threshold`` (block id -> m), ``stop_at`` and ``failure``.
 SI units.
 """
@@ -115,12 +115,17 @@ class Stability(Monitor):
             forces = [(int(np.flatnonzero(d == y)[0]), np.array(tuple(f))) for y, f, a, b in run.forces
                       if a <= t < b and y in d]
             p = stability.load_power(run.mass[d], run.vel[d], s.g, forces)
+            loads = getattr(run, "loads", None)
+            if loads is not None:
+                p += loads.power(run.vel, run.angvel)
             msg = self.energy.update(t, ke, 0.0 if np.isnan(elastic) else elastic, p)
         if msg is None and len(d):
             if self.e0 is None:
                 self.e0 = ke + (0.0 if np.isnan(elastic) else elastic)
             impulses = [(float(np.linalg.norm(tuple(f))) * max(0.0, min(t, b) - a), run.mass[y])
                         for y, f, a, b in run.forces if y in d]
+            if getattr(run, "loads", None) is not None:
+                impulses += run.loads.impulses(run.mass, run.inertia)
             budget = stability.speed_budget(float(np.sum(run.mass[d])), self.e0, run.g_integral, impulses,
                                             run.jump_dvs)
             msg = stability.speed_check(t, run.mass[d], run.vel[d], ke, budget, run.w_free,

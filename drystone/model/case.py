@@ -18,6 +18,7 @@ from drystone import inputfiles
 from drystone.geometry.blockfile import CONTACT_PROPERTIES, MATERIAL_PROPERTIES
 from drystone.model.keys import REQUIRED, CaseError, Key  # noqa: F401 (casemod.CaseError: callers read them here)
 from drystone.mechanics import collapse, laws
+from drystone.model.loads import REGISTRY as LOAD_TYPES
 from drystone.model.stages import REGISTRY as STAGE_TYPES
 from drystone.units import GRAVITY
 
@@ -82,7 +83,8 @@ SECTIONS: dict[str, dict[str, Key]] = {
         "tilt_block": Key(None, "-", "block whose tilt (deg) is recorded for the slip report", int),
     },
 }
-# the keys of each stage type ([[stages]] type = ...) are declared with it: drystone/model/stages.py
+# the keys of each stage type ([[stages]] type = ...) are declared with it: drystone/model/stages.py,
+# and of each load type ([[loads]] type = ...) with it: drystone/model/loads.py
 
 
 def _kinds(spec: Key) -> tuple:
@@ -221,7 +223,7 @@ def load(path, overrides: list[str] | None = None, sweep_run: bool = False) -> d
 
 
 def validate(raw: dict, where: str, base_dir: Path, stem: str = "case", sweep_run: bool = False) -> dict:
-    allowed = set(SECTIONS) | {"stages", "materials", "forces"}
+    allowed = set(SECTIONS) | {"stages", "materials", "forces", "loads"}
     unknown = sorted(set(raw) - allowed)
     if unknown:
         raise CaseError(f"{where}: unknown section(s) {unknown}; allowed: {sorted(allowed)}")
@@ -276,6 +278,7 @@ def validate(raw: dict, where: str, base_dir: Path, stem: str = "case", sweep_ru
         if filled["end"] is not None and filled["end"] <= filled["start"]:
             raise CaseError(f"{w}: 'end' ({filled['end']} s) must be after 'start' ({filled['start']} s)")
         case["forces"].append(filled)
+    case["loads"] = _loads(raw.get("loads", []), where)
     stages = raw.get("stages", [])
     if not isinstance(stages, list) or not stages:
         raise CaseError(f"{where}: at least one [[stages]] is required")
@@ -292,11 +295,7 @@ def validate(raw: dict, where: str, base_dir: Path, stem: str = "case", sweep_ru
         filled = _fill(w, body, types[stype].keys)
         filled["type"] = stype
         types[stype].validate(filled, w, last=k == len(stages) - 1, base_dir=base_dir)
-        if filled["name"] is not None:
-            if not filled["name"].strip() or filled["name"].isdigit() or "." in filled["name"]:
-                raise CaseError(f"{w}: 'name' {filled['name']!r} must be a non-empty label, not a number, without '.'")
-            if any(st["name"] == filled["name"] for st in case["stages"]):
-                raise CaseError(f"{w}: 'name' {filled['name']!r} is already the name of another stage")
+        _labelled(w, filled, case["stages"], "stage")
         case["stages"].append(filled)
     names = [c["name"] for c in case["output"]["contacts"]]
     for key in ("penetration", "slip"):
@@ -304,6 +303,35 @@ def validate(raw: dict, where: str, base_dir: Path, stem: str = "case", sweep_ru
         if ref is not None and ref not in names:
             raise CaseError(f"{where}: [analysis] '{key}' names contact {ref!r}, not among [output] contacts {names}")
     return case
+
+
+def _labelled(w: str, filled: dict, earlier: list[dict], what: str) -> None:
+    """A [[stages]] or [[loads]] table's optional ``name``: a label, unique among ``earlier``."""
+    if filled["name"] is not None:
+        if not filled["name"].strip() or filled["name"].isdigit() or "." in filled["name"]:
+            raise CaseError(f"{w}: 'name' {filled['name']!r} must be a non-empty label, not a number, without '.'")
+        if any(x["name"] == filled["name"] for x in earlier):
+            raise CaseError(f"{w}: 'name' {filled['name']!r} is already the name of another {what}")
+
+
+def _loads(loads, where: str) -> list[dict]:
+    """The [[loads]] tables filled and checked by their types (drystone/model/loads.py)."""
+    if not isinstance(loads, list):
+        raise CaseError(f"{where}: 'loads' must be an array of tables [[loads]], got {loads!r}")
+    out = []
+    for k, raw in enumerate(loads):
+        w = f"{where} [[loads]] #{k + 1}"
+        if not isinstance(raw, dict) or "type" not in raw:
+            raise CaseError(f"{w}: missing 'type' (one of {sorted(LOAD_TYPES)})")
+        ltype = raw["type"]
+        if ltype not in LOAD_TYPES:
+            raise CaseError(f"{w}: unknown load type {ltype!r}; allowed: {sorted(LOAD_TYPES)}")
+        filled = _fill(w, {key: v for key, v in raw.items() if key != "type"}, LOAD_TYPES[ltype].keys)
+        filled["type"] = ltype
+        LOAD_TYPES[ltype].validate(filled, w)
+        _labelled(w, filled, out, "load")
+        out.append(filled)
+    return out
 
 
 #: generator parameters that name input paths: key -> (what it must be, is it a list)
@@ -374,6 +402,9 @@ def describe() -> str:
     for stype, t in STAGE_TYPES.items():
         for name, k in t.keys.items():
             row(f"[[stages]] type = \"{stype}\"", name, k)
+    for ltype, t in LOAD_TYPES.items():
+        for name, k in t.keys.items():
+            row(f"[[loads]] type = \"{ltype}\"", name, k)
     return "\n".join(lines)
 
 

@@ -23,6 +23,8 @@ from drystone.geometry import blockfile as bf
 from drystone.geometry import generators
 from drystone.geometry import polyhedron as ph
 from drystone.model.spec import SPEC_FORMAT, SPEC_VERSION, Spec, StageSpec, spec_dict  # noqa: F401
+from drystone.model.loads import REGISTRY as LOAD_TYPES
+from drystone.model.loads import LoadContext
 from drystone.model.stages import AXES, REGISTRY, TOWARDS, ResolveContext, initial_relative_velocity  # noqa: F401
 
 
@@ -175,6 +177,21 @@ def _stages(case: dict, bs: bf.BlockSet, dt: float, where: str, out: Path) -> tu
     return stages, ctx.excitations
 
 
+def _loads(case: dict, bs: bf.BlockSet, stages: list[StageSpec], dt: float, where: str, out: Path) -> tuple | None:
+    """The resolved [[loads]] ({type, [name,] params}: each type's ``resolve``,
+    drystone/model/loads.py), or None for a case without loads."""
+    if not case.get("loads"):
+        return None
+    ctx = LoadContext(where=where, out=out, blocks=bs, stages=stages, gravity=case["physics"]["gravity"], dt=dt)
+    out_loads = []
+    for k, load in enumerate(case["loads"]):
+        d = {"type": load["type"], "params": LOAD_TYPES[load["type"]].resolve(load, k, ctx)}
+        if load["name"] is not None:
+            d["name"] = load["name"]
+        out_loads.append(d)
+    return tuple(out_loads)
+
+
 def _collapse_threshold(case: dict, bs: bf.BlockSet) -> dict[str, float]:
     """Per free block (id as a string): the displacement (m) beyond which it has collapsed."""
     cd = case["output"]["collapse_displacement"]
@@ -203,6 +220,7 @@ def resolve(case: dict, where: str, out: Path, check_overlaps: bool = True) -> S
     dt, dt_crit, crit = _time_step(case, bs, blocks, mats, where)
     stages, excitations = _stages(case, bs, dt, where, out)
     timestep.step_count_check(dt, stages[-1].end, where, crit)  # absurd step counts (slivers, kn = 1e300) refused
+    loads = _loads(case, bs, stages, dt, where, out)
     free_areas = [timestep.largest_face_area(b["vertices"]) for b in blocks if b["role"] == "free"]
     return Spec(
         name=case["case"]["name"], out_dir=str(out), law=case["contact"]["law"], detection=detection,
@@ -212,7 +230,7 @@ def resolve(case: dict, where: str, out: Path, check_overlaps: bool = True) -> S
         output={"interval": case["output"]["interval"], "contacts": case["output"]["contacts"]},
         collapse_threshold=_collapse_threshold(case, bs), onset_rate=case["output"]["onset_rate"],
         onset_window_deg=case["output"]["onset_window"], stock_shear_area=float(np.mean(free_areas)),
-        geometry_source=geo_source, excitations=excitations, analysis=case["analysis"])
+        geometry_source=geo_source, excitations=excitations, analysis=case["analysis"], loads=loads)
 
 
 PHYSICS_KEYS = ("law", "detection", "dt", "gravity", "materials", "blocks", "joint_overrides", "forces",
@@ -221,7 +239,7 @@ PHYSICS_KEYS = ("law", "detection", "dt", "gravity", "materials", "blocks", "joi
 
 def fingerprint(spec) -> str:
     """SHA-256 of what a run simulates: geometry, materials, law, time step and the stages
-    (an excitation by the content of its samples, not by its file's path). Two specs with
+    (an excitation by the content of its samples, not by its file's path) and the loads. Two specs with
     the same fingerprint give the same run whatever their names and folders. ``spec``: a
     Spec or a spec.json dict of any version (the same physics gives the same hash)."""
     d = spec_dict(spec)
@@ -235,4 +253,6 @@ def fingerprint(spec) -> str:
         stages.append({"kind": st["type"], "start": st["start"], "end": st["end"], "params": params})
     data = {k: d.get(k) for k in PHYSICS_KEYS}
     data["stages"] = stages
+    if d.get("loads"):  # hashed only where there are loads: the runs before them keep their fingerprint
+        data["loads"] = d["loads"]
     return hashlib.sha256(json.dumps(data, sort_keys=True, default=str).encode()).hexdigest()

@@ -9,7 +9,9 @@ fresh copy: dicts and lists); new code uses the attributes. A changed spec is a 
 
 Versions: 1 named a stage's type ``kind``, 2 names it ``type``, 3 adds a block's
 ``parts`` (a stone of several convex parts; its ``vertices`` are then every part's
-corners, for extents only; a reader of version 2 would take the stone for their hull). Every reader of a spec of
+corners, for extents only; a reader of version 2 would take the stone for their hull), 4
+adds ``loads`` (the resolved [[loads]], drystone/model/loads.py; absent when a case has
+none, so a spec without loads reads as before). Every reader of a spec of
 any version goes through ``upgrade`` (``spec_dict``, ``load_spec``); summary.json's
 ``inputs.stages`` mirror a spec's stages and are read with ``stage_type``. Core layer: no
 YADE, no numpy.
@@ -24,7 +26,7 @@ from pathlib import Path
 from types import MappingProxyType
 
 #: spec.json's format name and version (histories.npz and summary.json carry theirs)
-SPEC_FORMAT, SPEC_VERSION = "drystone-spec", 3
+SPEC_FORMAT, SPEC_VERSION = "drystone-spec", 4
 
 
 class SpecError(ValueError):
@@ -168,6 +170,7 @@ class Spec(_ReadOnlyMapping):
     geometry_source: Mapping  # {file, sha256} or {generator}
     excitations: tuple  # per excitation stage: its samples' metadata
     analysis: Mapping  # the case's [analysis]
+    loads: tuple | None = None  # {type, params} per [[loads]] (drystone/model/loads.py); None: no loads
     provenance: Mapping | None = None  # set by the runner (drystone/provenance.py)
 
     def __post_init__(self):
@@ -180,10 +183,10 @@ class Spec(_ReadOnlyMapping):
     @classmethod
     def from_dict(cls, data: Mapping) -> Spec:
         """A Spec from a spec.json dict of any version (``upgrade``); every key of the
-        current version is required except ``provenance``."""
+        current version is required except ``provenance`` and ``loads``."""
         d = upgrade(data)
         names = cls._fields()
-        missing = [n for n in names if n not in d and n != "provenance"]
+        missing = [n for n in names if n not in d and n not in ("provenance", "loads")]
         unknown = sorted(set(d) - set(names) - set(cls._HEADER))
         if missing or unknown:
             raise SpecError(f"spec {d.get('name', '?')!r}: " + "; ".join(

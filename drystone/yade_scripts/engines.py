@@ -19,6 +19,15 @@ for recording, ``set_velocity`` / ``velocity`` for the stages, ``add_work`` for 
 energy given at once (a velocity jump), ``finish`` (the state written back or read). A new
 engine is one class here and a name in ``ENGINES``.
 
+The case's [[loads]] (drystone/model/loads.py, ``run.loads``: an AppliedLoads or None) act at
+every step in every engine: their coefficients at the step's time (``_loads_at``) times
+their fixed vectors, a force on each loaded body and a moment about its centroid (fixed in
+the platform frame), added to the contact forces (compiled: ``contact_step.applied_wrench``,
+also inside ``advance`` with a coefficient row per step) or given to YADE
+(``O.forces.addF`` / ``addT``: the python and stock engines); their work enters the energy
+balance (``energy.load_work``; the stock law keeps none). Where a load becomes undefined
+(the retained soil's Mononobe-Okabe limit) the driver's ``load_limit`` stops the run.
+
 The energy balance (drystone/mechanics/energy.py) is accumulated at every step by the
 engines with the project's law: ``compiled`` in its compiled step, ``python`` in an
 ``energy.Ledger`` that charges step n when YADE has integrated it (the velocities read at
@@ -121,10 +130,34 @@ class Engine:
     def finish_step(self, g: np.ndarray) -> None:
         """What remains of the step after a sample (an engine that integrates: the motion)."""
 
-    def _applied(self, t: float) -> None:
+    def _applied(self, t: float, g: np.ndarray):
+        """Give YADE this step's applied forces and loads; returns the loads' (force, moment)
+        (nb, 3) or None without loads."""
         for y, f, start, end in self.run.forces:
             if start <= t < end:
                 self.run.O.forces.addF(y, f)
+        c = self._loads_at(t, g)
+        if c is None:
+            return None
+        F, T = self.run.loads.wrench(c)
+        for i in self.run.loads.loaded.tolist():
+            self.run.O.forces.addF(i, yade.Vector3(*F[i]))
+            self.run.O.forces.addT(i, yade.Vector3(*T[i]))
+        return F, T
+
+    def _loads_at(self, t: float, g: np.ndarray) -> np.ndarray | None:
+        """The loads' coefficients (J,) of the step at t (body acceleration g), None without
+        loads. Where a load is undefined the driver stops the run (``load_limit``) and the
+        step keeps the previous step's coefficients."""
+        loads = self.run.loads
+        if loads is None:
+            return None
+        c, bad, why = loads.coefficients(np.array([t]), np.asarray(g, float)[None])
+        if bad is not None:
+            self.run.load_limit(t, why)
+            c = loads.last[None]
+        loads.taken(c, self.run.O.dt)
+        return c[0]
 
     def _external(self, t: float) -> np.ndarray:
         """The applied forces (nb, 3) N at t, on the bodies they act on."""
@@ -191,7 +224,7 @@ class StockEngine(Engine):
 
     def forces(self, t, g):
         self.run.newton.gravity = yade.Vector3(*g)
-        self._applied(t)
+        self._applied(t, g)
 
     def before_sample(self):
         self.read(self.run.moving)
@@ -219,10 +252,13 @@ class NumpyEngine(Engine):
         self.ledger.complete(run.vel, run.angvel)  # the previous step, now that YADE has integrated it
         self.step.step(run.O, (run.pos, run.vel, run.angvel, run.rot))
         self.check_depth()
-        self._applied(t)
+        wrench = self._applied(t, g)
         last = self.step.last
-        self.ledger.begin(run.O.dt, g, last["F"], np.zeros_like(last["F"]), last["Fd"], last["Td"], self._external(t),
-                          self._velocities_before(), run.angvel, last["slip"])
+        F_ext, T_ext = self._external(t), None
+        if wrench is not None:
+            F_ext, T_ext = F_ext + wrench[0], wrench[1]
+        self.ledger.begin(run.O.dt, g, last["F"], np.zeros_like(last["F"]), last["Fd"], last["Td"], F_ext,
+                          self._velocities_before(), run.angvel, last["slip"], T_ext)
 
     def set_velocity(self, i, v):
         if self.ledger.pending:  # the step before was integrated with the velocities YADE holds: charge it first
@@ -287,6 +323,7 @@ class CompiledEngine(Engine):
         self.step = ce.Compiled(run.mass, run.inertia, run.local_v, material, table, joints,
                                 run.shape_size * stability.TUNNEL_FRACTION, run.owner)
         self.F = self.T = self.F_ext = None
+        self.c = None  # the loads' coefficients of the step being taken (None: no loads)
         self._normalise_orientations()
 
     def _normalise_orientations(self):
@@ -365,20 +402,30 @@ class CompiledEngine(Engine):
         if len(ts) == 0:
             return
         g = run.prog.body_acceleration_at(ts)  # bit for bit the per-step values
+        loads = coef = None
+        if run.loads is not None:  # a coefficient row per step; a step where a load is undefined goes through step()
+            coef, bad, _ = run.loads.coefficients(ts, g)
+            if bad is not None:
+                ts, g, coef = ts[:bad], g[:bad], coef[:bad]
+                if len(ts) == 0:
+                    return
+            loads = (coef, run.loads.force, run.loads.moment)
         F_ext = np.zeros_like(run.pos)
         for y, f, start, end in run.forces:
             if start <= ts[0] < end:
                 F_ext[y] += tuple(f)
         t_k = time.perf_counter()
         done, F, T, integrated = self.step.advance(run.pos, run.rot, run.vel, run.angvel, dt, g, F_ext,
-                                                   self._motion() + (run.quat,))
+                                                   self._motion() + (run.quat,), loads)
         run.kernel_time += time.perf_counter() - t_k
         if not integrated:  # stopped on the depth check before integrating step ts[done]
             self.check_depth()
             if run.failure is not None:
                 return
-            self._integrate(dt, g[done], F, T, F_ext)
+            self._integrate(dt, g[done], F, T, F_ext, None if coef is None else coef[done])
             done += 1
+        if coef is not None:
+            run.loads.taken(coef[:done], dt)
         run.g_integral += float(np.sum(np.linalg.norm(g[:done], axis=1))) * dt  # the speed bound
         run.iter += done
         last = ts[done - 1]  # the time of the last step taken
@@ -387,13 +434,15 @@ class CompiledEngine(Engine):
             run.done = True
         run.progress.on_step(run, run.t, run.stage)
 
-    def _integrate(self, dt, g, F, T, F_ext):
-        """One step of the motion (F, T: contact plus applied F_ext), then its energy terms."""
+    def _integrate(self, dt, g, F, T, F_ext, c=None):
+        """One step of the motion (F, T: contact plus applied F_ext, plus the loads' wrench of
+        coefficients ``c``), then its energy terms."""
         run = self.run
         v0, w0 = self._velocities_before(), run.angvel.copy()
         integration.integrate(dt, g, F, T, self.mass_int, self.inertia_int, self.lin_free, self.rot_free, self.aspherical,
                      run.pos, run.vel, run.angvel, self.angmom, run.quat, run.rot)
-        self.step.account(dt, g, F, T, F_ext, self.lin_free, v0, w0, run.vel, run.angvel)
+        loads = None if c is None else (c, run.loads.force, run.loads.moment, self.rot_free)
+        self.step.account(dt, g, F, T, F_ext, self.lin_free, v0, w0, run.vel, run.angvel, loads)
 
     # -- inside a step ---------------------------------------------------------------
     def forces(self, t, g):
@@ -407,10 +456,13 @@ class CompiledEngine(Engine):
             if start <= t < end:
                 self.F[y] += tuple(f)
         self.F_ext = self._external(t)  # for the loads' work
+        self.c = self._loads_at(t, g)
+        if self.c is not None:
+            cs.applied_wrench(self.c, run.loads.force, run.loads.moment, self.F, self.T)
 
     def finish_step(self, g):
         t_k = time.perf_counter()
-        self._integrate(self.run.O.dt, g, self.F, self.T, self.F_ext)
+        self._integrate(self.run.O.dt, g, self.F, self.T, self.F_ext, self.c)
         self.run.kernel_time += time.perf_counter() - t_k
 
     def finish(self):

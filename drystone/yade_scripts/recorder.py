@@ -4,6 +4,9 @@ energies at the half step t - dt/2, where leapfrog velocities live. The energy b
 cumulative terms (J from the run's start; drystone/mechanics/energy.py): ``work_loads``,
 ``dissipated_damping``, ``dissipated_friction``, accumulated by the engine at every step
 up to the same half step; NaN for an engine that cannot account (the stock YADE law).
+A run with [[loads]] also records the loads' total force ``load_force`` (N) and their
+total moment about the platform frame's origin ``load_moment`` (N m, each stone's force at
+its initial centroid plus its moment), as applied at the sample's step.
 """
 from __future__ import annotations
 
@@ -34,6 +37,9 @@ class Recorder:
         self.h = {k: [] for k in ("t", "tilt_deg", "g_eff", "base_acc", "pos", "quat", "vel", "angvel",
                                   "cp", "reaction", "n_contacts", "kinetic", "potential", "elastic",
                                   *energy.TERMS)}
+        if run.loads is not None:
+            self.h.update(load_force=[], load_moment=[])
+            self.centroid0 = run.pos0.copy()  # where the loads' forces act (fixed, drystone/model/loads.py)
         self.hc = {name: {k: [] for k in CONTACT_KEYS} for name, _, _ in self.named}
         self.max_contacts = 0
 
@@ -74,6 +80,10 @@ class Recorder:
         terms = run.engine.energy_terms()
         for k, v in zip(energy.TERMS, terms if terms is not None else (np.nan,) * len(energy.TERMS)):
             h[k].append(v)
+        if run.loads is not None:
+            F, T = run.loads.wrench()
+            h["load_force"].append(F.sum(axis=0))
+            h["load_moment"].append((np.cross(self.centroid0, F) + T).sum(axis=0))
         self._contacts(st, fb)
         return Sample(t, g, ke, ke_b, h["elastic"][-1], st, R)
 

@@ -28,6 +28,7 @@ from yade import log
 from drystone.mechanics import laws, monitors, rotations, stability  # noqa: E402
 from drystone.geometry import polyhedron as ph  # noqa: E402
 from drystone.model.loading import LoadProgramme  # noqa: E402
+from drystone.model.loads import AppliedLoads  # noqa: E402
 from drystone.simulate import ENGINES as REQUESTS  # noqa: E402 (what ENGINE may ask for)
 from drystone.model.spec import Spec, load_spec  # noqa: E402
 from drystone.yade_scripts import scene as sc  # noqa: E402
@@ -71,6 +72,9 @@ class Driver:
         self.moving = np.concatenate([self.dyn, np.array(self.moving_static, int)])  # the bodies read back
         self.forces = [(self.yid[f["block"]], yade.Vector3(*f["force"]), f["start"],
                         f["end"] if f["end"] is not None else np.inf) for f in spec.forces]
+        # the case's [[loads]] over the bodies (a stone's clump body for a multi-part one), or None
+        self.loads = AppliedLoads.from_spec(spec, self.prog, self.yid, nb)
+        self.load_limit_s = None  # when a load reached its limit after the collapse (run_info.json)
         self.engine = engine_class(self)
         self.rec_every = max(1, int(round(spec.output["interval"] / spec.dt)))
         self.steps_total = int(np.ceil(self.prog.end / spec.dt - 1e-9))
@@ -175,6 +179,20 @@ class Driver:
         if m is not None:
             self.monitors = sorted(self.monitors + [m], key=lambda x: x.order)
 
+    def load_limit(self, t, why):
+        """A load is undefined at t (the retained soil's Mononobe-Okabe limit, ``why``): before
+        a collapse the run fails (no result that looks complete); after one it ends with
+        this step (which keeps the loads of the step before)."""
+        if self.collapse is None:
+            self.fail(f"t = {t:.6g} s (tilt {self.prog.tilt_deg(t):.4g} deg): [[loads]]: {why}; the retained soil "
+                      "reached its limit before the wall collapsed: no result")
+        elif self.load_limit_s is None:
+            self.load_limit_s = float(t)
+            print(f"[{self.spec_name}] t = {t:.6g} s: the retained soil reached its limit after the collapse; "
+                  "the run ends here", flush=True)
+            if self.stop_at is None or self.stop_at > t:
+                self.stop_at = t
+
     def fail(self, msg):
         """Stop the run on a failed check: no histories, failure.txt, exit 3."""
         self.failure = msg
@@ -201,6 +219,8 @@ class Driver:
                 "max_contacts": int(self.recorder.max_contacts), "final_contacts": int(self.recorder.h["n_contacts"][-1]),
                 "stopped_early": bool(self.done), "collapse": self.collapse, "velocity_jumps": self.jumps,
                 "settle": None}
+        if self.loads is not None:
+            info["load_limit_s"] = self.load_limit_s
         for m in self.monitors:
             info.update(m.info())
         info.update({"max_contact_omega_dt": float(self.engine.max_omega_dt),
