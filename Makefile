@@ -13,7 +13,8 @@ RUN     := $(PY) -m drystone
 
 .PHONY: setup system-deps test demo run gravity4 settlement4 bench clean help records spectrum ogawa3d ogawa \
         reference sweep tilt tilt-rate tilt-sensitivity tilt-report sacsayhuaman sacsayhuaman-report vtk ogawa-pga readme docs free-decay \
-        fragility fragility-small fragility-report crosscheck shape-study shape-study-small shape-study-report report
+        fragility fragility-small fragility-report crosscheck shape-study shape-study-small shape-study-report \
+        site-study site-study-small site-study-report report
 
 help:
 	@echo "make setup        install Debian's YADE, make .venv, install PyPI dependencies"
@@ -46,6 +47,9 @@ help:
 	@echo "make shape-study [DASK=...]     stone shape: coursed, polygonal, interlocking (multi-part) and split walls of the Sacsayhuaman section's size, 3 seeds: tilt angle + PGA at collapse under 3 records by bisection (cost in results/shape/report.md)"
 	@echo "make shape-study-small          the shape study's pipeline on 2 variants, 1 seed, 1 short record (~1-2 min; not a result)"
 	@echo "make shape-study-report         rewrite results/shape/ from the runs made so far"
+	@echo "make site-study [DASK=...]      retained soil and the site: the Sacsayhuaman section free-standing and retaining soil (ASSUMED): tilt angle, PGA at collapse under 3 records at rock and at the surface of the example profile (bisection), water level at static failure (cost in results/site/report.md)"
+	@echo "make site-study-small           the site study's pipeline on 1 short record, coarse brackets (~2 min; not a result)"
+	@echo "make site-study-report          rewrite results/site/ from the runs made so far"
 	@echo "make crosscheck [XC=all]   LMGC90 (rigid) vs this package: toppling block + half-sine pulse (~3 min); XC=all adds the 40-block wall (~10 min) and the 5 tilt walls (hours); skipped without compas_lmgc90"
 	@echo "make clean        delete results/ and .numba_cache/ (everything the package wrote there)"
 
@@ -174,6 +178,15 @@ shape-study-small: setup
 
 shape-study-report: setup
 	$(PY) -m drystone.studies.shape report --config full
+
+site-study: setup
+	$(PY) -m drystone.studies.site all --config full --workers $(JOBS) $(if $(DASK),--dask $(DASK))
+
+site-study-small: setup
+	$(PY) -m drystone.studies.site all --config small --workers $(JOBS)
+
+site-study-report: setup
+	$(PY) -m drystone.studies.site report --config full
 
 crosscheck: setup
 	$(PY) -m drystone.studies.crosscheck $(or $(XC),small)

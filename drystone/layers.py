@@ -58,7 +58,8 @@ LAYERS = (
           "rocking restitution"),
     Layer(6, "studies", (), ("drystone.studies",), "`drystone/studies/`",
           "the papers and beyond, one package each: `tilt/`, `ogawa/`, `sacsayhuaman/`, `fragility/`, `shape/`, "
-          "`crosscheck/` (LMGC90); `readme_tables.py`"),
+          "`site/`, `crosscheck/` (LMGC90); `rounds.py` (bisection searches as resumable rounds of sweeps), "
+          "`readme_tables.py`"),
 )
 
 

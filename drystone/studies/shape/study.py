@@ -36,11 +36,10 @@ import numpy as np
 
 from drystone import sweep
 from drystone.postprocess import markdown
+from drystone.studies import rounds
 from drystone.studies.shape import bisect
 from drystone.studies.shape import plan as planmod
 
-#: most bisection rounds of one invocation (a search needs at most log2(cap / resolution) + 1)
-MAX_ROUNDS = 30
 #: two variants differ "beyond the seed-to-seed spread" when an exact two-sided permutation
 #: test of their mean (over every split of the pooled seeds) gives p <= this; with 3 seeds
 #: each the smallest p possible is 2 / C(6, 3) = 0.1 (the two sets do not overlap at all)
@@ -68,16 +67,9 @@ def tilt_job(cfg, variant: str, seed: int) -> sweep.Job:
                      str(cfg.results / cfg.tilt_runs / name))
 
 
-def _read_json(p: Path):
-    try:
-        return json.loads(Path(p).read_text())
-    except (OSError, ValueError):
-        return None
-
-
 def _cost(out: Path) -> dict:
-    s = _read_json(out / "summary.json") or {}
-    info = _read_json(out / "run_info.json") or {}
+    s = rounds.read_json(out / "summary.json") or {}
+    info = rounds.read_json(out / "run_info.json") or {}
     return {"simulated_s": info.get("simulated_time_s"), "wall_s": s.get("wall_time_total_s", info.get("wall_time_s")),
             "yade_wall_s": info.get("wall_time_s"), "steps": info.get("steps")}
 
@@ -98,7 +90,7 @@ def seismic_outcome(out: Path) -> dict:
 
 def tilt_outcome(out: Path) -> dict:
     out = Path(out)
-    s = _read_json(out / "summary.json")
+    s = rounds.read_json(out / "summary.json")
     if s is None:
         return {"status": "unreadable", "error": f"{out / 'summary.json'} unreadable"}
     col = s.get("collapse") or {}
@@ -107,44 +99,25 @@ def tilt_outcome(out: Path) -> dict:
             "first_blocks": col.get("first_blocks"), **_cost(out)}
 
 
-def _on_disk(job: sweep.Job, read) -> dict | None:
-    """The outcome of a job from its folder (finished with the same overrides; the inputs'
-    fingerprint is not checked here), a failure, or None (not run)."""
-    d = Path(job.out_dir)
-    if sweep.finished(job):
-        return read(d)
-    if (d / "FAILED.txt").is_file():
-        return {"status": "failed", "error": (d / "FAILED.txt").read_text(errors="replace").splitlines()[0][:300]}
-    return None
-
-
 def searches(cfg, variants=None) -> list[tuple[str, int, str]]:
     cfg = planmod.get(cfg)
     return [(v, s, r) for v in (cfg.variants if variants is None else variants) for s in cfg.seeds
             for r in cfg.records]
 
 
-def replay(cfg, variant: str, seed: int, record: str, outcome) -> dict:
-    """Follow one search's bisection through the outcomes ``outcome(job) -> dict | None``;
-    returns its state: ``status`` done (bracket final), pending (``next`` job to run),
-    failed (a run failed or is unreadable); the bracket and the runs so far."""
+def search(cfg, variant: str, seed: int, record: str) -> rounds.Search:
+    """The bisection search of the PGA at collapse of one wall, seed and record."""
     cfg = planmod.get(cfg)
-    observed, runs = {}, []
-    for _ in range(MAX_ROUNDS):
-        b = bisect.bracket(observed, cfg.pga_low_g, cfg.pga_cap_g, cfg.resolution_g)
-        base = {"variant": variant, "seed": seed, "record": record, "bracket": b.as_dict(), "runs": runs}
-        if b.done:
-            return dict(base, status="done", next=None)
-        job = seismic_job(cfg, variant, seed, record, b.next_g)
-        o = outcome(job)
-        if o is None:
-            return dict(base, status="pending", next=job, next_g=b.next_g)
-        if o["status"] != "done":
-            runs.append(dict(o, name=job.name, pga_g=b.next_g))
-            return dict(base, status="failed", next=None, error=o.get("error"))
-        runs.append(dict(o, name=job.name, pga_g=b.next_g))
-        observed[b.next_g] = o["collapsed"]
-    raise RuntimeError(f"{variant} seed {seed} {record}: no bracket after {MAX_ROUNDS} runs")
+    return rounds.Search({"variant": variant, "seed": seed, "record": record}, cfg.pga_low_g, cfg.pga_cap_g,
+                         cfg.resolution_g, lambda pga: seismic_job(cfg, variant, seed, record, pga),
+                         lambda pga: planmod.seismic_overrides(cfg, variant, seed, record, pga), seismic_outcome)
+
+
+def replay(cfg, variant: str, seed: int, record: str, outcome) -> dict:
+    """Follow one search's bisection through the outcomes ``outcome(job) -> dict | None``
+    (drystone.studies.rounds.follow): ``status`` done, pending or failed, the bracket and
+    the runs so far."""
+    return rounds.follow(search(cfg, variant, seed, record), outcome)
 
 
 def refused_variants(cfg, plan: dict) -> dict[str, str]:
@@ -172,19 +145,12 @@ def _duration(cfg, plan: dict, record: str) -> float:
     return min(d, cfg.record_duration_s) if cfg.record_duration_s else d
 
 
-def _log(cfg, entry: dict) -> None:
-    p = cfg.out_dir / "timing.json"
-    log = _read_json(p) or []
-    log.append(entry)
-    p.write_text(json.dumps(log, indent=1) + "\n")
-
-
 def run(config="full", workers=None, backend="local", address=None) -> dict:
     """Plan, the tilt sweep, then bisection rounds until every search is done or failed
     (module docstring). Returns {"rounds", "runs_run", "interrupted", "refused", "elapsed_s"}."""
     cfg = planmod.get(config)
     t0 = time.time()
-    load0 = _load()
+    load0 = rounds.load_average()
     plan = planmod.build(cfg)
     refused = refused_variants(cfg, plan)
     (cfg.out_dir / "refused.json").write_text(json.dumps(refused, indent=1) + "\n")
@@ -194,66 +160,19 @@ def run(config="full", workers=None, backend="local", address=None) -> dict:
     summary = {"rounds": 0, "runs_run": 0, "runs_reused": 0, "interrupted": False, "refused": refused,
                "failed": [], "workers": workers, "backend": backend, "cores": os.cpu_count(),
                "load_average_start": load0}
-
-    def account(res):
-        for st in res["runs"].values():
-            if st["status"] == "done":
-                summary["runs_run"] += 1
-            elif str(st["status"]).startswith("skipped"):
-                summary["runs_reused"] += 1
-        summary["failed"] += res["failed"]
-        summary["interrupted"] = res["interrupted"]
-
     if cfg.tilt and variants:
         path = planmod.tilt_sweep(cfg, variants)
-        account(sweep.run(path, workers, backend, address, results=cfg.results))
+        rounds.count(summary, sweep.run(path, workers, backend, address, results=cfg.results))
         if summary["interrupted"]:
-            return _finish(cfg, summary, t0)
-    verified: dict[str, dict] = {}
-
-    def outcome(job):
-        return verified.get(job.name)
-
-    for k in range(1, MAX_ROUNDS + 1):
-        states = [replay(cfg, v, s, r, outcome) for v, s, r in searches(cfg, variants)]
-        todo = [st for st in states if st["status"] == "pending"]
-        if not todo:
-            break
-        todo.sort(key=lambda st: -_duration(cfg, plan, st["record"]))  # longest first: a shorter tail
-        runs = [(st["next"].name, planmod.seismic_overrides(cfg, st["variant"], st["seed"], st["record"], st["next_g"]))
-                for st in todo]
-        path = planmod.write_sweep(cfg.out_dir / "rounds" / f"round_{k:02d}.toml", cfg.runs, planmod.RECORD_CASE,
-                                   runs, planmod.common_overrides(cfg),
-                                   f"generated by drystone/studies/shape (config {cfg.name!r}), bisection round {k}: "
-                                   f"the next PGA of {len(runs)} open search(es); do not edit")
-        print(f"[shape] round {k}: {len(runs)} run(s) ({path})", flush=True)
-        res = sweep.run(path, workers, backend, address, results=cfg.results)
-        summary["rounds"] = k
-        account(res)
-        for st in todo:
-            job = st["next"]
-            s = res["runs"].get(job.name, {})
-            if s.get("status") == "done" or str(s.get("status")).startswith("skipped"):
-                verified[job.name] = seismic_outcome(Path(job.out_dir))
-            elif s.get("status") == "failed":
-                verified[job.name] = {"status": "failed", "error": s.get("error", "")[:300]}
-        if summary["interrupted"]:
-            break
-    return _finish(cfg, summary, t0)
-
-
-def _load() -> list | None:
-    try:
-        return [round(x, 2) for x in os.getloadavg()]
-    except OSError:
-        return None
-
-
-def _finish(cfg, summary: dict, t0: float) -> dict:
-    summary["elapsed_s"] = time.time() - t0
-    summary["load_average_end"] = _load()
-    _log(cfg, {"started": time.strftime("%Y-%m-%dT%H:%M:%S", time.localtime(t0)), **summary})
-    return summary
+            return rounds.finish(cfg.out_dir, summary, t0)
+    summary["rounds"] = rounds.run_rounds(
+        [search(cfg, v, s, r) for v, s, r in searches(cfg, variants)], rounds_dir=cfg.out_dir / "rounds",
+        prefix="round_", sweep_name=cfg.runs, case=planmod.RECORD_CASE, common=planmod.common_overrides(cfg),
+        label=f"drystone/studies/shape (config {cfg.name!r})", summary=summary, workers=workers, backend=backend,
+        address=address, results=cfg.results,
+        order=lambda st: -_duration(cfg, plan, st["record"]),  # longest first: a shorter tail
+        log=lambda m: print(m, flush=True))
+    return rounds.finish(cfg.out_dir, summary, t0)
 
 
 # --- collect and compare ----------------------------------------------------------------------------------
@@ -261,14 +180,14 @@ def collect(config="full") -> dict:
     """Every search replayed from the runs on disk, and every tilt run."""
     cfg = planmod.get(config)
     plan = planmod.load_plan(cfg)
-    refused = _read_json(cfg.out_dir / "refused.json") or {}
+    refused = rounds.read_json(cfg.out_dir / "refused.json") or {}
     out = {"searches": [], "tilt": []}
     for v, s, r in searches(cfg):
         if v in refused:
             out["searches"].append({"variant": v, "seed": s, "record": r, "status": "refused", "runs": [],
                                     "bracket": None, "error": refused[v]})
             continue
-        out["searches"].append(replay(cfg, v, s, r, lambda j: _on_disk(j, seismic_outcome)))
+        out["searches"].append(replay(cfg, v, s, r, lambda j: rounds.on_disk(j, seismic_outcome)))
     if cfg.tilt:
         for v in cfg.variants:
             for s in cfg.seeds:
@@ -276,7 +195,7 @@ def collect(config="full") -> dict:
                 if v in refused:
                     row.update(status="refused", error=refused[v])
                 else:
-                    o = _on_disk(tilt_job(cfg, v, s), tilt_outcome)
+                    o = rounds.on_disk(tilt_job(cfg, v, s), tilt_outcome)
                     row.update(o if o is not None else {"status": "pending"})
                 out["tilt"].append(row)
     for st in out["searches"]:
@@ -559,8 +478,8 @@ def report(config="full") -> Path:
     ms = measures(data, cfg)
     cmp = compare(ms, cfg)
     c = costs(data)
-    timing = _read_json(cfg.out_dir / "timing.json") or []
-    refused = _read_json(cfg.out_dir / "refused.json") or {}
+    timing = rounds.read_json(cfg.out_dir / "timing.json") or []
+    refused = rounds.read_json(cfg.out_dir / "refused.json") or {}
     fig = figure(data, ms, cfg, cfg.out_dir / "shape.png")
     write_csv(data, cfg.out_dir / "runs.csv")
     status = {s: sum(st["status"] == s for st in data["searches"]) for s in ("done", "pending", "failed", "refused")}
