@@ -233,7 +233,7 @@ def _as_site(cfg) -> Path:
 @pytest.mark.yade
 @pytest.mark.slow
 def test_small_study_end_to_end(outdir):
-    """The small plan (ancash1970 cut to 3 s, coarse brackets and the retained wall's finer
+    """The small plan (ancash1970 cut to 1.5 s, coarse brackets and the retained wall's finer
     ones, both walls, rock and surface, tilt, dry and water static runs): every search ends, the report's tables carry what the
     runs on disk say (brackets replayed from the runs; surface PGAs from each run's
     spec.json), every run is in runs.csv; run again, every run is reused (about 2 min on 2

@@ -119,12 +119,18 @@ def write_sweep(path: Path, name: str, case: Path, runs: list, common: list, hea
 
 def count(summary: dict, res: dict) -> None:
     """Add a sweep's result (drystone.sweep.run) to a study's running ``summary``: runs run,
-    reused, failed, interrupted."""
-    for st in res["runs"].values():
+    reused, failed, interrupted. A run that several sweeps of one invocation list (a bracket's
+    end that a finer search reuses) counts once (``runs_seen``: the names counted so far)."""
+    seen = summary.setdefault("runs_seen", [])
+    for name, st in res["runs"].items():
+        if name in seen:
+            continue
         if st["status"] == "done":
             summary["runs_run"] += 1
+            seen.append(name)
         elif str(st["status"]).startswith("skipped"):
             summary["runs_reused"] += 1
+            seen.append(name)
     summary["failed"] += res["failed"]
     summary["interrupted"] = res["interrupted"]
 
@@ -186,7 +192,8 @@ def finish(out_dir: Path, summary: dict, t0: float) -> dict:
     summary["load_average_end"] = load_average()
     p = Path(out_dir) / "timing.json"
     log = read_json(p) or []
-    log.append({"started": time.strftime("%Y-%m-%dT%H:%M:%S", time.localtime(t0)), **summary})
+    log.append({"started": time.strftime("%Y-%m-%dT%H:%M:%S", time.localtime(t0)),
+                **{k: v for k, v in summary.items() if k != "runs_seen"}})
     p.write_text(json.dumps(log, indent=1) + "\n")
     return summary
 

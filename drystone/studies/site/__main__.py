@@ -8,7 +8,7 @@ run      plan, the tilt runs, the retained wall's static runs (dry, then the wat
 report   every search replayed from the runs on disk -> site.json, runs.csv, site.png, spectra.png,
          report.md, report.html
 all      run, then report
---config small: 1 record cut to 3 s, coarse brackets (results/site_small/): a pipeline check, not a result."""
+--config small: 1 record cut to 1.5 s, coarse brackets (results/site_small/): a pipeline check, not a result."""
 from __future__ import annotations
 
 from drystone.studies import rounds
