@@ -286,15 +286,8 @@ def validate(raw: dict, where: str, base_dir: Path, stem: str = "case", sweep_ru
     case["stages"] = []
     for k, s in enumerate(stages):
         w = f"{where} [[stages]] #{k + 1}"
-        if not isinstance(s, dict) or "type" not in s:
-            raise CaseError(f"{w}: missing 'type' (one of {sorted(types)})")
-        stype = s["type"]
-        if stype not in types:
-            raise CaseError(f"{w}: unknown stage type {stype!r}; allowed: {sorted(types)}")
-        body = {key: v for key, v in s.items() if key != "type"}
-        filled = _fill(w, body, types[stype].keys)
-        filled["type"] = stype
-        types[stype].validate(filled, w, last=k == len(stages) - 1, base_dir=base_dir)
+        filled = _typed(w, s, types, "stage")
+        types[filled["type"]].validate(filled, w, last=k == len(stages) - 1, base_dir=base_dir)
         _labelled(w, filled, case["stages"], "stage")
         case["stages"].append(filled)
     names = [c["name"] for c in case["output"]["contacts"]]
@@ -303,6 +296,19 @@ def validate(raw: dict, where: str, base_dir: Path, stem: str = "case", sweep_ru
         if ref is not None and ref not in names:
             raise CaseError(f"{where}: [analysis] '{key}' names contact {ref!r}, not among [output] contacts {names}")
     return case
+
+
+def _typed(w: str, raw, types: dict, what: str) -> dict:
+    """A [[stages]] or [[loads]] table filled with its type's keys (``types``: a registry of
+    classes with ``keys``); a missing or unknown ``type`` refused, naming the table."""
+    if not isinstance(raw, dict) or "type" not in raw:
+        raise CaseError(f"{w}: missing 'type' (one of {sorted(types)})")
+    kind = raw["type"]
+    if kind not in types:
+        raise CaseError(f"{w}: unknown {what} type {kind!r}; allowed: {sorted(types)}")
+    filled = _fill(w, {key: v for key, v in raw.items() if key != "type"}, types[kind].keys)
+    filled["type"] = kind
+    return filled
 
 
 def _labelled(w: str, filled: dict, earlier: list[dict], what: str) -> None:
@@ -321,14 +327,8 @@ def _loads(loads, where: str) -> list[dict]:
     out = []
     for k, raw in enumerate(loads):
         w = f"{where} [[loads]] #{k + 1}"
-        if not isinstance(raw, dict) or "type" not in raw:
-            raise CaseError(f"{w}: missing 'type' (one of {sorted(LOAD_TYPES)})")
-        ltype = raw["type"]
-        if ltype not in LOAD_TYPES:
-            raise CaseError(f"{w}: unknown load type {ltype!r}; allowed: {sorted(LOAD_TYPES)}")
-        filled = _fill(w, {key: v for key, v in raw.items() if key != "type"}, LOAD_TYPES[ltype].keys)
-        filled["type"] = ltype
-        LOAD_TYPES[ltype].validate(filled, w)
+        filled = _typed(w, raw, LOAD_TYPES, "load")
+        LOAD_TYPES[filled["type"]].validate(filled, w)
         _labelled(w, filled, out, "load")
         out.append(filled)
     return out
