@@ -85,10 +85,14 @@ def housner_restitution(b: float = B, h: float = H) -> float:
 
 def rocking_energy(theta, b: float = B, h: float = H, mass: float = 1.0, g: float = G):
     """Rocking energy (J, for ``mass`` kg) of a rigid block at rest tilted by |theta| (rad)
-    on a corner: the rise of its centroid above the upright position times m g."""
+    on a corner: the rise of its centroid above the upright position times m g,
+    R (cos(alpha - theta) - cos(alpha)) written as 2 R sin(alpha - theta/2) sin(theta/2): no
+    cancellation near theta = 0, and exactly 0 there on any processor (sin(0) = 0 in every
+    implementation, where numpy's cos and the C library's may differ in the last bit)."""
     a = alpha(b, h)
     R = 0.5 * math.hypot(b, h)
-    return mass * g * R * (np.cos(a - np.abs(np.asarray(theta, float))) - math.cos(a))
+    half = 0.5 * np.abs(np.asarray(theta, float))
+    return mass * g * R * 2.0 * np.sin(a - half) * np.sin(half)
 
 
 def frequency_parameter(b: float = B, h: float = H, g: float = G) -> float:
