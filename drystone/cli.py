@@ -8,6 +8,7 @@ import signal
 import sys
 from pathlib import Path
 
+from drystone import atomic
 from drystone.model import case as casemod
 
 
@@ -98,7 +99,7 @@ def main(argv=None) -> int:
                                   if a.cmd == "keys" else
                                   (layers.readme_block, layers.readme_with_layout, paths.DOCS / "maintainers-guide.md"))
             if a.update_docs:
-                p.write_text(into_doc(p.read_text()))
+                atomic.write_text(p, into_doc(p.read_text()))
                 print(f"updated {p}")
             else:
                 print(table())

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from drystone import atomic
 from drystone.mechanics.contact import DETECTIONS
 from drystone.postprocess import markdown
 from drystone.units import GRAVITY as G  # the runs' gravity (the case default), m/s^2
@@ -132,7 +133,7 @@ def report(out: Path | None = None, dampings=(0.05, 0.3)) -> Path:
     data = {"frequencies_hz": freqs, "rows": rows, "block_m": [B, D, H], "density": RHO, "kn": KN, "kt": KT,
             "package_version": drystone.__version__, "git": provenance.git_commit(),
             "yade": provenance.yade_version(), "restitution": rest_data}
-    (out / "free_decay.json").write_text(json.dumps(data, indent=1))
+    atomic.write_text(out / "free_decay.json", json.dumps(data, indent=1))
     lines = ["# Free decay of one block: damping ratio per mode (logarithmic decrement)", "",
              f"Block {B} x {D} x {H} m, {RHO:g} kg/m^3, K_n {KN:g}, K_t {KT:g} N/m^3 on the platform "
              "(drystone/free_decay.py). Modes: bouncing "

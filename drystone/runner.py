@@ -13,6 +13,7 @@ import time
 from pathlib import Path
 
 import drystone
+from drystone import atomic
 from drystone.model import case as casemod
 from drystone import paths, provenance
 from drystone.model.resolve import AXES, TOWARDS, fingerprint, initial_relative_velocity, resolve  # noqa: F401
@@ -97,5 +98,5 @@ def resummarise(out) -> dict:
 def run_dict(case_dict: dict, case_path: Path, overrides=None, **kw) -> dict:
     """Write a case dict as a TOML file and run it (used by tests, sweeps and bench)."""
     case_path = Path(case_path)
-    case_path.write_text(to_toml(case_dict))
+    atomic.write_text(case_path, to_toml(case_dict))
     return run(case_path, overrides, **kw)

@@ -45,6 +45,7 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from drystone import atomic
 from drystone.model import case as casemod
 from drystone import inputfiles, paths, tomlio
 from drystone.simulate import is_run_folder
@@ -259,7 +260,7 @@ def run_job(job: Job) -> dict:
     except Exception as exc:  # noqa: BLE001 - one failed run must not stop the sweep
         msg = f"{type(exc).__name__}: {exc}\n\n{traceback.format_exc()}"
         out.mkdir(parents=True, exist_ok=True)
-        (out / "FAILED.txt").write_text(msg)
+        atomic.write_text(out / "FAILED.txt", msg)
         return {"name": job.name, "status": "failed", "wall_s": time.time() - t0, "error": str(exc)[-2000:],
                 "log": str(runner.staging_folder(out) / "log.txt")}
     except BaseException:  # SIGTERM from the sweep (_worker_init): the run has killed its YADE
@@ -372,10 +373,8 @@ def run(path, workers: int | None = None, backend: str = "local", dask_address: 
 
 
 def _write_status(root: Path, name: str, path, status: dict) -> None:
-    tmp = root / "sweep.tmp.json"
-    tmp.write_text(json.dumps({"sweep": name, "file": str(Path(path).resolve()), "runs": list(status.values())},
-                              indent=1, default=str))
-    os.replace(tmp, root / "sweep.json")
+    atomic.write_text(root / "sweep.json", json.dumps({"sweep": name, "file": str(Path(path).resolve()),
+                                                       "runs": list(status.values())}, indent=1, default=str))
 
 
 def _execute(jobs: list[Job], workers: int, backend: str, address: str | None):

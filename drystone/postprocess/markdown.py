@@ -17,6 +17,7 @@ import html as _html
 import re
 from pathlib import Path
 
+from drystone import atomic
 from drystone.postprocess.html import MIME, data_uri, esc, page
 
 _FENCE = re.compile(r"^\s*(```|~~~)")
@@ -218,6 +219,6 @@ def write(md_path: Path, text: str) -> Path:
     beside it (same name, ``.html``; images embedded from the same folder); returns
     ``md_path``, as the studies returned it."""
     md_path = Path(md_path)
-    md_path.write_text(text)
-    md_path.with_suffix(".html").write_text(html_page(text, md_path.parent))
+    atomic.write_text(md_path, text)
+    atomic.write_text(md_path.with_suffix(".html"), html_page(text, md_path.parent))
     return md_path

@@ -16,6 +16,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from drystone import atomic  # noqa: E402
 from drystone.postprocess import summary as summ  # noqa: E402
 from drystone.model.spec import stage_type  # noqa: E402
 
@@ -39,7 +40,7 @@ def contact_forces(spec: dict, h: dict, name: str, path: Path, slip: dict | None
     ax.legend(loc="best", fontsize=8)
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    atomic.savefig(fig, path, dpi=120)
     plt.close(fig)
     return path
 
@@ -62,7 +63,7 @@ def penetration_history(spec: dict, h: dict, name: str, path: Path) -> Path:
     ax.set_title(f"{spec['name']}: relative normal displacement at contact {name}")
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    atomic.savefig(fig, path, dpi=120)
     plt.close(fig)
     return path
 
@@ -89,7 +90,7 @@ def reaction(spec: dict, h: dict, path: Path, collapse: dict | None) -> Path:
         a2.axvline(collapse["angle_deg"], color="r", ls="--", lw=0.8)
         a2.set_title(f"collapse at {collapse['angle_deg']:.2f} deg", fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    atomic.savefig(fig, path, dpi=120)
     plt.close(fig)
     return path
 
@@ -104,7 +105,7 @@ def control_points(h: dict, path: Path) -> Path:
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    atomic.savefig(fig, path, dpi=120)
     plt.close(fig)
     return path
 

@@ -28,6 +28,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from drystone import atomic  # noqa: E402
 from drystone.model.spec import stage_type  # noqa: E402
 from drystone.postprocess import console, markdown, plots, snapshots  # noqa: E402
 from drystone.postprocess import summary as summ  # noqa: E402
@@ -299,7 +300,7 @@ def energy_figure(h: dict, path: Path, spec: dict) -> Path | None:
     a2.set_title("kinetic and elastic" + (" and the balance" if bal is not None else "") + ", on their own scale",
                  fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=ENERGY_DPI)
+    atomic.savefig(fig, path, dpi=ENERGY_DPI)
     plt.close(fig)
     return Path(path)
 
@@ -414,11 +415,11 @@ def write(run_dir: Path) -> Path:
     if d.is_dir() and not (d / "spec.json").exists() and (d / "report.md").is_file():  # a study's folder
         md = d / "report.md"
         out = md.with_suffix(".html")
-        out.write_text(markdown.html_page(md.read_text(), d))
+        atomic.write_text(out, markdown.html_page(md.read_text(), d))
         return out
     text = build_html(d)
     out = d / "report.html"
-    out.write_text(text)
+    atomic.write_text(out, text)
     return out
 
 

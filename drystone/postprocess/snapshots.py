@@ -27,6 +27,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.collections import PolyCollection  # noqa: E402
 
+from drystone import atomic  # noqa: E402
 from drystone.mechanics import rotations  # noqa: E402
 from drystone.geometry import polyhedron as ph  # noqa: E402
 from drystone.model.loading import LoadProgramme, Stage  # noqa: E402
@@ -266,7 +267,7 @@ def render(out: Path, times: list[float], path: Path, world: bool = True, elev: 
     spans every frame's blocks but the platform, or with ``frame_on_first`` the first
     frame's (so that stones thrown far after a collapse do not shrink the wall to a dot)."""
     fig = figure(out, times, world, elev, azim, titles, frame_on_first)
-    fig.savefig(path, dpi=DPI)
+    atomic.savefig(fig, path, dpi=DPI)
     plt.close(fig)
     return Path(path)
 
@@ -329,6 +330,6 @@ def elevation(block_file: Path, path: Path) -> Path:
     ax.set_title(f"{d.get('name', '')}: fixed (grey), side blocks with blocked DOFs (dark), control points (red)",
                  fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    atomic.savefig(fig, path, dpi=110)
     plt.close(fig)
     return Path(path)

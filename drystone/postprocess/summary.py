@@ -13,11 +13,11 @@ collapsed and its motion is ``unbounded``: no residual, maximum or rotation is g
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 
 import numpy as np
 
+from drystone import atomic
 from drystone.mechanics import collapse, rotations, stability
 from drystone.model.spec import spec_dict, stage_type
 
@@ -449,12 +449,9 @@ def write(summary: dict, out: Path) -> Path:
     """Write summary.json atomically (it is the marker of a complete run). A non-finite
     number raises ValueError naming it (JSON has no NaN or Infinity)."""
     p = Path(out) / "summary.json"
-    tmp = p.with_suffix(".tmp")
     try:
         text = json.dumps(summary, indent=1, default=float, allow_nan=False)
     except ValueError:
         raise ValueError(f"{p}: the summary has non-finite numbers ({', '.join(_non_finite_keys(summary)[:10])}); "
                          "not written") from None
-    tmp.write_text(text)
-    os.replace(tmp, p)
-    return p
+    return atomic.write_text(p, text)

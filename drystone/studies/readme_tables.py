@@ -54,6 +54,7 @@ import re
 import sys
 from pathlib import Path
 
+from drystone import atomic
 from drystone import paths
 
 #: a marked block: the begin and end comments each on a line of their own
@@ -391,7 +392,7 @@ def main(argv=None) -> int:
         if new != old:
             changed.append(path)
             if not a.check:
-                path.write_text(new)
+                atomic.write_text(path, new)
                 print(f"written {path}")
     for name in unplaced(texts):
         shown = ", ".join(str(p.relative_to(paths.ROOT)) if p.is_relative_to(paths.ROOT) else str(p) for p in files)

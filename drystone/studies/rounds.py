@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
+from drystone import atomic
 from drystone import paths, sweep, tomlio
 from drystone.studies.shape import bisect
 
@@ -105,9 +106,7 @@ def write_if_changed(path: Path, text: str) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     if not path.exists() or path.read_text() != text:
-        tmp = path.with_suffix(".tmp")
-        tmp.write_text(text)
-        os.replace(tmp, path)
+        atomic.write_text(path, text)
     return path
 
 
@@ -194,7 +193,7 @@ def finish(out_dir: Path, summary: dict, t0: float) -> dict:
     log = read_json(p) or []
     log.append({"started": time.strftime("%Y-%m-%dT%H:%M:%S", time.localtime(t0)),
                 **{k: v for k, v in summary.items() if k != "runs_seen"}})
-    p.write_text(json.dumps(log, indent=1) + "\n")
+    atomic.write_text(p, json.dumps(log, indent=1) + "\n")
     return summary
 
 

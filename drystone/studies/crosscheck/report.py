@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from drystone import atomic
 from drystone.postprocess import markdown
 from drystone.studies.crosscheck import VERSION, cases, engine, study, translate
 
@@ -135,7 +136,7 @@ def figure(entry, path: Path) -> Path | None:
         ax2.set_axis_off()
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
+    atomic.savefig(fig, path)
     plt.close(fig)
     return path
 

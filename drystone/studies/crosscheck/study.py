@@ -15,6 +15,7 @@ import shutil
 import time
 from pathlib import Path
 
+from drystone import atomic
 from drystone import paths
 from drystone.studies.crosscheck import VERSION, cases, lmgc90, package
 
@@ -34,9 +35,7 @@ def save(data: dict, out: Path = OUT) -> Path:
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     p = out / JSON
-    tmp = p.with_suffix(".tmp")
-    tmp.write_text(json.dumps(data, indent=1, default=_jsonable))
-    tmp.replace(p)
+    atomic.write_text(p, json.dumps(data, indent=1, default=_jsonable))
     return p
 
 

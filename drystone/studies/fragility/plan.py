@@ -54,6 +54,7 @@ from pathlib import Path
 
 import numpy as np
 
+from drystone import atomic
 from drystone import paths, tomlio
 from drystone.studies.rounds import write_if_changed
 
@@ -280,9 +281,9 @@ def write(cfg: Config | str, out_dir: Path | None = None, records_dir: Path = RE
     text = tomlio.sweep_file(cfg.sweep_name, os.path.relpath(CASE, out), runs, plan["common_overrides"], header)
     path = out / "plan.toml"
     if not path.exists() or path.read_text() != text:
-        path.write_text(text)
+        atomic.write_text(path, text)
     plan["sweep_file"] = str(path)
-    (out / "plan.json").write_text(json.dumps(plan, indent=1) + "\n")
+    atomic.write_text(out / "plan.json", json.dumps(plan, indent=1) + "\n")
     return path
 
 

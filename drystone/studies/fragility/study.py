@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+from drystone import atomic
 from drystone import paths, sweep
 from drystone.postprocess import markdown
 from drystone.studies.fragility import fit as fitmod
@@ -282,7 +283,7 @@ def cost(rows: list[dict], reference: list[dict] | None = None) -> dict:
 
 # --- outputs ----------------------------------------------------------------------------------------------
 def write_csv(rows: list[dict], path: Path) -> Path:
-    with open(path, "w", newline="") as fh:
+    with atomic.aside(path) as _tmp, open(_tmp, "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=CSV_FIELDS, extrasaction="ignore")
         w.writeheader()
         for r in rows:
@@ -328,7 +329,7 @@ def figure(states: dict, path: Path) -> Path:
     np.atleast_1d(axes)[0].set_ylabel("P(DS reached | PGA)")
     fig.tight_layout()
     Path(path).parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
+    atomic.savefig(fig, path, dpi=120)
     plt.close(fig)
     return Path(path)
 
@@ -375,7 +376,7 @@ def figure_measures(im: dict, rows: list[dict], path: Path) -> Path:
     np.atleast_1d(axes)[0].set_ylabel("P(DS reached | IM); markers: runs (1 reached, 0 not)")
     fig.tight_layout()
     Path(path).parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
+    atomic.savefig(fig, path, dpi=120)
     plt.close(fig)
     return Path(path)
 
@@ -461,7 +462,7 @@ def fit_step(config="full", out_dir: Path | None = None, results: Path | None = 
                               for n, lab, t in DAMAGE_STATES},
             "runs": counts, "planned_runs": len(rows), "fits": states,
             "intensity_measures": dict(fit_measures(rows, cfg.n_boot, cfg.seed), t1=t1), "cost": cost(rows)}
-    (out / "fragility.json").write_text(json.dumps(data, indent=1, default=str) + "\n")
+    atomic.write_text(out / "fragility.json", json.dumps(data, indent=1, default=str) + "\n")
     write_csv(rows, out / "runs.csv")
     return dict(data, rows=rows)
 

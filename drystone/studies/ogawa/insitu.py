@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from drystone import atomic
 from drystone import paths
 
 DATA = paths.DATA / "ogawa"
@@ -76,6 +77,6 @@ def figure(path: Path) -> Path:
     ax.grid(alpha=0.3, which="both")
     fig.tight_layout()
     Path(path).parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
+    atomic.savefig(fig, path, dpi=120)
     plt.close(fig)
     return Path(path)

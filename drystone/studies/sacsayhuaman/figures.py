@@ -12,6 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from drystone import atomic  # noqa: E402
 from drystone.studies.sacsayhuaman import analysis as an  # noqa: E402
 
 
@@ -27,7 +28,7 @@ def _frame_wall(ax) -> None:
 def _save(fig, path) -> Path:
     """Save as PNG (120 dpi) and close."""
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    atomic.savefig(fig, path, dpi=120)
     plt.close(fig)
     return Path(path)
 
@@ -123,7 +124,7 @@ def final_states(rows: list[dict], key: str, path: Path) -> Path:
         ax.axis("off")
     sm = plt.cm.ScalarMappable(norm=norm, cmap=cmap)
     fig.colorbar(sm, ax=axes.ravel().tolist(), shrink=0.8, label="out-of-plane residual (mm); red: collapsed")
-    fig.savefig(path, dpi=110)
+    atomic.savefig(fig, path, dpi=110)
     plt.close(fig)
     return Path(path)
 
@@ -251,6 +252,6 @@ def mode_shapes(modal: dict, run: Path, path: Path, n: int = 6) -> Path:
         ax.axis("off")
     sm = plt.cm.ScalarMappable(norm=plt.Normalize(-1, 1), cmap=cmap)
     fig.colorbar(sm, ax=axes.ravel().tolist(), shrink=0.8, label="out-of-plane modal displacement (normalised)")
-    fig.savefig(path, dpi=110)
+    atomic.savefig(fig, path, dpi=110)
     plt.close(fig)
     return Path(path)

@@ -56,6 +56,7 @@ from pathlib import Path
 
 import numpy as np
 
+from drystone import atomic
 from drystone import paths, tomlio
 from drystone.studies.rounds import StudyFolders, write_if_changed, write_sweep
 
@@ -386,7 +387,7 @@ def build(cfg: Config) -> dict:
             "common_overrides": common_overrides(cfg)}
     if cfg.tilt:
         plan["tilt_sweep"] = str(tilt_sweep(cfg))
-    (cfg.out_dir / "plan.json").write_text(json.dumps(plan, indent=1) + "\n")
+    atomic.write_text(cfg.out_dir / "plan.json", json.dumps(plan, indent=1) + "\n")
     return plan
 
 

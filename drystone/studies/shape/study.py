@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from drystone import atomic
 from drystone import sweep
 from drystone.postprocess import markdown
 from drystone.studies import rounds
@@ -153,7 +154,7 @@ def run(config="full", workers=None, backend="local", address=None) -> dict:
     load0 = rounds.load_average()
     plan = planmod.build(cfg)
     refused = refused_variants(cfg, plan)
-    (cfg.out_dir / "refused.json").write_text(json.dumps(refused, indent=1) + "\n")
+    atomic.write_text(cfg.out_dir / "refused.json", json.dumps(refused, indent=1) + "\n")
     for v, why in refused.items():
         print(f"[shape] variant {v} left out: {why}", flush=True)
     variants = [v for v in cfg.variants if v not in refused]
@@ -311,7 +312,7 @@ def compare(ms: dict, cfg) -> dict:
 
 # --- outputs ----------------------------------------------------------------------------------------------
 def write_csv(data: dict, path: Path) -> Path:
-    with open(path, "w", newline="") as fh:
+    with atomic.aside(path) as _tmp, open(_tmp, "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=CSV_FIELDS, extrasaction="ignore")
         w.writeheader()
         for r in data["tilt"]:
@@ -386,7 +387,7 @@ def figure(data: dict, ms: dict, cfg, path: Path) -> Path:
         ax.grid(alpha=0.3)
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
+    atomic.savefig(fig, path, dpi=120)
     plt.close(fig)
     return path
 
@@ -483,7 +484,7 @@ def report(config="full") -> Path:
     fig = figure(data, ms, cfg, cfg.out_dir / "shape.png")
     write_csv(data, cfg.out_dir / "runs.csv")
     status = {s: sum(st["status"] == s for st in data["searches"]) for s in ("done", "pending", "failed", "refused")}
-    (cfg.out_dir / "shape.json").write_text(json.dumps(
+    atomic.write_text(cfg.out_dir / "shape.json", json.dumps(
         {"config": plan["config"], "searches": data["searches"], "tilt": data["tilt"], "measures": ms,
          "comparisons": cmp, "cost": c, "timing": timing, "refused": refused, "status": status},
         indent=1, default=str) + "\n")

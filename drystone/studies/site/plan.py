@@ -42,6 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
+from drystone import atomic
 from drystone import paths, tomlio
 from drystone.studies.rounds import StudyFolders, write_if_changed, write_sweep
 from drystone.studies.shape import bisect
@@ -251,7 +252,7 @@ def build(cfg: Config, walls=None) -> dict:
             "records": records, "caps": caps, "common_overrides": common_overrides(cfg)}
     if cfg.tilt:
         plan["tilt_sweeps"] = [str(p) for p in tilt_sweep(cfg, walls)]
-    (cfg.out_dir / "plan.json").write_text(json.dumps(plan, indent=1, default=str) + "\n")
+    atomic.write_text(cfg.out_dir / "plan.json", json.dumps(plan, indent=1, default=str) + "\n")
     return plan
 
 

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from drystone import atomic
 from drystone.postprocess import markdown
 from drystone.studies import rounds
 from drystone.studies.shape import study as shape_study
@@ -231,7 +232,7 @@ def write_csv(data: dict, path: Path) -> Path:
     rows += [{"kind": "static", "wall": "retained", **r} for r in (data.get("water") or {}).get("runs", [])]
     rows += [{"kind": "seismic", **{k: s[k] for k in ("wall", "site", "record", "polarity")}, **r}
              for s, r in unique_runs(data["searches"])]
-    with open(path, "w", newline="") as fh:
+    with atomic.aside(path) as _tmp, open(_tmp, "w", newline="") as fh:
         wr = csv.DictWriter(fh, fieldnames=CSV_FIELDS, extrasaction="ignore")
         wr.writeheader()
         for r in rows:
@@ -271,7 +272,7 @@ def _save(fig, path: Path, dpi: int = 110) -> Path:
 
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=dpi)
+    atomic.savefig(fig, path, dpi=dpi)
     plt.close(fig)
     return path
 
@@ -363,7 +364,7 @@ def write(config="full") -> Path:
     status = {s: sum(st["status"] == s for st in data["searches"]) for s in ("done", "pending", "failed")}
     check = hand.summary() if "retained" in walls else None
     consistency = shape_check(data, cfg)
-    (cfg.out_dir / "site.json").write_text(json.dumps(
+    atomic.write_text(cfg.out_dir / "site.json", json.dumps(
         {"config": plan["config"], "walls": walls, "refused": data["refused"], "searches": data["searches"],
          "tilt": data["tilt"], "static": data["static"], "water": data["water"], "spectra": sp, "cost": c,
          "timing": timing, "status": status, "hand_check": check}, indent=1, default=str) + "\n")

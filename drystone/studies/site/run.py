@@ -26,6 +26,7 @@ import os
 import time
 from pathlib import Path
 
+from drystone import atomic
 from drystone import sweep
 from drystone.studies import rounds
 from drystone.studies.shape import study as shape_study
@@ -148,7 +149,7 @@ def run(config="full", workers=None, backend="local", address=None) -> dict:
     t0 = time.time()
     planmod.write_records(cfg)  # the runs validated next read them
     refused = refused_walls(cfg)
-    (cfg.out_dir / "refused.json").write_text(json.dumps(refused, indent=1) + "\n")
+    atomic.write_text(cfg.out_dir / "refused.json", json.dumps(refused, indent=1) + "\n")
     for w, why in refused.items():
         print(f"[site] wall {w} left out: {why}", flush=True)
     walls = [w for w in cfg.walls if w not in refused]

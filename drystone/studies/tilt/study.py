@@ -31,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from drystone import atomic
 from drystone import paths
 from drystone.postprocess import compare, markdown
 from drystone.model.spec import stage_type
@@ -348,7 +349,7 @@ def reaction_figure(rows: list[dict], path: Path) -> Path | None:
     fig.suptitle("Tilt-table walls: vertical reaction on the platform and fixed course (cf. paper Fig. 13)",
                  fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    atomic.savefig(fig, path, dpi=120)
     plt.close(fig)
     return Path(path)
 
@@ -419,7 +420,7 @@ def build(seeds=None, rate=None, sensitivity=None, out: Path = OUT, figures: boo
             summary["figures"].append(str(f))
         show = next((r for r in rate_rows if r["finished"]), done[0])
         summary["figures"].append(str(snapshot_figure(show, out / "snapshots.png")))
-    (out / "summary.json").write_text(json.dumps(summary, indent=1, default=_json_default))
+    atomic.write_text(out / "summary.json", json.dumps(summary, indent=1, default=_json_default))
     markdown.write(out / "report.md", report_md(summary))  # and report.html beside it
     return summary
 
