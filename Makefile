@@ -51,7 +51,7 @@ help:
 	@echo "make site-study-small           the site study's pipeline on 1 short record, coarse brackets (~2 min; not a result)"
 	@echo "make site-study-report          rewrite results/site/ from the runs made so far"
 	@echo "make crosscheck [XC=all]   LMGC90 (rigid) vs this package: toppling block + half-sine pulse (~3 min); XC=all adds the 40-block wall (~10 min) and the 5 tilt walls (hours); skipped without compas_lmgc90"
-	@echo "make clean        delete results/ and .numba_cache/ (everything the package wrote there)"
+	@echo "make clean        delete what the package wrote in results/ (its runs, sweeps, studies) and .numba_cache/; says what it left"
 
 setup: system-deps $(STAMP)
 
@@ -77,7 +77,7 @@ test: setup
 
 run: setup
 	@test -n "$(CASE)" || { echo "usage: make run CASE=path/to/case.toml [SET='key=value ...']"; exit 2; }
-	$(RUN) run $(CASE) -j $(THREADS) $(foreach s,$(SET),--set $(s))
+	$(RUN) run "$(CASE)" -j $(THREADS) $(foreach s,$(SET),--set $(s))
 
 gravity4: setup
 	$(RUN) run cases/gravity4.toml -j $(THREADS)
@@ -129,7 +129,7 @@ spectrum: setup
 
 sweep: setup
 	@test -n "$(SWEEP)" || { echo "usage: make sweep SWEEP=cases/sweeps/x.toml [DASK=tcp://host:8786|local]"; exit 2; }
-	$(RUN) sweep $(SWEEP) --workers $(JOBS) $(if $(DASK),--dask $(DASK))
+	$(RUN) sweep "$(SWEEP)" --workers $(JOBS) $(if $(DASK),--dask "$(DASK)")
 
 tilt: setup
 	$(RUN) sweep cases/sweeps/tilt_seeds.toml --workers $(JOBS)
@@ -159,7 +159,7 @@ report: setup
 
 vtk: setup
 	@test -n "$(DIR)" || { echo "usage: make vtk DIR=results/<run folder> [EVERY=5]"; exit 2; }
-	$(PY) -m drystone.postprocess.vtk $(DIR) --every $(or $(EVERY),1)
+	$(PY) -m drystone.postprocess.vtk "$(DIR)" --every "$(or $(EVERY),1)"
 
 fragility: setup
 	$(PY) -m drystone.studies.fragility all --config full --workers $(JOBS) $(if $(DASK),--dask $(DASK))
@@ -192,4 +192,4 @@ crosscheck: setup
 	$(PY) -m drystone.studies.crosscheck $(or $(XC),small)
 
 clean:
-	rm -rf results .numba_cache
+	@if [ -x $(PY) ]; then $(PY) -m drystone.clean; else /usr/bin/python3 -m drystone.clean; fi

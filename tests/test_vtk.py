@@ -17,7 +17,7 @@ import pytest
 
 import tolerances as tol
 from drystone.geometry import blockfile as bf
-from drystone.postprocess import snapshots, vtk
+from drystone.postprocess import runfolder, snapshots, vtk
 
 GRAVITY = {"type": "gravity", "start": 0.0, "end": 1.0, "params": {"ramp": 0.5}}
 
@@ -40,6 +40,8 @@ def fake_run(folder, dx, angle, times=(0.0, 1.0), stages=(GRAVITY,), cube_parts=
               cube]
     (folder / "geometry.json").write_text(json.dumps({"blocks": blocks}))
     (folder / "spec.json").write_text(json.dumps({"gravity": 9.81, "stages": list(stages)}))
+    (folder / "summary.json").write_text(json.dumps({"name": folder.name, "run": {"steps": len(times),
+                                                                                 "simulated_time_s": times[-1]}}))
     k = np.arange(len(times))
     c0 = np.array([[0.0, 0.0, 0.5]])
     q = np.zeros((len(times), 1, 4))  # (x, y, z, w) as drystone.mechanics.rotations
@@ -198,12 +200,12 @@ def test_not_a_run_folder(tmp_path, capsys):
     (tmp_path / "x").mkdir()
     for f in ("spec.json", "geometry.json"):
         (tmp_path / "x" / f).write_text("{}")
-    with pytest.raises(FileNotFoundError, match="histories.npz"):
+    with pytest.raises(runfolder.NotARun, match="no summary.json"):
         vtk.write(tmp_path / "x")
     assert not (tmp_path / "x" / "vtk").exists()  # nothing written
     assert vtk.main([str(tmp_path / "x")]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("error: ") and "histories.npz" in err and err.count("\n") == 1
+    assert err.startswith("error: ") and "no summary.json" in err and err.count("\n") == 1
     fake_run(tmp_path / "run", [0.1, 0, 0], 0.1)
     assert vtk.main([str(tmp_path / "run"), "--every", "0"]) == 2
     assert "--every" in capsys.readouterr().err

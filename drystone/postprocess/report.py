@@ -11,7 +11,8 @@ figures (control points, initial and final state, energy terms against time, and
 standard figures) and the provenance (versions, git commit, record sources). Figures are
 written into the run folder as PNG too and embedded in the page as ``data:`` URIs: the page
 fetches nothing. ``python -m drystone report RUN_DIR`` and ``make report DIR=...`` call it.
-A folder that is not a complete run is refused (``NotARun``, naming it). A study's folder
+A folder that is not a complete run (drystone/postprocess/runfolder.py: a file missing,
+unreadable or without what the page reads) is refused (``NotARun``, naming the file). A study's folder
 (a report.md, no spec.json) gets its report.md converted (drystone/postprocess/markdown.py).
 Units: SI in the files; the page shows mm for displacements, deg for angles, J for energy.
 """
@@ -31,12 +32,10 @@ import numpy as np  # noqa: E402
 from drystone import atomic  # noqa: E402
 from drystone.model.spec import stage_type  # noqa: E402
 from drystone.postprocess import console, markdown, plots, snapshots  # noqa: E402
-from drystone.postprocess import summary as summ  # noqa: E402
+from drystone.postprocess import runfolder  # noqa: E402
 from drystone.postprocess import summary as summ  # noqa: E402
 from drystone.postprocess.html import esc, image, page, table  # noqa: E402
 
-#: the files a complete run has (summary.json last: the marker of a complete run)
-RUN_FILES = ("summary.json", "spec.json", "histories.npz")
 #: figures the report draws into the run folder
 FINAL_STATE_PNG, ENERGY_PNG = "final_state.png", "energy.png"
 #: energy histories (J) the energy figure draws when histories.npz has them, with their labels
@@ -51,26 +50,14 @@ ENERGY_FIGSIZE, ENERGY_DPI = (8.0, 6.5), 110
 MAX_BLOCK_ROWS = 400
 
 
-class NotARun(ValueError):
-    """The folder is not a complete run (the message names it and what is missing)."""
+#: a folder that is not a complete run (drystone/postprocess/runfolder.py)
+NotARun = runfolder.NotARun
 
 
 def check(run_dir: Path) -> Path:
-    """``run_dir`` if it holds a complete run, else NotARun naming it and the missing file."""
-    d = Path(run_dir)
-    if not d.is_dir():
-        raise NotARun(f"{d}: no such folder")
-    for name in RUN_FILES:
-        if not (d / name).is_file():
-            raise NotARun(f"{d} is not a complete run (no {name}): run a case into it first "
-                          f"(python -m drystone run CASE --out {d})")
-    for name in ("summary.json", "spec.json"):
-        try:
-            if not isinstance(json.loads((d / name).read_text()), dict):
-                raise ValueError
-        except (ValueError, OSError, RecursionError):
-            raise NotARun(f"{d / name}: not a run's {name} (not a JSON object)") from None
-    return d
+    """``run_dir`` if it holds a complete run, else NotARun naming it and the missing or
+    unreadable file (``runfolder.load``)."""
+    return runfolder.load(run_dir).folder
 
 
 # -- what ran -------------------------------------------------------------------------------
@@ -361,10 +348,8 @@ def provenance_html(spec: dict) -> str:
 
 def build_html(run_dir: Path) -> str:
     """The report page of the complete run in ``run_dir`` (draws its figures there)."""
-    d = check(run_dir)
-    summary = json.loads((d / "summary.json").read_text())
-    spec = json.loads((d / "spec.json").read_text())
-    h = summ.load_histories(d)
+    run = runfolder.load(run_dir)
+    d, summary, spec, h = run.folder, run.summary, run.spec, run.h
     case = case_inputs(spec)
     name = summary.get("name") or spec.get("name") or d.name
     body = [f"<h1>drystone run: {esc(name)}</h1>",
@@ -434,6 +419,9 @@ def main(argv=None) -> int:
         print(write(a.run_dir))
     except NotARun as exc:
         print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # a full disk, a read-only folder: the file and the system's words
+        print(f"error: {exc.filename or a.run_dir}: {exc.strerror or exc}", file=sys.stderr)
         return 2
     return 0
 

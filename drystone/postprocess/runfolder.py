@@ -6,7 +6,7 @@ geometry.json and histories.npz, each readable and holding what the post-process
 
 - summary.json and spec.json: JSON objects; the summary with its ``name`` and ``run``
   (``steps``, ``simulated_time_s``); the spec with ``gravity`` and ``stages`` (each with its
-  ``start`` and ``end``, s);
+  ``start`` and ``end``, s, and ``params``);
 - geometry.json: a JSON object whose ``blocks`` each have an ``id`` and ``vertices`` or ``parts``;
 - histories.npz: a readable archive with the time ``t`` (at least one sample) and the moving
   blocks' ``block_ids``, ``pos``/``quat`` per sample and ``pos0``/``quat0``, of matching shapes.
@@ -87,8 +87,9 @@ def load(run_dir: Path) -> Run:
     stages = spec.get("stages")
     _need(d / "spec.json", isinstance(stages, list) and bool(stages), "no stages")
     _need(d / "spec.json", all(isinstance(s, dict) and isinstance(s.get("start"), (int, float))
-                               and isinstance(s.get("end"), (int, float)) for s in stages),
-          "a stage without its start and end times")
+                               and isinstance(s.get("end"), (int, float)) and isinstance(s.get("params"), dict)
+                               for s in stages),
+          "a stage without its start and end times or params")
     _need(d / "spec.json", isinstance(spec.get("gravity"), (int, float)), "no gravity")
     geo = _json_object(d / "geometry.json", "geometry.json")
     blocks = geo.get("blocks")

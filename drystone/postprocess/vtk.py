@@ -6,6 +6,9 @@ every part's faces), its corners as points placed as in the snapshots
 (drystone/postprocess/snapshots.py ``Frame.place``: x(t) = x_c(t) + R(t) R(0)^T (v - x_c(0)),
 in the world frame for a tilt, the platform turned by its tilt), and ``<run>/vtk/blocks.pvd``,
 the time series ParaView opens (File > Open blocks.pvd), listing every file with its time.
+Only a complete run is written (drystone/postprocess/runfolder.py); the output folder is
+replaced whole, only if it is new, empty or a set this module wrote (``check_out``), and
+the new set is written aside and swapped in (the old one kept if writing fails).
 
 Arrays (SI units; "initial" is the block file's geometry at t = 0):
 
@@ -24,7 +27,9 @@ dozen lines of XML written here (meshio has no .pvd writer).
 """
 from __future__ import annotations
 
-import json
+import os
+import re
+import shutil
 import sys
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
@@ -33,12 +38,14 @@ import meshio
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from drystone.postprocess import snapshots
-from drystone.postprocess import summary as summ
+from drystone.postprocess import runfolder, snapshots
 
 #: names of the files written (``NNNNN`` the sample's rank among those written)
 PVD_NAME = "blocks.pvd"
 SAMPLE_PATTERN = "blocks_{:05d}.vtu"
+_SAMPLE = re.compile(r"blocks_[0-9]{5}\.vtu")
+#: the line in a .pvd that says this module wrote it (and the folder it is in: ``check_out``)
+MARK = "<!-- written by drystone.postprocess.vtk: this folder is replaced whole by the next VTK set -->"
 
 
 class Topology:
@@ -92,37 +99,83 @@ def sample_mesh(topo: Topology, frame: snapshots.Frame, moving: set[int], centro
                        cell_data={k: topo.split(v) for k, v in cell_data.items()})
 
 
+class VtkError(ValueError):
+    """The VTK set cannot be written (one line naming the folder or file; nothing changed)."""
+
+
+def check_out(out: Path, own: bool = False) -> None:
+    """Refuse (VtkError naming the folder and what it holds) to replace ``out`` unless it is
+    new, empty or a VTK set this module wrote: a ``blocks.pvd`` carrying ``MARK`` and
+    ``blocks_NNNNN.vtu`` files, nothing else. ``own``: ``out`` is the run's own ``vtk``
+    folder (inside the package's run folder), where a set written before the mark was
+    introduced (the same names, no mark) is the package's too. A user's files are never
+    deleted or overwritten (as ``run --out``: drystone/simulate.py ``check_replaceable``)."""
+    if not out.exists() and not out.is_symlink():
+        return
+    if not out.is_dir() or out.is_symlink():
+        raise VtkError(f"{out} exists and is not a folder; choose another --out")
+    try:
+        entries = sorted(p.name for p in out.iterdir())
+    except OSError as exc:
+        raise VtkError(f"{out}: cannot read the folder: {exc.strerror or exc}") from None
+    if not entries:
+        return
+    foreign = [e for e in entries if e != PVD_NAME and not _SAMPLE.fullmatch(e)]
+    try:
+        marked = MARK in (out / PVD_NAME).read_text(errors="replace")
+    except OSError:
+        marked = False
+    if foreign or not (marked or own):
+        shown = foreign or entries
+        raise VtkError(f"{out} holds files this package did not write ({', '.join(shown[:3])}"
+                       f"{', ...' if len(shown) > 3 else ''}): a VTK set replaces its folder whole, so it is "
+                       "written only into a new or empty folder or one of its own sets; choose another --out")
+
+
 def write(run: Path, every: int = 1, world: bool = True, out: Path | None = None) -> Path:
     """Write every ``every``-th recorded sample of a finished run (and the last one); returns the .pvd path.
-    Earlier ``blocks_NNNNN.vtu`` files in the output folder are replaced."""
-    run = Path(run)
-    for f in ("spec.json", "geometry.json", "histories.npz"):
-        if not (run / f).is_file():
-            raise FileNotFoundError(f"{run}: no {f} (not a finished run folder)")
+
+    The run is checked whole first (drystone/postprocess/runfolder.py: NotARun naming the
+    file), the output folder too (``check_out``). The new set is written into a hidden
+    folder beside ``out`` and swapped in when complete: an earlier set is replaced whole, and
+    kept as it was if writing fails (VtkError naming the file, e.g. a full disk)."""
     if every < 1:
         raise ValueError(f"--every must be >= 1, got {every}")
-    blocks = json.loads((run / "geometry.json").read_text())["blocks"]
-    h = summ.load_histories(run)
+    r = runfolder.load(run)
+    h = r.h
     rows = list(range(0, len(h["t"]), every))
     if rows[-1] != len(h["t"]) - 1:
         rows.append(len(h["t"]) - 1)  # the final state always
-    topo = Topology(blocks)
-    centroids = snapshots.stone_centroids(blocks)
+    out = Path(out) if out else r.folder / "vtk"
+    check_out(out, own=out.resolve() == (r.folder / "vtk").resolve())
+    topo = Topology(r.blocks)
+    centroids = snapshots.stone_centroids(r.blocks)
     moving = {int(i) for i in h["block_ids"]}
-    out = Path(out or run / "vtk")
-    out.mkdir(parents=True, exist_ok=True)
-    for old in list(out.glob("blocks_[0-9][0-9][0-9][0-9][0-9].vt[up]")):
-        old.unlink()
-    entries = []
-    for k, frame in enumerate(snapshots.frames_at(run, [h["t"][i] for i in rows], world=world)):
-        name = SAMPLE_PATTERN.format(k)
-        meshio.write(out / name, sample_mesh(topo, frame, moving, centroids), file_format="vtu", binary=True)
-        entries.append(f'    <DataSet timestep="{frame.t!r}" part="0" file={quoteattr(name)}/>')
-    pvd = out / PVD_NAME
-    pvd.write_text('<?xml version="1.0"?>\n'
-                   '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">\n  <Collection>\n'
-                   + "\n".join(entries) + "\n  </Collection>\n</VTKFile>\n")
-    return pvd
+    stage, old = out.parent / f".{out.name}.vtk-partial", out.parent / f".{out.name}.vtk-old"
+    try:
+        for d in (stage, old):  # this module's own leftovers of an interrupted write
+            shutil.rmtree(d, ignore_errors=True)
+        stage.mkdir(parents=True)
+        entries = []
+        for k, frame in enumerate(snapshots.frames_at(r.folder, [h["t"][i] for i in rows], world=world)):
+            name = SAMPLE_PATTERN.format(k)
+            meshio.write(stage / name, sample_mesh(topo, frame, moving, centroids), file_format="vtu", binary=True)
+            entries.append(f'    <DataSet timestep="{frame.t!r}" part="0" file={quoteattr(name)}/>')
+        (stage / PVD_NAME).write_text('<?xml version="1.0"?>\n' + MARK + "\n"
+                                      '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">\n'
+                                      "  <Collection>\n" + "\n".join(entries) + "\n  </Collection>\n</VTKFile>\n")
+        if out.exists():
+            os.replace(out, old)
+        os.replace(stage, out)
+    except OSError as exc:
+        shutil.rmtree(stage, ignore_errors=True)
+        if old.exists() and not out.exists():
+            os.replace(old, out)
+        where = str(exc.filename or out).replace(str(stage), str(out))
+        raise VtkError(f"{where}: {exc.strerror or exc}; the VTK set in {out} is unchanged") from None
+    finally:
+        shutil.rmtree(old, ignore_errors=True)
+    return out / PVD_NAME
 
 
 def main(argv=None) -> int:
@@ -137,7 +190,7 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     try:
         pvd = write(Path(a.run), a.every, world=not a.platform_frame, out=a.out)
-    except (FileNotFoundError, ValueError) as exc:
+    except ValueError as exc:  # NotARun, VtkError, a bad --every
         print(f"error: {exc}", file=sys.stderr)
         return 2
     n = len(list(pvd.parent.glob("blocks_*.vtu")))
