@@ -15,7 +15,10 @@ temporary.
     atomic.savefig(fig, path, dpi=120)
 
 ``TEMP_MARK`` names the temporaries, which ``python -m drystone.clean`` recognises as the
-package's own (left behind only by a process killed mid-write).
+package's own (left behind only by a process killed mid-write). A file written under the
+results folder (``paths.RESULTS``) is also listed in its folder's hidden ``MANIFEST``, so that
+``make clean`` deletes what the package wrote there and nothing else (a study's report, tables
+and figures beside a user's notes).
 """
 from __future__ import annotations
 
@@ -27,6 +30,8 @@ from typing import Iterator
 
 #: the infix of every temporary this module makes (``.NAME.tmp-XXXXXXXX.EXT``)
 TEMP_MARK = ".tmp-"
+#: the hidden file, in a folder under the results folder, listing the files written there (one name a line)
+MANIFEST = ".drystone-written"
 
 
 def temporary(path: Path) -> Path:
@@ -65,6 +70,39 @@ def aside(path) -> Iterator[Path]:
         if isinstance(exc, OSError):
             raise named(exc, p) from None
         raise
+    record(p)
+
+
+def record(path: Path) -> None:
+    """List ``path`` in its folder's ``MANIFEST`` when it lies under the results folder
+    (``python -m drystone.clean`` deletes what is listed). Best effort: a manifest that cannot
+    be written never fails the write it records (the file is then left by clean, and said)."""
+    from drystone import paths
+
+    p = Path(path)
+    try:
+        p.resolve().relative_to(Path(paths.RESULTS).resolve())
+    except (ValueError, OSError):
+        return
+    m = p.parent / MANIFEST
+    try:
+        if m.is_file() and p.name in m.read_text(errors="replace").splitlines():
+            return
+        fd = os.open(m, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+        try:
+            os.write(fd, (p.name + "\n").encode())
+        finally:
+            os.close(fd)
+    except OSError:
+        pass
+
+
+def listed(folder: Path) -> set[str]:
+    """The names ``MANIFEST`` lists in ``folder`` (empty when it has none)."""
+    try:
+        return set((Path(folder) / MANIFEST).read_text(errors="replace").splitlines()) - {""}
+    except OSError:
+        return set()
 
 
 def write_text(path, text: str, encoding: str = "utf-8") -> Path:

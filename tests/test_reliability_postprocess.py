@@ -213,3 +213,70 @@ def test_make_passes_a_path_with_spaces_as_one_argument(target, var):
     lines = [ln for ln in r.stdout.splitlines() if "-m drystone" in ln]
     assert lines, r.stdout
     assert all(path in shlex.split(ln) for ln in lines), lines
+
+
+# -- make clean: only what the package wrote ----------------------------------------------------
+def test_clean_deletes_only_what_the_package_wrote_and_says_what_it_left(tmp_path, monkeypatch, capsys):
+    """``make clean`` deleted results/ wholesale, a user's own files there included."""
+    from drystone import clean
+    from drystone.model.spec import SPEC_FORMAT
+
+    results, outside = tmp_path / "results", tmp_path / "outside"
+    monkeypatch.setattr(paths, "RESULTS", results)
+    results.mkdir()
+    run = _run(results, "box")  # a run (spec.json with the spec's format tag)
+    spec = json.loads((run / "spec.json").read_text())
+    (run / "spec.json").write_text(json.dumps(dict(spec, format=SPEC_FORMAT, version=2)))
+    vtk.write(run, out=results / "box_vtk")  # a VTK set elsewhere
+    (results / ".box.lock").write_text("123")  # leftovers of an interrupted run and write
+    (results / ".other.partial").mkdir()
+    (results / ".x.tmp-0123abcd.json").write_text("{")
+    sweep = results / "sw"
+    (sweep / "failed_run").mkdir(parents=True)
+    (sweep / "failed_run" / "FAILED.txt").write_text("RunError: ...")
+    (sweep / "sweep.json").write_text(json.dumps({"sweep": "sw", "file": "x.toml", "runs": []}))  # before manifests
+    study = results / "study"
+    study.mkdir()
+    atomic.write_text(study / "report.md", "# report")
+    atomic.write_text(study / "plan.json", "{}")
+    atomic.savefig(plt.figure(), study / "figure.png", dpi=20)
+    plt.close("all")
+    user = {"README.txt": "my index", "mine/data.csv": "1,2", "study/my notes.md": "mine", "sw/notes.txt": "mine",
+            "study/sub/keep.json": "{}"}
+    for rel, text in user.items():
+        (results / rel).parent.mkdir(parents=True, exist_ok=True)
+        (results / rel).write_text(text)
+    outside.mkdir()
+    (outside / "precious.txt").write_text("not in results")
+    (results / "link").symlink_to(outside, target_is_directory=True)
+    cache = tmp_path / ".numba_cache"
+    (cache / "abc").mkdir(parents=True)
+    monkeypatch.setattr(paths, "ROOT", tmp_path)
+
+    assert clean.main([str(results), "--dry-run"]) == 0
+    assert (run / "spec.json").is_file() and (study / "report.md").is_file()  # a dry run deletes nothing
+    capsys.readouterr()
+    assert clean.main([str(results)]) == 0
+    printed = capsys.readouterr().out
+    left = {str(p.relative_to(results)) for p in results.rglob("*") if p.is_file() or p.is_symlink()}
+    assert left == set(user) | {"link"}
+    assert all((results / rel).read_text() == text for rel, text in user.items())
+    assert (outside / "precious.txt").read_text() == "not in results" and not cache.exists()
+    assert "left 6 file(s)" in printed and all(str(results / rel) in printed for rel in user)
+    assert not (results / "study" / atomic.MANIFEST).exists()
+
+
+def test_clean_of_results_holding_only_package_outputs_removes_the_folder(tmp_path, monkeypatch, capsys):
+    from drystone import clean
+
+    results = tmp_path / "results"
+    monkeypatch.setattr(paths, "RESULTS", results)
+    (results / "a" / "b").mkdir(parents=True)
+    atomic.write_text(results / "a" / "b" / "report.md", "x")
+    removed, left = clean.clean(results, cache=tmp_path / "none")
+    assert not results.exists() and left == [] and len(removed) == 2  # report.md and its manifest
+
+
+def test_make_clean_calls_the_module():
+    r = subprocess.run(["make", "-n", "--no-print-directory", "clean"], cwd=paths.ROOT, capture_output=True, text=True)
+    assert r.returncode == 0 and "-m drystone.clean" in r.stdout and "rm -rf" not in r.stdout, r.stdout
