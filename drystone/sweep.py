@@ -302,6 +302,11 @@ class _Heartbeat(threading.Thread):
                 print(f"[{self.sweep}] running: " + "; ".join(_progress_line(j) for j in live), flush=True)
 
 
+#: the runs (folders) that failed in this process's sweeps: a study that ran them exits non-zero
+#: (drystone.studies.exit_status), whatever its report could still say
+FAILED_RUNS: list[str] = []
+
+
 def run(path, workers: int | None = None, backend: str = "local", dask_address: str | None = None,
         threads: int = 1, only: list[str] | None = None, results: Path | None = None,
         heartbeat_s: float = 60.0) -> dict:
@@ -363,6 +368,7 @@ def run(path, workers: int | None = None, backend: str = "local", dask_address: 
                 status[n]["status"] = "interrupted"
         _write_status(root, name, path, status)
     failed = [n for n, s in status.items() if s["status"] == "failed"]
+    FAILED_RUNS.extend(str(root / n) for n in failed if str(root / n) not in FAILED_RUNS)
     if failed:
         print(f"[{name}] {len(failed)} run(s) failed: {failed}; see FAILED.txt and log.txt in their folders",
               flush=True)

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -202,7 +203,8 @@ def main(argv, prog: str, doc: str, configs: dict, plan, run, report, tag: str) 
     {plan,run,report,all} [--config ...] [--workers N] [--dask ADDRESS]``): ``plan(cfg)``
     returns a one-line description, ``run(cfg, workers=, backend=, address=)`` a summary
     (``count``, ``finish``), ``report(cfg)`` the report's path. Exit 130 when interrupted,
-    1 when ``run`` alone had failed runs."""
+    1 when runs failed or the report is incomplete (a search pending, failed or refused:
+    ``incomplete``), with one line on standard error saying what is missing."""
     import argparse
 
     ap = argparse.ArgumentParser(prog=prog, description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -215,15 +217,44 @@ def main(argv, prog: str, doc: str, configs: dict, plan, run, report, tag: str) 
     if a.step == "plan":
         print(plan(cfg))
         return 0
+    failed = []
     if a.step in ("run", "all"):
         r = run(cfg, workers=a.workers, backend="dask" if a.dask else "local", address=a.dask)
         print(f"[{tag}] {r['rounds']} round(s), {r['runs_run']} run(s) run, {r['runs_reused']} reused, "
               f"{len(r['failed'])} failed, {r['elapsed_s'] / 60:.1f} min")
         if r["interrupted"]:
             return 130
+        failed = r["failed"]
         if a.step == "run":
-            return 1 if r["failed"] else 0
+            return 1 if failed else 0
     path = report(cfg)
     print(path.read_text())
     print(f"report: {path}")
+    missing = incomplete(cfg.out_dir / f"{tag}.json")
+    if failed or missing:
+        print(f"error: {path}: incomplete: {missing or 'no search missing'}"
+              + (f"; {len(failed)} run(s) of this invocation failed: {', '.join(map(str, failed[:5]))}" if failed else "")
+              + " (run the study again to continue or retry)", file=sys.stderr)
+        return 1
     return 0
+
+
+def missing_text(status: str) -> str:
+    """A report's cell for a search without a result: MISSING and why (never a bracket-like
+    "open" that reads as a result)."""
+    why = {"pending": "not run yet", "failed": "a run failed"}.get(status, status)
+    return f"**MISSING** ({why})"
+
+
+def incomplete(report_json: Path) -> str:
+    """What a study's report (its ``<tag>.json``: ``status`` counts of the searches by state,
+    ``refused`` walls) lacks, in words, or "" when every search is done."""
+    data = read_json(report_json)
+    if not isinstance(data, dict):
+        return f"{report_json} unreadable"
+    status = data.get("status") or {}
+    parts = [f"{n} search(es) {k}" for k, n in status.items() if k != "done" and n]
+    refused = data.get("refused")
+    if isinstance(refused, list) and refused:
+        parts.append(f"walls not run: {', '.join(map(str, refused))}")
+    return "; ".join(parts)

@@ -17,6 +17,7 @@ import argparse
 import sys
 import time
 
+from drystone.studies import exit_status
 from drystone.studies.crosscheck import cases, lmgc90_status
 
 
@@ -63,4 +64,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(exit_status(main()))

@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import json
 
+from drystone.studies import exit_status
 from drystone.studies.fragility import plan as planmod
 from drystone.studies.fragility import study
 
@@ -61,4 +62,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    raise SystemExit(exit_status(main()))

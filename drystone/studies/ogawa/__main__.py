@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import json
 
+from drystone.studies import exit_status
 from drystone import paths
 
 
@@ -46,4 +47,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    raise SystemExit(exit_status(main()))

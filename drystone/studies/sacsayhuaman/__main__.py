@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 
+from drystone.studies import exit_status
 from drystone.studies.sacsayhuaman import study
 
 
@@ -50,4 +51,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    raise SystemExit(exit_status(main()))

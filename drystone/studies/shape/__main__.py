@@ -10,6 +10,7 @@ all      run, then report
 pipeline check, not a result."""
 from __future__ import annotations
 
+from drystone.studies import exit_status
 from drystone.studies import rounds
 from drystone.studies.shape import plan as planmod
 from drystone.studies.shape import study
@@ -26,4 +27,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    raise SystemExit(exit_status(main()))

@@ -588,7 +588,7 @@ def report(config="full") -> Path:
         b = st.get("bracket")
         br = ("refused" if st["status"] == "refused" else
               f"> {b['low_g']:g} (stood at the cap)" if b and b["censored"] else
-              f"({b['low_g']:g}, {b['high_g']:g}]" if b and b["done"] else f"open ({st['status']})")
+              f"({b['low_g']:g}, {b['high_g']:g}]" if b and b["done"] else rounds.missing_text(st["status"]))
         seq = ", ".join(f"{r['pga_g']:g}: {'c' if r.get('collapsed') else 's' if r.get('status') == 'done' else r['status']}"
                         for r in st["runs"])
         L.append(f"| {planmod.VARIANTS[st['variant']][0]} | {st['seed']} | {st['record']} | {br} | {seq} |")

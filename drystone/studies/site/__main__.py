@@ -11,6 +11,7 @@ all      run, then report
 --config small: 1 record cut to 1.5 s, coarse brackets (results/site_small/): a pipeline check, not a result."""
 from __future__ import annotations
 
+from drystone.studies import exit_status
 from drystone.studies import rounds
 from drystone.studies.site import plan as planmod
 from drystone.studies.site import report
@@ -28,4 +29,4 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    raise SystemExit(exit_status(main()))

@@ -73,7 +73,7 @@ def bracket_text(st: dict | None, unit: str = "g") -> str:
         return "not run"
     b = st.get("bracket")
     if st["status"] != "done" or not b:
-        return f"open ({st['status']})"
+        return rounds.missing_text(st["status"])
     if b["censored"]:
         return f"> {b['low_g']:g} (stood at the cap)"
     return f"({b['low_g']:g}, {b['high_g']:g}]"
