@@ -74,8 +74,8 @@ def aside(path) -> Iterator[Path]:
 
 
 def record(path: Path) -> None:
-    """List ``path`` in its folder's ``MANIFEST`` when it lies under the results folder
-    (``python -m drystone.clean`` deletes what is listed). Best effort: a manifest that cannot
+    """List ``path`` in its folder's ``MANIFEST`` when it lies under the results folder and
+    outside a run's folder (``python -m drystone.clean`` deletes what is listed). Best effort: a manifest that cannot
     be written never fails the write it records (the file is then left by clean, and said)."""
     from drystone import paths
 
@@ -84,6 +84,8 @@ def record(path: Path) -> None:
         p.resolve().relative_to(Path(paths.RESULTS).resolve())
     except (ValueError, OSError):
         return
+    if p.parent.name.endswith(".partial") or (p.parent / "spec.json").is_file():
+        return  # a run's folder (or one being built): the package's whole, recognised as such
     m = p.parent / MANIFEST
     try:
         if m.is_file() and p.name in m.read_text(errors="replace").splitlines():

@@ -146,7 +146,7 @@ def write(run: Path, every: int = 1, world: bool = True, out: Path | None = None
     rows = list(range(0, len(h["t"]), every))
     if rows[-1] != len(h["t"]) - 1:
         rows.append(len(h["t"]) - 1)  # the final state always
-    out = Path(out) if out else r.folder / "vtk"
+    out = Path(os.path.abspath(out if out else r.folder / "vtk"))
     check_out(out, own=out.resolve() == (r.folder / "vtk").resolve())
     topo = Topology(r.blocks)
     centroids = snapshots.stone_centroids(r.blocks)
