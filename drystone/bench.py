@@ -49,6 +49,7 @@ from pathlib import Path
 
 import numpy as np
 
+from drystone import atomic
 from drystone.mechanics import laws
 
 from drystone import paths, runner
@@ -670,10 +671,7 @@ def write_results(results: dict, path: Path | None = None) -> Path:
         except json.JSONDecodeError:
             old = {}
     old.update(results)
-    tmp = path.with_suffix(".tmp")
-    tmp.write_text(json.dumps(old, indent=1))
-    os.replace(tmp, path)
-    return path
+    return atomic.write_text(path, json.dumps(old, indent=1))
 
 
 def main(only=None, sizes=SIZES, walls=WALLS, steps: int = 300, engines=None) -> dict:

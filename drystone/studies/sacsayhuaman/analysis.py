@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from drystone import atomic
 from drystone.motions import spectra
 from drystone.postprocess import summary as summ
 from drystone.model.spec import stage_type
@@ -181,7 +182,7 @@ def write_table3(rows: list[dict], path: Path) -> Path:
     def flag(x):
         return "" if x is None else str(bool(x)).lower()
 
-    with open(path, "w", newline="") as f:
+    with atomic.aside(path) as tmp, open(tmp, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(TABLE3_COLUMNS)
         for r in sorted(rows, key=lambda r: (r["record"], r["pga_g"])):
