@@ -108,6 +108,8 @@ def write_if_changed(path: Path, text: str) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     if not path.exists() or path.read_text() != text:
         atomic.write_text(path, text)
+    else:
+        atomic.record(path)  # the package's, for make clean, even if written before it kept lists
     return path
 
 
