@@ -44,6 +44,12 @@ def test_housner_restitution_is_angular_momentum_about_the_new_corner():
     R = 0.5 * math.hypot(rs.B, rs.H)
     assert rs.rocking_energy(rs.alpha(), mass=3.0) == pytest.approx(3.0 * rs.G * R * (1 - math.cos(rs.alpha())),
                                                                      rel=tol.EXACT_REL)
+    # near upright the energy is m g R sin(alpha) theta (1 - theta cot(alpha) / 2 - theta^2 / 6 + O(theta^3)),
+    # to every digit (as a difference of cosines it kept only ~7 digits at theta = 1e-9: cancellation)
+    for th in (1e-9, -1e-7):
+        t = abs(th)
+        series = rs.G * R * math.sin(rs.alpha()) * t * (1 - t / (2 * math.tan(rs.alpha())) - t * t / 6)
+        assert rs.rocking_energy(th) == pytest.approx(series, rel=tol.CHAINED_ULP_REL, abs=0)
 
 
 @pytest.mark.parametrize("r", [0.95, 0.912, 0.75])
