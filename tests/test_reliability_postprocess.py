@@ -280,3 +280,15 @@ def test_clean_of_results_holding_only_package_outputs_removes_the_folder(tmp_pa
 def test_make_clean_calls_the_module():
     r = subprocess.run(["make", "-n", "--no-print-directory", "clean"], cwd=paths.ROOT, capture_output=True, text=True)
     assert r.returncode == 0 and "-m drystone.clean" in r.stdout and "rm -rf" not in r.stdout, r.stdout
+
+
+def test_vtk_after_a_write_stopped_between_its_renames_keeps_the_old_set(tmp_path, monkeypatch, capsys):
+    """Killed after the old set was moved aside: the next write puts it back before anything
+    else, so a failure of that write still leaves it."""
+    run = _run(tmp_path)
+    vtk.write(run)
+    before = _tree(run / "vtk")
+    os.replace(run / "vtk", run / ".vtk.vtk-old")
+    monkeypatch.setattr(vtk.meshio, "write", lambda path, *a, **k: (_ for _ in ()).throw(_enospc(path)))
+    _one_line_error(vtk.main([str(run)]), capsys.readouterr().err, "No space left on device")
+    assert _tree(run / "vtk") == before and sorted(p.name for p in run.iterdir() if p.name.startswith(".")) == []

@@ -153,6 +153,8 @@ def write(run: Path, every: int = 1, world: bool = True, out: Path | None = None
     moving = {int(i) for i in h["block_ids"]}
     stage, old = out.parent / f".{out.name}.vtk-partial", out.parent / f".{out.name}.vtk-old"
     try:
+        if old.is_dir() and not out.exists():  # a write stopped between its two renames: the old set back
+            os.replace(old, out)
         for d in (stage, old):  # this module's own leftovers of an interrupted write
             shutil.rmtree(d, ignore_errors=True)
         stage.mkdir(parents=True)
@@ -169,12 +171,11 @@ def write(run: Path, every: int = 1, world: bool = True, out: Path | None = None
         os.replace(stage, out)
     except OSError as exc:
         shutil.rmtree(stage, ignore_errors=True)
-        if old.exists() and not out.exists():
+        if old.is_dir() and not out.exists():
             os.replace(old, out)
         where = str(exc.filename or out).replace(str(stage), str(out))
         raise VtkError(f"{where}: {exc.strerror or exc}; the VTK set in {out} is unchanged") from None
-    finally:
-        shutil.rmtree(old, ignore_errors=True)
+    shutil.rmtree(old, ignore_errors=True)  # the new set is in place
     return out / PVD_NAME
 
 
