@@ -92,6 +92,10 @@ PARTS_VERSION = 2
 #: the versions this reader reads
 VERSIONS = (VERSION, PARTS_VERSION)
 ROLES = ("free", "fixed", "platform")
+#: largest block id (in magnitude): YADE numbers bodies with C ints, and ids are stored in
+#: integer arrays (histories.npz); a larger one (a 40-digit label) would become an object
+#: array no run could load back
+MAX_ID = 2**31 - 1
 #: a vertex standing out of the block's other vertices by less than this x the block's
 #: size (the diagonal of its bounding box) is not a corner (far above round-off, far below
 #: any real stone's corner)
@@ -562,6 +566,9 @@ def parse(data: dict, where: str = "<blocks>", check_overlaps: bool = True) -> B
         if not is_int(bid):
             raise GeometryError(f"{where}: blocks[{k}]: 'id' must be an integer, got {bid!r}")
         bid = int(bid)
+        if abs(bid) > MAX_ID:
+            raise GeometryError(f"{where}: blocks[{k}]: 'id' {bid} is beyond {MAX_ID} (ids are integers up to "
+                                f"{MAX_ID} in magnitude)")
         w = f"{where}: block {bid}"
         unknown = set(b) - BLOCK_KEYS
         if unknown:
