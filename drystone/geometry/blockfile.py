@@ -130,6 +130,10 @@ OVERLAP_TOL = 1e-6
 #: checks of one stone's parts (at most 496 pairs, each a linear programme at worst) and,
 #: once the engines take parts, the K_a x K_b part pairs of a contact between two stones.
 MAX_PARTS_PER_BLOCK = 32
+#: a block stands on another (a fixed stone on the platform) when they are within this (m):
+#: a drawing's precision, 1 mm. A fixed block farther from the platform and from every fixed
+#: block that stands on it is held in mid-air (``hovering_fixed``)
+STANDING_TOL = 1e-3
 #: two parts of one stone are joined face to face when a face of one and a face of the
 #: other have opposite normals, lie within OVERLAP_TOL of each other's plane and overlap in
 #: a patch wider than this (m; the width 2 x area / perimeter, a strip's width). Parts
@@ -706,6 +710,28 @@ def check_no_overlaps(bs: BlockSet, where: str = "<blocks>", tol: float = OVERLA
                 raise GeometryError(
                     f"{where}: blocks {a.id} and {b.id} interpenetrate by {t:.3g} m{which} "
                     f"(tolerance {tol:g} m)")
+
+
+def hovering_fixed(bs: BlockSet, tol: float = STANDING_TOL) -> list[int]:
+    """Ids of the fixed blocks that stand neither on a platform block nor on a fixed block that
+    does (a chain), judged by bounding boxes: a block whose box is more than ``tol`` (m) from
+    every such block's box certainly touches none of them (a conservative test: a block
+    listed hovers; one not listed may still only nearly touch). A geometry without a
+    platform block has its fixed blocks as its ground (the four-block model): none listed."""
+    box = {b.id: (b.points.min(axis=0), b.points.max(axis=0)) for b in bs.blocks}
+
+    def near(a, b):
+        return bool(np.all(box[a][0] <= box[b][1] + tol) and np.all(box[b][0] <= box[a][1] + tol))
+
+    held = [b.id for b in bs.blocks if b.role == "platform"]
+    rest = [b.id for b in bs.blocks if b.role == "fixed"]
+    todo = list(held)
+    while todo and rest:
+        a = todo.pop()
+        reached = [b for b in rest if near(a, b)]
+        rest = [b for b in rest if b not in reached]
+        todo += reached
+    return sorted(rest)
 
 
 def load(path, check_overlaps: bool = True) -> BlockSet:

@@ -229,9 +229,8 @@ def read(file, units: str | None = None) -> dict:
         elif low in ROLE_LAYERS:
             allowed = ("closed LWPOLYLINE or 2D POLYLINE (straight edges)" if low != CONTROL_LAYER
                        else "POINT, TEXT or MTEXT")
-            raise _fail(path, f"{what} on layer {lay!r} is a {kind}, which this reader does not take: the layer "
-                              f"{lay!r} holds {allowed} entities (and id/depth labels); redraw it or move it to "
-                              "another layer")
+            raise _fail(path, f"{what} on layer {lay!r} cannot be read: that layer takes {allowed} (and "
+                              f"id/depth labels), not a {kind}; redraw it or move it to another layer")
         else:
             ignored.add(lay)
     if not polys:

@@ -210,9 +210,10 @@ def points_in(polygons: list, points) -> list[np.ndarray]:
 
 
 #: a stone stands on the platform (or on a fixed stone) when one of its corners is within
-#: this of it (m): a drawing's precision (1 mm). A fixed stone farther away would hover
-#: in place, and a wall whose lowest stones are farther would drop onto its platform.
-STANDING_TOL = 1e-3
+#: this of it (m; ``blockfile.STANDING_TOL``, 1 mm, a drawing's precision). A fixed stone
+#: farther away would hover in place, and a wall whose lowest stones are farther would drop
+#: onto its platform.
+STANDING_TOL = bf.STANDING_TOL
 
 
 def _gap(p: np.ndarray, q: np.ndarray) -> float:
@@ -221,18 +222,21 @@ def _gap(p: np.ndarray, q: np.ndarray) -> float:
     return min(min(_distance(q, c) for c in p), min(_distance(p, c) for c in q))
 
 
-def _check_standing(stones: dict, platform: np.ndarray, fixed: set, where: dict, origin: str) -> set:
-    """The stones standing on the drawn ``platform`` (within ``STANDING_TOL``); refused when
-    none does, or when a stone of ``fixed`` stands neither on the platform nor on a fixed
-    stone that does (a chain), naming the stone and its gap."""
+def _check_standing(stones: dict, platform: np.ndarray, roles: dict, fix_bottom: bool, where: dict) -> set:
+    """The stones standing on the drawn ``platform`` (within ``STANDING_TOL``). Refused, naming
+    the stone and its gap: a platform no stone stands on (the wall would drop onto it), and
+    a stone fixed by ``roles`` that stands neither on the platform nor on fixed stones that
+    do (a chain; with ``fix_bottom`` the stones on the platform are fixed)."""
     gaps = {bid: min(_distance(platform, c) for c in p) for bid, p in stones.items()}
     on = {bid for bid, g in gaps.items() if g <= STANDING_TOL}
     if not on:
         low = min(stones, key=lambda b: (stones[b][:, 1].min(), b))
-        raise OutlineError(f"{origin}: no stone stands on the platform: the lowest, {where[low]}, is "
-                           f"{gaps[low]:.4g} m from it (tolerance {STANDING_TOL:g} m); draw the platform under "
+        raise OutlineError(f"{where[low]}: no stone stands on the drawn platform; the lowest, this one, is "
+                           f"{gaps[low]:.4g} m from it (tolerance {STANDING_TOL:g} m): draw the platform under "
                            "the stones")
-    held, todo = fixed & on, list(fixed & on)
+    fixed = {bid for bid, role in roles.items() if role == "fixed"}
+    held = {bid for bid in on if roles.get(bid, "fixed" if fix_bottom else "free") == "fixed"}
+    todo = sorted(held)
     while todo:
         a = stones[todo.pop()]
         for bid in sorted(fixed - held):
@@ -310,8 +314,7 @@ def build(stones: dict, thickness: float, where: dict, *, origin: str, roles: di
         if platform is None:  # the slab under the lowest stone
             on = {bid for bid, p in stones.items() if p[:, 1].min() <= zmin + STANDING_TOL}
         else:
-            fixed = {bid for bid, role in roles.items() if role == "fixed"}
-            on = _check_standing(stones, platform, fixed, where, origin)
+            on = _check_standing(stones, platform, roles, fix_bottom, where)
         if fix_bottom:
             for b in blocks:
                 if b["id"] not in roles and b["id"] in on:
