@@ -724,6 +724,8 @@ def hovering_fixed(bs: BlockSet, tol: float = STANDING_TOL) -> list[int]:
         return bool(np.all(box[a][0] <= box[b][1] + tol) and np.all(box[b][0] <= box[a][1] + tol))
 
     held = [b.id for b in bs.blocks if b.role == "platform"]
+    if not held:
+        return []
     rest = [b.id for b in bs.blocks if b.role == "fixed"]
     todo = list(held)
     while todo and rest:
