@@ -8,9 +8,12 @@ Model space only. Layers (names case-insensitive, as in CAD):
 
 * ``stones``: closed LWPOLYLINE or 2D POLYLINE (closed flag, or first point = last), a
   stone fixed when it stands on the platform (``fix_bottom``, default) and free otherwise;
-  ``free`` / ``fixed``: a stone with that role whatever its place;
+  ``free`` / ``fixed``: a stone with that role (a fixed stone must stand on the platform, or
+  on fixed stones that do, within ``blockfile.STANDING_TOL``, else it is refused: it would
+  hover);
 * ``platform``: at most one closed convex polyline, the platform (id 0), extruded through
-  3 x the wall's thickness; without one, a 0.1 m slab under the lowest stone;
+  3 x the wall's thickness; some stone must stand on it (within ``blockfile.STANDING_TOL``),
+  else the drawing is refused; without one, a 0.1 m slab under the lowest stone;
 * ``control_points``: POINT (named P1, P2, ... in drawing order) or TEXT/MTEXT (named by
   its text) at a control point, put on the stone that contains it (or the nearest) at the
   wall's front face (y = -T/2); without any, one ``top_<id>`` at the centroid of each top
@@ -18,17 +21,31 @@ Model space only. Layers (names case-insensitive, as in CAD):
 * any other layer is ignored (listed in the block file's ``description``).
 
 Ids: a TEXT or MTEXT (any layer but ``control_points``) whose insertion point lies inside
-a stone and reads a positive integer (``7`` or ``id=7``), or a block reference (INSERT)
-placed inside it with an attribute ``ID``. A stone without one, with two, or an id used
-twice is refused naming the polyline's handle and layer. A text ``depth=0.6`` (or an
-INSERT attribute ``DEPTH``) inside a stone gives that stone its own depth (m) instead of
-``thickness``.
+a stone and reads a positive integer (``7`` or ``id=7``; at most ``blockfile.MAX_ID``), or
+a block reference (INSERT) with an attribute ``ID`` whose text lies inside it. A stone
+without one, with two, or an id used twice is refused naming the polyline's handle and
+layer. A text ``depth=0.6`` (or an INSERT attribute ``DEPTH``) inside a stone gives that
+stone its own depth (m) instead of ``thickness``. A label that starts with ``id`` or
+``depth`` but does not read (``id: 7``, ``depth=0,3``, ``depth=0.3m``) is refused naming
+the stone, not ignored.
+
+Every entity on a role layer (``stones``, ``free``, ``fixed``, ``platform``,
+``control_points``) is read or refused naming its handle and type (a SPLINE, CIRCLE, HATCH
+... on a stone layer was silently dropped). Block references (INSERT, MINSERT) are exploded
+(ezdxf's virtual entities: the reference's insertion point, scale, rotation and extrusion
+applied, nested references too): a stone drawn in a block is read where the reference puts
+it; an entity of a block on layer ``0`` takes the reference's layer, as CAD draws it.
+Coordinates are world coordinates (WCS): an entity's object coordinate system (its
+extrusion, (0, 0, -1) for a stone mirrored in CAD) is applied; an entity drawn out of the
+XY plane (extrusion not along z) is refused.
 
 Units: the header's ``$INSUNITS`` (in, ft, mm, cm, m) scales the drawing to metres; a
 unitless drawing (0, the default of many programs) is refused unless ``units`` ("mm",
 "cm", "m", "in", "ft") is given, and ``units`` that contradict the header are refused.
-Polylines with arcs (bulges) are refused (draw the stone with straight edges). Every error
-is one GeometryError line naming the file (and the handle, layer or stone).
+Polylines with arcs (bulges) are refused (draw the stone with straight edges). A wall or
+stone of implausible size for masonry (a drawing in the wrong unit) gets a ``warning:``
+line (``plausible.py``). Every error is one GeometryError line naming the file (and the
+handle, layer or stone).
 """
 from __future__ import annotations
 
@@ -205,10 +222,10 @@ def read(file, units: str | None = None) -> dict:
         low = lay.lower()
         kind = e.dxftype()
         if kind == "INSERT":  # exploded by _entities; its attributes ID and DEPTH label a stone
-            p = e.ocs().to_wcs(e.dxf.insert)
             for tag in ("ID", "DEPTH"):
-                if e.has_attrib(tag):
-                    val = e.get_attrib_text(tag).strip()
+                att = e.get_attrib(tag)
+                if att is not None:  # where its text is (a stone's block has its origin at a corner)
+                    val, p = att.dxf.text.strip(), _text_point(att)
                     labels.append((val if tag == "ID" else f"depth={val}", p[0] * scale, p[1] * scale,
                                    f"{what} attribute {tag}"))
         elif kind in ("LWPOLYLINE", "POLYLINE") and (low in STONE_LAYERS or low == PLATFORM_LAYER):
