@@ -362,7 +362,7 @@ def test_unreadable_labels_are_refused_naming_the_stone(tmp_path, label, match):
 def test_fixed_stones_stand_on_the_drawn_platform(tmp_path):
     """A platform drawn 1 m below the stones: the bottom course was fixed in mid-air. Now a
     drawn platform no stone stands on is refused, and so is a stone on layer 'fixed' that
-    stands neither on the platform nor on fixed stones that do (within STANDING_TOL); one on
+    stands neither on the platform nor on fixed stones that do (within standing_tol); one on
     the fixed bottom course is accepted, and so is a course within the tolerance."""
     def drawing(name, platform_z, extra=None):
         doc, msp = _doc()
@@ -378,7 +378,7 @@ def test_fixed_stones_stand_on_the_drawn_platform(tmp_path):
 
     with pytest.raises(GeometryError, match=r"below\.dxf \(stone 1, polyline handle \w+, layer 'stones'\): no stone "
                                             r"stands on the drawn platform; the lowest, this one, is 1 m from it "
-                                            r"\(tolerance 0\.001 m\)"):
+                                            r"\(tolerance 0\.0009 m: 0\.1 % of the 0\.9 m wall\)"):
         dxf.make(drawing("below.dxf", -1.0), thickness=0.5)
     with pytest.raises(GeometryError, match=r"hover\.dxf \(stone 4, .*layer 'fixed'\): a fixed stone must stand on "
                                             r"the platform .* it is 0\.5 m from the platform"):

@@ -130,10 +130,18 @@ OVERLAP_TOL = 1e-6
 #: checks of one stone's parts (at most 496 pairs, each a linear programme at worst) and,
 #: once the engines take parts, the K_a x K_b part pairs of a contact between two stones.
 MAX_PARTS_PER_BLOCK = 32
-#: a block stands on another (a fixed stone on the platform) when they are within this (m):
-#: a drawing's precision, 1 mm. A fixed block farther from the platform and from every fixed
-#: block that stands on it is held in mid-air (``hovering_fixed``)
+#: a block stands on another (a fixed stone on the platform) when they are within
+#: ``standing_tol``: STANDING_TOL (m, a drawing's precision, 1 mm), or STANDING_REL x the
+#: wall's size where that is less (a 2 cm laboratory model's stones are not 1 mm "on" each
+#: other). A fixed block farther from the platform and from every fixed block that stands
+#: on it is held in mid-air (``hovering_fixed``)
 STANDING_TOL = 1e-3
+STANDING_REL = 1e-3
+
+
+def standing_tol(size: float) -> float:
+    """The standing tolerance (m) for a wall ``size`` m across (``STANDING_TOL``)."""
+    return min(STANDING_TOL, STANDING_REL * size)
 #: two parts of one stone are joined face to face when a face of one and a face of the
 #: other have opposite normals, lie within OVERLAP_TOL of each other's plane and overlap in
 #: a patch wider than this (m; the width 2 x area / perimeter, a strip's width). Parts
@@ -712,9 +720,10 @@ def check_no_overlaps(bs: BlockSet, where: str = "<blocks>", tol: float = OVERLA
                     f"(tolerance {tol:g} m)")
 
 
-def hovering_fixed(bs: BlockSet, tol: float = STANDING_TOL) -> list[int]:
+def hovering_fixed(bs: BlockSet, tol: float | None = None) -> list[int]:
     """Ids of the fixed blocks that stand neither on a platform block nor on a fixed block that
-    does (a chain), judged by bounding boxes: a block whose box is more than ``tol`` (m) from
+    does (a chain), judged by bounding boxes: a block whose box is more than ``tol`` (m; default
+    ``standing_tol`` of the non-platform blocks' extent) from
     every such block's box certainly touches none of them (a conservative test: a block
     listed hovers; one not listed may still only nearly touch). A geometry without a
     platform block has its fixed blocks as its ground (the four-block model): none listed."""
@@ -726,6 +735,9 @@ def hovering_fixed(bs: BlockSet, tol: float = STANDING_TOL) -> list[int]:
     held = [b.id for b in bs.blocks if b.role == "platform"]
     if not held:
         return []
+    if tol is None:
+        pts = np.vstack([b.points for b in bs.blocks if b.role != "platform"])
+        tol = standing_tol(float(np.max(pts.max(axis=0) - pts.min(axis=0))))
     rest = [b.id for b in bs.blocks if b.role == "fixed"]
     todo = list(held)
     while todo and rest:

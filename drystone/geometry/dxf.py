@@ -9,10 +9,10 @@ Model space only. Layers (names case-insensitive, as in CAD):
 * ``stones``: closed LWPOLYLINE or 2D POLYLINE (closed flag, or first point = last), a
   stone fixed when it stands on the platform (``fix_bottom``, default) and free otherwise;
   ``free`` / ``fixed``: a stone with that role (a fixed stone must stand on the platform, or
-  on fixed stones that do, within ``blockfile.STANDING_TOL``, else it is refused: it would
-  hover);
+  on fixed stones that do, within ``blockfile.standing_tol``, 1 mm or 0.1 % of the wall's
+  size if less; else it is refused: it would hover);
 * ``platform``: at most one closed convex polyline, the platform (id 0), extruded through
-  3 x the wall's thickness; some stone must stand on it (within ``blockfile.STANDING_TOL``),
+  3 x the wall's thickness; some stone must stand on it (within ``blockfile.standing_tol``),
   else the drawing is refused; without one, a 0.1 m slab under the lowest stone;
 * ``control_points``: POINT (named P1, P2, ... in drawing order) or TEXT/MTEXT (named by
   its text) at a control point, put on the stone that contains it (or the nearest) at the

@@ -209,11 +209,6 @@ def points_in(polygons: list, points) -> list[np.ndarray]:
     return out
 
 
-#: a stone stands on the platform (or on a fixed stone) when one of its corners is within
-#: this of it (m; ``blockfile.STANDING_TOL``, 1 mm, a drawing's precision). A fixed stone
-#: farther away would hover in place, and a wall whose lowest stones are farther would drop
-#: onto its platform.
-STANDING_TOL = bf.STANDING_TOL
 
 
 def _gap(p: np.ndarray, q: np.ndarray) -> float:
@@ -222,17 +217,25 @@ def _gap(p: np.ndarray, q: np.ndarray) -> float:
     return min(min(_distance(q, c) for c in p), min(_distance(p, c) for c in q))
 
 
-def _check_standing(stones: dict, platform: np.ndarray, roles: dict, fix_bottom: bool, where: dict) -> set:
-    """The stones standing on the drawn ``platform`` (within ``STANDING_TOL``). Refused, naming
+def _tol_words(tol: float, stones: dict) -> str:
+    allp = np.vstack(list(stones.values()))
+    size = float(np.max(allp.max(axis=0) - allp.min(axis=0)))
+    return f"{tol:.3g} m" if tol >= bf.STANDING_TOL else f"{tol:.3g} m: {100 * bf.STANDING_REL:g} % of the {size:.3g} m wall"
+
+
+def _check_standing(stones: dict, platform: np.ndarray, roles: dict, fix_bottom: bool, where: dict,
+                    tol: float) -> set:
+    """The stones standing on the drawn ``platform`` (a corner within ``tol``, m: a fixed stone
+    farther away would hover in place; a wall whose lowest stones are would drop). Refused, naming
     the stone and its gap: a platform no stone stands on (the wall would drop onto it), and
     a stone fixed by ``roles`` that stands neither on the platform nor on fixed stones that
     do (a chain; with ``fix_bottom`` the stones on the platform are fixed)."""
     gaps = {bid: min(_distance(platform, c) for c in p) for bid, p in stones.items()}
-    on = {bid for bid, g in gaps.items() if g <= STANDING_TOL}
+    on = {bid for bid, g in gaps.items() if g <= tol}
     if not on:
         low = min(stones, key=lambda b: (stones[b][:, 1].min(), b))
         raise OutlineError(f"{where[low]}: no stone stands on the drawn platform; the lowest, this one, is "
-                           f"{gaps[low]:.4g} m from it (tolerance {STANDING_TOL:g} m): draw the platform under "
+                           f"{gaps[low]:.4g} m from it (tolerance {_tol_words(tol, stones)}): draw the platform under "
                            "the stones")
     fixed = {bid for bid, role in roles.items() if role == "fixed"}
     held = {bid for bid in on if roles.get(bid, "fixed" if fix_bottom else "free") == "fixed"}
@@ -241,13 +244,13 @@ def _check_standing(stones: dict, platform: np.ndarray, roles: dict, fix_bottom:
         a = stones[todo.pop()]
         for bid in sorted(fixed - held):
             b = stones[bid]
-            if (np.all(b.min(axis=0) <= a.max(axis=0) + STANDING_TOL)
-                    and np.all(a.min(axis=0) <= b.max(axis=0) + STANDING_TOL) and _gap(a, b) <= STANDING_TOL):
+            if (np.all(b.min(axis=0) <= a.max(axis=0) + tol)
+                    and np.all(a.min(axis=0) <= b.max(axis=0) + tol) and _gap(a, b) <= tol):
                 held.add(bid)
                 todo.append(bid)
     for bid in sorted(fixed - held):
         raise OutlineError(f"{where[bid]}: a fixed stone must stand on the platform (or on fixed stones that do) "
-                           f"within {STANDING_TOL:g} m; it is {gaps[bid]:.4g} m from the platform: it would hover")
+                           f"within {_tol_words(tol, stones)}; it is {gaps[bid]:.4g} m from the platform: it would hover")
     return on
 
 
@@ -311,10 +314,12 @@ def build(stones: dict, thickness: float, where: dict, *, origin: str, roles: di
             cps.append({"name": cp, "block": bid, "position": [float(top[:, 0].mean()), 0.0,
                                                                float(top[:, 1].max())]})
     else:
+        allp = np.vstack(list(stones.values()))
+        tol = bf.standing_tol(float(np.max(allp.max(axis=0) - allp.min(axis=0))))
         if platform is None:  # the slab under the lowest stone
-            on = {bid for bid, p in stones.items() if p[:, 1].min() <= zmin + STANDING_TOL}
+            on = {bid for bid, p in stones.items() if p[:, 1].min() <= zmin + tol}
         else:
-            on = _check_standing(stones, platform, roles, fix_bottom, where)
+            on = _check_standing(stones, platform, roles, fix_bottom, where, tol)
         if fix_bottom:
             for b in blocks:
                 if b["id"] not in roles and b["id"] in on:
