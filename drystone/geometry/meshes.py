@@ -5,12 +5,16 @@ Sources (exactly one): ``files = ["stone_a.obj", "stone_b.ply"]`` (one file per 
 ``folder = "scans"`` (every .obj/.ply/.stl in it, one per stone), or ``file = "wall.stl"``
 with ``split = true`` (default): one mesh split into its connected components, one stone
 each (ordered by centroid z, then x, then y). Ids: the file stems when all are positive
-integers (``3.obj`` is stone 3), else 1, 2, ... in order (``files`` as listed, a folder
+integers in ASCII digits up to ``blockfile.MAX_ID`` (``3.obj`` is stone 3), else 1, 2, ... in order (``files`` as listed, a folder
 sorted by name).
 
 Every mesh (each component, when split) must be closed (watertight: each edge shared by
-exactly two faces); a mesh with a hole, an unreadable or empty file is refused, one
-GeometryError line naming the file (and component).
+exactly two faces) and enclose a volume (not flat: ``FLAT_REL``); a mesh with a hole, a
+flat one, one with a non-finite (NaN) vertex (named before trimesh's processing drops it),
+an unreadable or empty file, and, where a file is one stone (``files``, ``folder``, or
+``file`` with ``split = false``), a file of several separate bodies (its hull would bridge
+the gap) is refused, one GeometryError line naming the file (and component). A wall or
+stone of implausible size (wrong ``units``) gets a ``warning:`` line (``plausible.py``).
 
 Units: meshes carry none, so ``units`` ("mm", "cm", "m", "in", "ft") is required and
 scales the file to metres. ``up`` ("z" default, "y" or "x"): the mesh's up axis, turned

@@ -3,7 +3,8 @@ e.g. digitised from a photograph of the wall's face, extruded through the thickn
 (y from -T/2 to T/2).
 
 Input: a folder with one text file per stone named ``<id>.csv`` or ``<id>.txt`` (the id is
-the stone's number, e.g. the paper's Figure 19c), two columns x z per line (comma, space or
+the stone's number, e.g. the paper's Figure 19c: ASCII digits, 1 to ``blockfile.MAX_ID``;
+the file UTF-8 or ASCII text), two columns x z per line (comma, space or
 tab separated; ``#`` comments and one header line allowed), at least 3 vertices in order
 around the stone (either sense; the last joins the first). The rules of an outline are
 ``drystone.geometry.decompose.check_outline``'s: repeated points and points on a
@@ -262,11 +263,14 @@ def build(stones: dict, thickness: float, where: dict, *, origin: str, roles: di
     """The block-file dict of the stones ``{id: (n, 2) counter-clockwise outline (x, z, m)}``
     (as ``decompose.check_outline`` returns them) extruded through ``thickness`` (m; y from
     -T/2 to T/2, or a stone's own ``depths[id]``), shared by the outline folder and DXF
-    readers. ``where[id]`` names a stone in messages, ``origin`` the source. ``roles``:
-    ``{id: "free" | "fixed"}`` fixes a stone's role; the others are fixed when they touch the
-    platform and ``fix_bottom``, else free (``layout = "sacsayhuaman"`` overrides both).
-    ``platform``: a convex (n, 2) outline for the platform (id 0), extruded through 3 x the
-    deepest stone; default a 0.1 m slab under the lowest stone, 2 x the wall's length wide.
+    readers. ``where[id]`` names a stone in messages, ``origin`` the source, ``units`` the
+    unit it was read in (``plausible.check_sizes`` warns about an implausible size). ``roles``:
+    ``{id: "free" | "fixed"}`` fixes a stone's role; the others are fixed when they stand on
+    the platform (within ``blockfile.standing_tol``) and ``fix_bottom``, else free
+    (``layout = "sacsayhuaman"`` overrides both). ``platform``: a convex (n, 2) outline for
+    the platform (id 0), extruded through 3 x the deepest stone (some stone must stand on it,
+    and every stone of role fixed on it or on fixed stones that do: ``_check_standing``);
+    default a 0.1 m slab under the lowest stone, 2 x the wall's length wide.
     ``control_points``: ``[(name, x, z)]`` on the stone containing (or nearest to) each point,
     at the front face (y = -T/2); none given: one ``top_<id>`` at the centroid of each top stone
     (``top_stones``)."""
