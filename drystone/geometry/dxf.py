@@ -110,17 +110,19 @@ def _polyline(e, what, path, scale):
     else:
         if e.is_poly_face_mesh or e.is_polygon_mesh:
             raise _fail(path, f"{what} is a mesh, not an outline")
-        if e.is_3d_polyline:
-            raise _fail(path, f"{what} is a 3D polyline; draw stones as 2D polylines in the XY plane")
         bulges = [v.dxf.get("bulge", 0.0) for v in e.vertices]
         wcs = list(e.points_in_wcs())
         closed = bool(e.is_closed)
     _plane(e, what, path)
     if any(abs(b) > 1e-12 for b in bulges[:-1]) or (closed and bulges and abs(bulges[-1]) > 1e-12):
         raise _fail(path, f"{what} has arcs (bulges); draw stones with straight edges")
-    xy = np.array([(v[0], v[1]) for v in wcs], float).reshape(-1, 2) * scale
-    if not np.all(np.isfinite(xy)):
+    xyz = np.array([(v[0], v[1], v[2]) for v in wcs], float).reshape(-1, 3) * scale
+    if not np.all(np.isfinite(xyz)):
         raise _fail(path, f"{what} has non-finite coordinates")
+    if len(xyz) and np.ptp(xyz[:, 2]) > 1e-9 * (1.0 + np.ptp(xyz[:, :2])):  # a 3D polyline off the XY plane
+        raise _fail(path, f"{what} is not flat in the XY plane (its z spans {np.ptp(xyz[:, 2]):.3g} m); draw the "
+                          "wall's face in plan view (XY)")
+    xy = xyz[:, :2]
     if not closed and len(xy) > 3 and np.allclose(xy[0], xy[-1], atol=1e-12 * (1 + np.abs(xy).max())):
         closed = True
     if not closed:
