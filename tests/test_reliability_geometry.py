@@ -216,6 +216,7 @@ def _set(path, value):
     (_set(["blocks", 1, "vertices", 0, 2], float("inf")), ["block 1: vertices contain a non-finite number"]),
     (_set(["blocks", 1, "id"], "1"), ["blocks[1]: 'id' must be an integer, got '1'"]),
     (_set(["blocks", 1, "id"], 1.0), ["blocks[1]: 'id' must be an integer, got 1.0"]),
+    (_set(["blocks", 1, "id"], 10**40), ["blocks[1]: 'id' 1" + "0" * 40 + " is beyond 2147483647"]),
     (_set(["blocks", 1, "material"], ["stone"]), ["block 1: unknown material ['stone']"]),
     (_set(["blocks", 1, "label"], 5), ["block 1: 'label' must be a string"]),
     (_set(["control_points", 0, "position"], ["0", 0, 0.2]), ["control point 'top': 'position' contains '0'"]),
@@ -402,3 +403,25 @@ def test_bad_drawing_refused_by_run_before_anything_is_written(tmp_path):
     assert len(lines) == 1 and lines[0].startswith("error: ") and "Traceback" not in r.stderr
     assert f"wall.dxf: CIRCLE handle {h} on layer 'stones' cannot be read" in lines[0]
     assert not (tmp_path / "out").exists()
+
+
+def test_resolving_a_run_warns_of_a_fixed_block_in_mid_air(tmp_path, capsys):
+    """A block file whose fixed block is 1 m above the platform: the run's resolution prints
+    one `warning:` line naming the file and the block (before YADE); on the platform, none."""
+    from drystone import runner
+    from drystone.model import case as casemod
+
+    for z, warned in ((1.1, True), (0.1, False)):
+        d = blocks_file(bf.box_vertices((0, 0, z + 0.2), (0.2, 0.2, 0.2)), joints=[], control_points=[])
+        d["blocks"].append({"id": 2, "role": "fixed", "material": "stone",
+                            "vertices": bf.box_vertices((0, 0, z), (0.2, 0.2, 0.2))})
+        (tmp_path / "g.json").write_text(json.dumps(d))
+        (tmp_path / "c.toml").write_text('[case]\ngeometry = "g.json"\n[[stages]]\ntype = "gravity"\nduration = 0.1\n')
+        p = tmp_path / "c.toml"
+        runner.resolve(casemod.load(p), str(p), tmp_path / f"out{z}")
+        err = capsys.readouterr().err
+        if warned:
+            assert err.startswith("warning: ") and "g.json: fixed block(s) [2] stand neither on the platform" in err
+            assert len(err.strip().splitlines()) == 1
+        else:
+            assert "warning" not in err
