@@ -192,3 +192,57 @@ def test_case_paths_resolve_relative_to_the_case_file(tmp_path):
         case_mod._generator_paths(dict(geo, files=["scans/a.obj", "scans/b.obj"]), tmp_path, "c.toml")
     with pytest.raises(case_mod.CaseError, match="'folder': .* is not a folder"):
         case_mod._generator_paths({"generator": "outlines", "folder": "nowhere"}, tmp_path, "c.toml")
+
+
+# --- bad meshes named: non-finite vertices, no volume, several bodies, odd file names --------
+
+def test_non_finite_vertex_is_named_not_called_a_hole(tmp_path):
+    """A NaN vertex was dropped by trimesh's processing and the mesh then reported 'not
+    closed'; it is now named before processing."""
+    m = box([1.0, 1.0, 1.0])
+    v = np.array(m.vertices)
+    v[3, 1] = np.nan
+    path = tmp_path / "nan.obj"
+    path.write_text("".join(f"v {x} {y} {z}\n" for x, y, z in v) + "".join(f"f {a + 1} {b + 1} {c + 1}\n"
+                                                                           for a, b, c in m.faces))
+    with pytest.raises(GeometryError, match=r"nan\.obj: mesh has 1 vertex\(es\) with non-finite coordinates .*"
+                                            r"the first vertex 3 at \([^)]*nan[^)]*\)"):
+        meshes.make(files=[str(path)], units="m")
+
+
+def test_closed_mesh_of_no_volume_is_refused(tmp_path):
+    """Four coplanar points joined as a tetrahedron: closed (every edge in two faces) but flat;
+    was a QhullError traceback."""
+    flat = trimesh.Trimesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], [[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]],
+                           process=False)
+    with np.errstate(invalid="ignore"):  # trimesh divides by the zero volume for the centre of mass
+        assert flat.is_watertight and flat.volume == 0.0
+    flat.export(tmp_path / "flat.stl")
+    with pytest.raises(GeometryError, match=r"flat\.stl: mesh encloses no volume"):
+        meshes.make(files=[str(tmp_path / "flat.stl")], units="m")
+
+
+@pytest.mark.parametrize("mode", ["folder", "files", "file"])
+def test_a_file_of_two_bodies_is_not_one_stone(tmp_path, mode):
+    """Two separate boxes in one file became one convex stone bridging the gap (its hull 175 %
+    above the mesh); in folder or files mode (one stone per file), or file mode with split =
+    false, it is refused naming the file; file mode with split = true still splits it."""
+    (tmp_path / "w").mkdir()
+    (box([1.0, 1.0, 1.0]) + box([1.0, 1.0, 1.0], at=(3.0, 0.0, 0.0))).export(tmp_path / "w" / "1.stl")
+    box([1.0, 1.0, 1.0], at=(0.0, 0.0, 1.0)).export(tmp_path / "w" / "2.stl")
+    kw = {"folder": {"folder": str(tmp_path / "w")}, "files": {"files": [str(tmp_path / "w" / "1.stl")]},
+          "file": {"file": str(tmp_path / "w" / "1.stl"), "split": False}}[mode]
+    with pytest.raises(GeometryError, match=r"w/1\.stl: the mesh holds 2 separate bodies, not one stone"):
+        meshes.make(units="m", **kw)
+    d = meshes.make(file=str(tmp_path / "w" / "1.stl"), units="m", fix_bottom=False)
+    assert [b["id"] for b in d["blocks"]] == [0, 1, 2]
+
+
+def test_file_names_that_are_not_plain_ids(tmp_path):
+    """'².stl' (a superscript digit: str.isdigit but not int) and a 40-digit stem were a
+    traceback and an id no run could store; such names are numbered in order, as any
+    non-integer stem."""
+    box([1.0, 1.0, 1.0]).export(tmp_path / "².stl")
+    box([1.0, 1.0, 1.0], at=(2.0, 0.0, 0.0)).export(tmp_path / ("7" * 40 + ".stl"))
+    d = meshes.make(folder=str(tmp_path), units="m", fix_bottom=False)
+    assert [b["id"] for b in d["blocks"]] == [0, 1, 2]

@@ -106,3 +106,21 @@ def test_notched_outline_once_refused_is_a_two_part_stone(tmp_path):
     parts = bs.block(3).parts
     assert len(parts) == 2
     assert sum(ph.volume_centroid(p)[0] for p in parts) == pytest.approx(0.75 * 0.5, rel=tol.NUMERICAL_REL)
+
+
+@pytest.mark.parametrize("name, raw, match", [
+    ("1.csv", "0 0\n1 0\n1 1\n0 1\n# caf\xe9\n".encode("latin-1"),
+     r"1\.csv: not a UTF-8 text file \(byte 0xe9 at position 21\)"),
+    ("².txt", b"0 0\n1 0\n1 1\n0 1\n", r"².txt: outline files are named by the stone's id, an integer from 1 to "
+                                       r"2147483647 in the digits 0-9"),
+    ("1" * 40 + ".txt", b"0 0\n1 0\n1 1\n0 1\n", r"1{40}\.txt: outline files are named by the stone's id"),
+])
+def test_unreadable_names_and_encodings_are_refused(tmp_path, name, raw, match):
+    """A latin-1 file and a file named '².txt' were tracebacks (UnicodeDecodeError, int('²'));
+    a 40-digit id was accepted and broke the run's outputs at the end."""
+    d = tmp_path / "w"
+    write(d, "2.csv", "0 1\n1 1\n1 2\n0 2\n")
+    (d / name).write_bytes(raw)
+    with pytest.raises(ol.OutlineError, match=match) as err:
+        ol.make(d, thickness=0.4)
+    assert "\n" not in str(err.value)

@@ -216,6 +216,7 @@ def _set(path, value):
     (_set(["blocks", 1, "vertices", 0, 2], float("inf")), ["block 1: vertices contain a non-finite number"]),
     (_set(["blocks", 1, "id"], "1"), ["blocks[1]: 'id' must be an integer, got '1'"]),
     (_set(["blocks", 1, "id"], 1.0), ["blocks[1]: 'id' must be an integer, got 1.0"]),
+    (_set(["blocks", 1, "id"], 10**12), ["blocks[1]: 'id' 1000000000000 is beyond 2147483647"]),
     (_set(["blocks", 1, "material"], ["stone"]), ["block 1: unknown material ['stone']"]),
     (_set(["blocks", 1, "label"], 5), ["block 1: 'label' must be a string"]),
     (_set(["control_points", 0, "position"], ["0", 0, 0.2]), ["control point 'top': 'position' contains '0'"]),
@@ -326,3 +327,101 @@ def test_sweep_finds_the_same_pairs_and_errors_as_all_pairs():
             except bf.GeometryError as exc:
                 errors.append(str(exc))
         assert errors[0] == errors[1]
+
+
+# --- drawings and scans: wrong units, hovering fixed blocks, refusals from the command line --
+
+def _outline_wall(folder, scale):
+    """Three 0.45 x 0.3 (x scale) stones, two side by side and one on top, as outline files."""
+    folder.mkdir()
+    for bid, (x, z) in {1: (0, 0), 2: (0.45, 0), 3: (0.2, 0.3)}.items():
+        pts = [(x, z), (x + 0.45, z), (x + 0.45, z + 0.3), (x, z + 0.3)]
+        (folder / f"{bid}.csv").write_text("".join(f"{px * scale!r} {pz * scale!r}\n" for px, pz in pts))
+    return folder
+
+
+@pytest.mark.parametrize("scale, words", [
+    (1.0, None),
+    (0.001 * 2 / 0.9, ["the wall is 0.002 m across", "outside the plausible 0.1-500 m",
+                       "stone(s) outside the plausible 0.02-20 m"]),  # a 0.9 m wall drawn in mm read as m
+    (2000 / 0.9, ["the wall is 2e+03 m across", "outside the plausible 0.1-500 m", "e.g. "]),
+])
+def test_wrong_units_warn_stating_the_range(tmp_path, capsys, scale, words):
+    """A 2 mm or 2 km wall ran without a word: a `warning:` line on stderr states the size and
+    the plausible range (drystone/geometry/plausible.py); the geometry is still built."""
+    d = ol.make(_outline_wall(tmp_path / "w", scale), thickness=0.5 * scale)
+    assert len(d["blocks"]) == 4
+    err = capsys.readouterr().err
+    if words is None:
+        assert "warning" not in err
+    else:
+        assert err.startswith("warning: ") and all(w in err for w in words), err
+        assert all(line.startswith("warning: ") for line in err.splitlines())
+
+
+def test_absurd_size_refused_naming_the_file_not_the_platform(tmp_path):
+    """A drawing of 1e20 mm was refused as 'block 0: vertices are coplanar' (the package's own
+    0.1 m platform lost in the round-off): now refused for its size, naming the file."""
+    with pytest.raises(bf.GeometryError, match=r"outlines in .*w: the wall is 9e\+16 m across, beyond any "
+                                               r"structure \(at most 100000 m"):
+        ol.make(_outline_wall(tmp_path / "w", 1e17), thickness=0.5)
+
+
+def test_fixed_blocks_held_in_mid_air_are_listed():
+    """A fixed block 1 m above the platform touches neither it nor a fixed block that does: a
+    run warns (resolve); one on the platform, or on a fixed block on it, is not listed, nor
+    are the four-block model's supports (no platform: the fixed blocks are the ground)."""
+    def fixed_at(z):
+        return {"id": 2, "role": "fixed", "material": "stone", "vertices": bf.box_vertices((0, 0, z), (0.2, 0.2, 0.2))}
+    base = blocks_file(bf.box_vertices((1, 0, 0.1), (0.2, 0.2, 0.2)), joints=[], control_points=[])
+    for z, want in ((1.1, [2]), (0.1, []), (0.1 + 0.5 * bf.STANDING_TOL, []), (0.1 + 2 * bf.STANDING_TOL, [2])):
+        d = dict(base, blocks=base["blocks"] + [fixed_at(z)])
+        assert bf.hovering_fixed(bf.parse(d)) == want, z
+    chain = dict(base, blocks=base["blocks"] + [fixed_at(0.1), dict(fixed_at(0.3), id=3)])
+    assert bf.hovering_fixed(bf.parse(chain)) == []
+    assert bf.hovering_fixed(bf.parse(generators.generate({"generator": "four_blocks"}))) == []
+
+
+def test_bad_drawing_refused_by_run_before_anything_is_written(tmp_path):
+    """From the command line: a stone drawn as a CIRCLE on the stones layer is one line naming
+    the drawing, the handle and the type, exit 2, before the run (nothing in --out)."""
+    ezdxf = pytest.importorskip("ezdxf")
+    doc = ezdxf.new("R2010")
+    doc.header["$INSUNITS"] = 6
+    msp = doc.modelspace()
+    msp.add_lwpolyline([(0, 0), (0.45, 0), (0.45, 0.3), (0, 0.3)], close=True, dxfattribs={"layer": "stones"})
+    msp.add_text("1").set_placement((0.2, 0.15))
+    h = msp.add_circle((0.2, 0.5), 0.15, dxfattribs={"layer": "stones"}).dxf.handle
+    doc.saveas(tmp_path / "wall.dxf")
+    (tmp_path / "c.toml").write_text('[case]\nname = "dxfwall"\n'
+                                     'geometry = {generator = "dxf", file = "wall.dxf", thickness = 0.5}\n'
+                                     '[[stages]]\ntype = "gravity"\nduration = 0.1\n')
+    r = subprocess.run([sys.executable, "-m", "drystone", "run", str(tmp_path / "c.toml"), "--out",
+                        str(tmp_path / "out")], capture_output=True, text=True, cwd=ROOT)
+    assert r.returncode == 2, r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and "Traceback" not in r.stderr
+    assert f"wall.dxf: CIRCLE handle {h} on layer 'stones' cannot be read" in lines[0]
+    assert not (tmp_path / "out").exists()
+
+
+def test_resolving_a_run_warns_of_a_fixed_block_in_mid_air(tmp_path, capsys):
+    """A block file whose fixed block is 1 m above the platform: the run's resolution prints
+    one `warning:` line naming the file and the block (before YADE); on the platform, none."""
+    from drystone import runner
+    from drystone.model import case as casemod
+
+    for z, warned in ((1.1, True), (0.1, False)):
+        d = blocks_file(bf.box_vertices((0, 0, z + 0.2), (0.2, 0.2, 0.2)), joints=[], control_points=[])
+        d["blocks"].append({"id": 2, "role": "fixed", "material": "stone",
+                            "vertices": bf.box_vertices((0, 0, z), (0.2, 0.2, 0.2))})
+        (tmp_path / "g.json").write_text(json.dumps(d))
+        (tmp_path / "c.toml").write_text('[case]\ngeometry = "g.json"\n[[stages]]\ntype = "gravity"\nduration = 0.1\n')
+        p = tmp_path / "c.toml"
+        runner.resolve(casemod.load(p), str(p), tmp_path / f"out{z}")
+        err = capsys.readouterr().err
+        if warned:
+            assert err.startswith("warning: ") and "g.json: fixed block(s) [2] stand neither on the platform" in err
+            assert len(err.strip().splitlines()) == 1
+        else:
+            assert "warning" not in err

@@ -92,6 +92,10 @@ PARTS_VERSION = 2
 #: the versions this reader reads
 VERSIONS = (VERSION, PARTS_VERSION)
 ROLES = ("free", "fixed", "platform")
+#: largest block id (in magnitude): YADE numbers bodies with C ints, and ids are stored in
+#: integer arrays (histories.npz); a larger one (a 40-digit label) would become an object
+#: array no run could load back
+MAX_ID = 2**31 - 1
 #: a vertex standing out of the block's other vertices by less than this x the block's
 #: size (the diagonal of its bounding box) is not a corner (far above round-off, far below
 #: any real stone's corner)
@@ -126,6 +130,18 @@ OVERLAP_TOL = 1e-6
 #: checks of one stone's parts (at most 496 pairs, each a linear programme at worst) and,
 #: once the engines take parts, the K_a x K_b part pairs of a contact between two stones.
 MAX_PARTS_PER_BLOCK = 32
+#: a block stands on another (a fixed stone on the platform) when they are within
+#: ``standing_tol``: STANDING_TOL (m, a drawing's precision, 1 mm), or STANDING_REL x the
+#: wall's size where that is less (a 2 cm laboratory model's stones are not 1 mm "on" each
+#: other). A fixed block farther from the platform and from every fixed block that stands
+#: on it is held in mid-air (``hovering_fixed``)
+STANDING_TOL = 1e-3
+STANDING_REL = 1e-3
+
+
+def standing_tol(size: float) -> float:
+    """The standing tolerance (m) for a wall ``size`` m across (``STANDING_TOL``)."""
+    return min(STANDING_TOL, STANDING_REL * size)
 #: two parts of one stone are joined face to face when a face of one and a face of the
 #: other have opposite normals, lie within OVERLAP_TOL of each other's plane and overlap in
 #: a patch wider than this (m; the width 2 x area / perimeter, a strip's width). Parts
@@ -562,6 +578,9 @@ def parse(data: dict, where: str = "<blocks>", check_overlaps: bool = True) -> B
         if not is_int(bid):
             raise GeometryError(f"{where}: blocks[{k}]: 'id' must be an integer, got {bid!r}")
         bid = int(bid)
+        if abs(bid) > MAX_ID:
+            raise GeometryError(f"{where}: blocks[{k}]: 'id' {bid} is beyond {MAX_ID} (ids are integers up to "
+                                f"{MAX_ID} in magnitude)")
         w = f"{where}: block {bid}"
         unknown = set(b) - BLOCK_KEYS
         if unknown:
@@ -699,6 +718,34 @@ def check_no_overlaps(bs: BlockSet, where: str = "<blocks>", tol: float = OVERLA
                 raise GeometryError(
                     f"{where}: blocks {a.id} and {b.id} interpenetrate by {t:.3g} m{which} "
                     f"(tolerance {tol:g} m)")
+
+
+def hovering_fixed(bs: BlockSet, tol: float | None = None) -> list[int]:
+    """Ids of the fixed blocks that stand neither on a platform block nor on a fixed block that
+    does (a chain), judged by bounding boxes: a block whose box is more than ``tol`` (m; default
+    ``standing_tol`` of the non-platform blocks' extent) from
+    every such block's box certainly touches none of them (a conservative test: a block
+    listed hovers; one not listed may still only nearly touch). A geometry without a
+    platform block has its fixed blocks as its ground (the four-block model): none listed."""
+    box = {b.id: (b.points.min(axis=0), b.points.max(axis=0)) for b in bs.blocks}
+
+    def near(a, b):
+        return bool(np.all(box[a][0] <= box[b][1] + tol) and np.all(box[b][0] <= box[a][1] + tol))
+
+    held = [b.id for b in bs.blocks if b.role == "platform"]
+    if not held:
+        return []
+    if tol is None:
+        pts = np.vstack([b.points for b in bs.blocks if b.role != "platform"])
+        tol = standing_tol(float(np.max(pts.max(axis=0) - pts.min(axis=0))))
+    rest = [b.id for b in bs.blocks if b.role == "fixed"]
+    todo = list(held)
+    while todo and rest:
+        a = todo.pop()
+        reached = [b for b in rest if near(a, b)]
+        rest = [b for b in rest if b not in reached]
+        todo += reached
+    return sorted(rest)
 
 
 def load(path, check_overlaps: bool = True) -> BlockSet:

@@ -5,12 +5,16 @@ Sources (exactly one): ``files = ["stone_a.obj", "stone_b.ply"]`` (one file per 
 ``folder = "scans"`` (every .obj/.ply/.stl in it, one per stone), or ``file = "wall.stl"``
 with ``split = true`` (default): one mesh split into its connected components, one stone
 each (ordered by centroid z, then x, then y). Ids: the file stems when all are positive
-integers (``3.obj`` is stone 3), else 1, 2, ... in order (``files`` as listed, a folder
+integers in ASCII digits up to ``blockfile.MAX_ID`` (``3.obj`` is stone 3), else 1, 2, ... in order (``files`` as listed, a folder
 sorted by name).
 
 Every mesh (each component, when split) must be closed (watertight: each edge shared by
-exactly two faces); a mesh with a hole, an unreadable or empty file is refused, one
-GeometryError line naming the file (and component).
+exactly two faces) and enclose a volume (not flat: ``FLAT_REL``); a mesh with a hole, a
+flat one, one with a non-finite (NaN) vertex (named before trimesh's processing drops it),
+an unreadable or empty file, and, where a file is one stone (``files``, ``folder``, or
+``file`` with ``split = false``), a file of several separate bodies (its hull would bridge
+the gap) is refused, one GeometryError line naming the file (and component). A wall or
+stone of implausible size (wrong ``units``) gets a ``warning:`` line (``plausible.py``).
 
 Units: meshes carry none, so ``units`` ("mm", "cm", "m", "in", "ft") is required and
 scales the file to metres. ``up`` ("z" default, "y" or "x"): the mesh's up axis, turned
@@ -54,6 +58,7 @@ import numpy as np
 from . import blockfile as bf
 from . import outlines as ol
 from . import params as pc
+from . import plausible
 from .blockfile import GeometryError
 
 #: mesh unit -> metres (as the DXF reader's)
@@ -63,6 +68,10 @@ SUFFIXES = (".obj", ".ply", ".stl")
 #: faces, which fit the contact kernel's buffer (faces + largest face's corners <= 48) for
 #: V <= 24 (blockfile.MAX_VERTICES_PER_BLOCK's note)
 MAX_CORNERS = 24
+#: a mesh is flat (no volume) when the spread of its points normal to their best plane (the
+#: least singular value of the centred points, about sqrt(n) x their RMS distance to it) is
+#: below this x its size x sqrt(n): far below any stone (a 1 m stone 1 um thick)
+FLAT_REL = 1e-6
 DECOMPOSITIONS = ("hull", "coacd")
 UP_AXES = ("z", "y", "x")
 PLATFORM_THICKNESS = ol.PLATFORM_THICKNESS
@@ -82,21 +91,40 @@ def load(path, what: str | None = None):
     if path.suffix.lower() not in SUFFIXES:
         raise _fail(path, f"not a mesh file of a known kind {list(SUFFIXES)}")
     try:
-        m = trimesh.load(str(path), force="mesh", process=True)
+        m = trimesh.load(str(path), force="mesh", process=False)
     except Exception as err:  # trimesh raises many kinds on bad files
         raise _fail(path, f"not a readable mesh: {' '.join(str(err).split()) or type(err).__name__}") from None
     if not isinstance(m, trimesh.Trimesh) or len(m.faces) == 0:
         raise _fail(path, "not a readable mesh (no triangles)")
-    if not np.all(np.isfinite(m.vertices)):
-        raise _fail(path, "mesh has non-finite coordinates")
+    bad = np.flatnonzero(~np.all(np.isfinite(m.vertices), axis=1))
+    if len(bad):  # checked before processing, which drops such vertices (and the mesh then has holes)
+        raise _fail(path, f"mesh has {len(bad)} vertex(es) with non-finite coordinates (NaN or infinity), "
+                          f"the first vertex {bad[0]} at {tuple(float(x) for x in m.vertices[bad[0]])}")
+    m.process(validate=False)  # merge duplicate vertices, as trimesh.load(process=True)
     return m
 
 
 def check_closed(m, where: str) -> None:
-    """Refuse a mesh that is not closed (an edge not shared by exactly two faces)."""
+    """Refuse a mesh that is not closed (an edge not shared by exactly two faces) or that
+    encloses no volume (flat: all its points within ``FLAT_REL`` x its size of a plane)."""
     if not m.is_watertight:
         raise GeometryError(f"{where}: mesh is not closed (watertight): it has a hole or a loose edge; "
                             "close it (fill holes) before use")
+    p = np.asarray(m.vertices, float)
+    size = float(np.max(p.max(axis=0) - p.min(axis=0))) if len(p) else 0.0
+    thin = float(np.linalg.svd(p - p.mean(axis=0), compute_uv=False)[-1]) if len(p) >= 4 else 0.0
+    if size == 0.0 or thin <= FLAT_REL * size * np.sqrt(len(p)):
+        raise GeometryError(f"{where}: mesh encloses no volume (its points lie in a plane or on a line); "
+                            "a stone is a solid")
+
+
+def check_one_body(m, where: str) -> None:
+    """Refuse a mesh of several separate bodies where one stone is meant (its hull would
+    bridge the gap: a stone that is not there)."""
+    n = len(m.split(only_watertight=False, repair=False))
+    if n > 1:
+        raise GeometryError(f"{where}: the mesh holds {n} separate bodies, not one stone; give one stone per file "
+                            "(or the whole wall as file = ... with split = true, one stone per body)")
 
 
 def orient(points, units: str, up: str) -> np.ndarray:
@@ -167,6 +195,7 @@ def _sources(files, folder, file, split):
         m = load(path)
         if not split:
             check_closed(m, str(path))
+            check_one_body(m, str(path))
             return [(path, m, str(path))], [1]
         comps = m.split(only_watertight=False, repair=False)  # no hole filling: holes are refused
         out = []
@@ -184,9 +213,9 @@ def _sources(files, folder, file, split):
             raise GeometryError(f"{fp}: no mesh files ({', '.join(SUFFIXES)}) in the folder")
     else:
         paths = [Path(f) for f in files]
-    stems = [p.stem for p in paths]
-    if all(s.isdigit() and int(s) > 0 for s in stems):
-        ids = [int(s) for s in stems]
+    stems = [ol.stone_id(p.stem) for p in paths]
+    if all(s is not None for s in stems):
+        ids = stems
         dup = sorted({i for i in ids if ids.count(i) > 1})
         if dup:
             raise GeometryError(f"two mesh files for stone(s) {dup}: "
@@ -197,6 +226,7 @@ def _sources(files, folder, file, split):
     for p in paths:
         m = load(p)
         check_closed(m, str(p))
+        check_one_body(m, str(p))
         out.append((p, m, str(p)))
     return out, ids
 
@@ -242,6 +272,9 @@ def make(files=None, folder=None, file=None, units: str | None = None, up: str =
     if units is None:
         raise _fail(sources[0][0], f"mesh files carry no units; give units = one of {sorted(UNITS)}")
 
+    plausible.check_sizes({bid: orient(m.vertices, units, up) for (_, m, _), bid in zip(sources, ids)},
+                          {bid: f"stone {bid} ({where})" for (_, _, where), bid in zip(sources, ids)},
+                          str(file or folder or "meshes"), units)
     blocks, notes, stone_points = [], [], {}
     for (path, m, where), bid in zip(sources, ids):
         pts = orient(m.vertices, units, up)

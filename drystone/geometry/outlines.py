@@ -3,7 +3,8 @@ e.g. digitised from a photograph of the wall's face, extruded through the thickn
 (y from -T/2 to T/2).
 
 Input: a folder with one text file per stone named ``<id>.csv`` or ``<id>.txt`` (the id is
-the stone's number, e.g. the paper's Figure 19c), two columns x z per line (comma, space or
+the stone's number, e.g. the paper's Figure 19c: ASCII digits, 1 to ``blockfile.MAX_ID``;
+the file UTF-8 or ASCII text), two columns x z per line (comma, space or
 tab separated; ``#`` comments and one header line allowed), at least 3 vertices in order
 around the stone (either sense; the last joins the first). The rules of an outline are
 ``drystone.geometry.decompose.check_outline``'s: repeated points and points on a
@@ -39,6 +40,7 @@ import numpy as np
 from . import blockfile as bf
 from . import decompose as dc
 from . import params as pc
+from . import plausible
 from .decompose import OutlineError  # the outline rules have one home: decompose.py
 
 PLATFORM_THICKNESS = 0.1  # m
@@ -48,8 +50,15 @@ def read_outline(path) -> np.ndarray:
     """(n, 2) array of the x, z corners (m) of one outline file, counter-clockwise
     (``decompose.check_outline``; errors name the file and stone)."""
     path = Path(path)
+    try:
+        content = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as err:
+        raise OutlineError(f"{path}: not a UTF-8 text file (byte 0x{err.object[err.start]:02x} at position "
+                           f"{err.start}); save the outline as plain text (UTF-8 or ASCII)") from None
+    except OSError as err:
+        raise OutlineError(f"{path}: cannot read the outline file ({err.strerror or err})") from None
     pts = []
-    for k, line in enumerate(path.read_text().splitlines(), 1):
+    for k, line in enumerate(content.splitlines(), 1):
         text = line.split("#", 1)[0].strip()
         if not text:
             continue
@@ -66,9 +75,23 @@ def read_outline(path) -> np.ndarray:
     return dc.check_outline(np.array(pts, float).reshape(-1, 2), _where(path))
 
 
+#: a stone's id as written in a file name or a label: ASCII digits (``str.isdigit`` also
+#: takes superscripts and other scripts' digits, which ``int`` refuses)
+ID_DIGITS = re.compile(r"[0-9]+")
+
+
+def stone_id(text: str) -> int | None:
+    """The stone id ``text`` spells (ASCII digits, 1 to ``blockfile.MAX_ID``), else None."""
+    if not ID_DIGITS.fullmatch(text):
+        return None
+    bid = int(text)
+    return bid if 1 <= bid <= bf.MAX_ID else None
+
+
 def _where(path: Path) -> str:
     """An outline file and its stone, for messages."""
-    return f"{path} (stone {int(path.stem)})" if path.stem.isdigit() else str(path)
+    bid = stone_id(path.stem)
+    return f"{path} (stone {bid})" if bid is not None else str(path)
 
 
 def _points(block: dict) -> np.ndarray:
@@ -95,12 +118,14 @@ def make(folder, thickness: float, layout: str | None = None, fix_bottom: bool =
         raise OutlineError(f"{folder}: no outline files (<id>.csv or <id>.txt)")
     stones, files_by_id = {}, {}
     for f in files:
-        if not f.stem.isdigit() or int(f.stem) == 0:
-            raise OutlineError(f"{f}: outline files are named by the stone's id, a positive integer (1.csv ...)")
-        if int(f.stem) in stones:
-            raise OutlineError(f"{f}: a second outline for stone {int(f.stem)}")
-        stones[int(f.stem)] = read_outline(f)
-        files_by_id[int(f.stem)] = f
+        bid = stone_id(f.stem)
+        if bid is None:
+            raise OutlineError(f"{f}: outline files are named by the stone's id, an integer from 1 to "
+                               f"{bf.MAX_ID} in the digits 0-9 (1.csv ...)")
+        if bid in stones:
+            raise OutlineError(f"{f}: a second outline for stone {bid}")
+        stones[bid] = read_outline(f)
+        files_by_id[bid] = f
     return build(stones, thickness, {bid: _where(f) for bid, f in files_by_id.items()}, origin=f"outlines in {folder}",
                  layout=layout, fix_bottom=fix_bottom, density=density, kn=kn, kt=kt, mu=mu, damping=damping,
                  name=name or folder.name,
@@ -150,23 +175,108 @@ def stone_at(stones: dict, q) -> int:
     return min(sorted(stones), key=lambda b: _distance(stones[b], q))
 
 
+def inside(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Which of the points ``q`` (m, 2) lie inside the polygon ``p`` (n, 2) or on its edges
+    (``_distance`` 0), vectorised over the points and the edges."""
+    q = np.asarray(q, float).reshape(-1, 2)
+    a, b = p[None, :, :], np.roll(p, -1, axis=0)[None, :, :]
+    x, z = q[:, 0:1], q[:, 1:2]
+    z0, z1, x0, x1 = a[..., 1], b[..., 1], a[..., 0], b[..., 0]
+    straddle = (z0 > z) != (z1 > z)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cross = straddle & (x < x0 + (z - z0) * (x1 - x0) / np.where(straddle, z1 - z0, 1.0))
+    odd = np.count_nonzero(cross, axis=1) % 2 == 1
+    ab = b - a
+    t = np.clip(np.einsum("mnk,mnk->mn", q[:, None, :] - a, np.broadcast_to(ab, (len(q),) + ab.shape[1:]))
+                / np.maximum(np.einsum("mnk,mnk->mn", ab, ab), 1e-300), 0, 1)
+    on_edge = np.any(np.all(a + t[..., None] * ab == q[:, None, :], axis=2), axis=1)
+    return odd | on_edge
+
+
+def points_in(polygons: list, points) -> list[np.ndarray]:
+    """For each polygon of ``polygons`` ((n_i, 2) arrays), the indices of the ``points``
+    (m, 2) inside it or on its edges (``inside``). The points are sorted by x once and each
+    polygon tests only those within its bounding box: O((n + m) log m) plus the points near
+    each polygon, where testing each point against each polygon took 171 s for 1000 stones."""
+    pts = np.asarray(points, float).reshape(-1, 2)
+    order = np.argsort(pts[:, 0], kind="stable")
+    xs = pts[order, 0]
+    out = []
+    for poly in polygons:
+        lo, hi = poly.min(axis=0), poly.max(axis=0)
+        cand = order[np.searchsorted(xs, lo[0], side="left"):np.searchsorted(xs, hi[0], side="right")]
+        cand = cand[(pts[cand, 1] >= lo[1]) & (pts[cand, 1] <= hi[1])]
+        out.append(np.sort(cand[inside(poly, pts[cand])]) if len(cand) else cand)
+    return out
+
+
+
+
+def _gap(p: np.ndarray, q: np.ndarray) -> float:
+    """Distance (m) between two polygons that do not overlap (0 where they touch): the least
+    distance of a corner of one to the other."""
+    return min(min(_distance(q, c) for c in p), min(_distance(p, c) for c in q))
+
+
+def _tol_words(tol: float, stones: dict) -> str:
+    allp = np.vstack(list(stones.values()))
+    size = float(np.max(allp.max(axis=0) - allp.min(axis=0)))
+    return f"{tol:.3g} m" if tol >= bf.STANDING_TOL else f"{tol:.3g} m: {100 * bf.STANDING_REL:g} % of the {size:.3g} m wall"
+
+
+def _check_standing(stones: dict, platform: np.ndarray, roles: dict, fix_bottom: bool, where: dict,
+                    tol: float) -> set:
+    """The stones standing on the drawn ``platform`` (a corner within ``tol``, m: a fixed stone
+    farther away would hover in place; a wall whose lowest stones are would drop). Refused, naming
+    the stone and its gap: a platform no stone stands on (the wall would drop onto it), and
+    a stone fixed by ``roles`` that stands neither on the platform nor on fixed stones that
+    do (a chain; with ``fix_bottom`` the stones on the platform are fixed)."""
+    gaps = {bid: min(_distance(platform, c) for c in p) for bid, p in stones.items()}
+    on = {bid for bid, g in gaps.items() if g <= tol}
+    if not on:
+        low = min(stones, key=lambda b: (stones[b][:, 1].min(), b))
+        raise OutlineError(f"{where[low]}: no stone stands on the drawn platform; the lowest, this one, is "
+                           f"{gaps[low]:.4g} m from it (tolerance {_tol_words(tol, stones)}): draw the platform under "
+                           "the stones")
+    fixed = {bid for bid, role in roles.items() if role == "fixed"}
+    held = {bid for bid in on if roles.get(bid, "fixed" if fix_bottom else "free") == "fixed"}
+    todo = sorted(held)
+    while todo:
+        a = stones[todo.pop()]
+        for bid in sorted(fixed - held):
+            b = stones[bid]
+            if (np.all(b.min(axis=0) <= a.max(axis=0) + tol)
+                    and np.all(a.min(axis=0) <= b.max(axis=0) + tol) and _gap(a, b) <= tol):
+                held.add(bid)
+                todo.append(bid)
+    for bid in sorted(fixed - held):
+        raise OutlineError(f"{where[bid]}: a fixed stone must stand on the platform (or on fixed stones that do) "
+                           f"within {_tol_words(tol, stones)}; it is {gaps[bid]:.4g} m from the platform: it would hover")
+    return on
+
+
 def build(stones: dict, thickness: float, where: dict, *, origin: str, roles: dict | None = None,
           depths: dict | None = None, platform: np.ndarray | None = None, control_points=None,
           layout: str | None = None, fix_bottom: bool = True, density=2300.0, kn=2e8, kt=1e8, mu=0.4,
-          damping=0.8, name: str = "outlines", generator: dict | None = None, description: str = "") -> dict:
+          damping=0.8, name: str = "outlines", generator: dict | None = None, description: str = "",
+          units: str | None = None) -> dict:
     """The block-file dict of the stones ``{id: (n, 2) counter-clockwise outline (x, z, m)}``
     (as ``decompose.check_outline`` returns them) extruded through ``thickness`` (m; y from
     -T/2 to T/2, or a stone's own ``depths[id]``), shared by the outline folder and DXF
-    readers. ``where[id]`` names a stone in messages, ``origin`` the source. ``roles``:
-    ``{id: "free" | "fixed"}`` fixes a stone's role; the others are fixed when they touch the
-    platform and ``fix_bottom``, else free (``layout = "sacsayhuaman"`` overrides both).
-    ``platform``: a convex (n, 2) outline for the platform (id 0), extruded through 3 x the
-    deepest stone; default a 0.1 m slab under the lowest stone, 2 x the wall's length wide.
+    readers. ``where[id]`` names a stone in messages, ``origin`` the source, ``units`` the
+    unit it was read in (``plausible.check_sizes`` warns about an implausible size). ``roles``:
+    ``{id: "free" | "fixed"}`` fixes a stone's role; the others are fixed when they stand on
+    the platform (within ``blockfile.standing_tol``) and ``fix_bottom``, else free
+    (``layout = "sacsayhuaman"`` overrides both). ``platform``: a convex (n, 2) outline for
+    the platform (id 0), extruded through 3 x the deepest stone (some stone must stand on it,
+    and every stone of role fixed on it or on fixed stones that do: ``_check_standing``);
+    default a 0.1 m slab under the lowest stone, 2 x the wall's length wide.
     ``control_points``: ``[(name, x, z)]`` on the stone containing (or nearest to) each point,
     at the front face (y = -T/2); none given: one ``top_<id>`` at the centroid of each top stone
     (``top_stones``)."""
     roles = roles or {}
     depths = depths or {}
+    plausible.check_sizes(stones, where, origin, units)
     h = thickness / 2.0
     blocks = []
     zmin = min(p[:, 1].min() for p in stones.values())
@@ -208,9 +318,15 @@ def build(stones: dict, thickness: float, where: dict, *, origin: str, roles: di
             cps.append({"name": cp, "block": bid, "position": [float(top[:, 0].mean()), 0.0,
                                                                float(top[:, 1].max())]})
     else:
+        allp = np.vstack(list(stones.values()))
+        tol = bf.standing_tol(float(np.max(allp.max(axis=0) - allp.min(axis=0))))
+        if platform is None:  # the slab under the lowest stone
+            on = {bid for bid, p in stones.items() if p[:, 1].min() <= zmin + tol}
+        else:
+            on = _check_standing(stones, platform, roles, fix_bottom, where, tol)
         if fix_bottom:
             for b in blocks:
-                if b["id"] not in roles and np.min(_points(b)[:, 2]) <= zmin + 1e-6:
+                if b["id"] not in roles and b["id"] in on:
                     b["role"] = "fixed"
         if control_points:
             for cname, x, z in control_points:

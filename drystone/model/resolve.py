@@ -47,6 +47,13 @@ def _geometry(case: dict, where: str, out: Path, check_overlaps: bool = True) ->
             if why:
                 what = f"block {b.id}" + (f" part {k}" if len(b.parts) > 1 else "")
                 raise bf.GeometryError(f"{geo if isinstance(geo, str) else where}: {what}: {why}")
+    hovering = bf.hovering_fixed(bs)
+    if hovering:
+        import sys
+        print(f"warning: {geo if isinstance(geo, str) else where}: fixed block(s) {hovering} stand neither on the "
+              f"platform nor on fixed blocks that do (more than {bf.STANDING_TOL:g} m away, or 0.1 % of the "
+              "wall's size if less): held in mid-air",
+              file=sys.stderr)
     bf.write(data, out / "geometry.json")
     return bs, source
 
