@@ -299,6 +299,26 @@ def _tipping(axis_z, L: float, D: float, H: float) -> tuple[float, float]:
     return lean, math.atan2(w, 0.5 * H)
 
 
+def collapse_reasons(extent, u, rotvec) -> tuple[list[str], bool]:
+    """The collapse rule for one stone (module docstring): ``extent`` (L, D, H) its
+    bounding box (m), ``u`` its centroid's displacement (m) and ``rotvec`` its rotation
+    (rotation vector, rad) since the reference, platform frame. Returns (reasons among
+    fell, overturned, out_of_plane; [] when it stands) and whether it slid along the
+    wall by more than half its length (reported, not collapse)."""
+    from scipy.spatial.transform import Rotation
+
+    L, D, H = (float(x) for x in extent)
+    reasons = []
+    if u[2] < -0.5 * H:
+        reasons.append("fell")
+    lean, tip = _tipping(Rotation.from_rotvec(rotvec).apply([0.0, 0.0, 1.0]), L, D, H)
+    if lean > tip:
+        reasons.append("overturned")
+    if abs(u[1]) > 0.5 * D:
+        reasons.append("out_of_plane")
+    return reasons, (not reasons and abs(u[0]) > 0.5 * L)
+
+
 def outcome(run_dir) -> dict:
     """THE collapse criterion and reduction of a finished run folder (module docstring).
 
@@ -311,7 +331,6 @@ def outcome(run_dir) -> dict:
     "onset_deg", "reaction_drop_deg", "first_stone", "max_tilt_deg"}. A folder without a
     complete run gives {"status": "failed", "error"}."""
     import numpy as np
-    from scipy.spatial.transform import Rotation
 
     from drystone.mechanics import rotations
     from drystone.model.spec import spec_dict, stage_type
@@ -348,19 +367,10 @@ def outcome(run_dir) -> dict:
         if b in left:
             why[b] = ["left_model"]
             continue
-        ext = np.ptp(verts[b], axis=0)
-        L, D, H = (float(x) for x in ext)
-        reasons = []
-        if u[j, 2] < -0.5 * H:
-            reasons.append("fell")
-        lean, tip = _tipping(Rotation.from_rotvec(rot[j]).apply([0.0, 0.0, 1.0]), L, D, H)
-        if lean > tip:
-            reasons.append("overturned")
-        if abs(u[j, 1]) > 0.5 * D:
-            reasons.append("out_of_plane")
+        reasons, slid = collapse_reasons(np.ptp(verts[b], axis=0), u[j], rot[j])
         if reasons:
             why[b] = reasons
-        elif abs(u[j, 0]) > 0.5 * L:
+        elif slid:
             sliding.append(b)
         res_norm[b] = float(np.linalg.norm(u[j]))
         out_plane[b] = float(abs(u[j, 1]))
