@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 import os
 import re
 import time
@@ -290,33 +289,11 @@ def run_jobs(case_path, runs: list, root, label: str, common=(), workers=None, b
 
 # -- THE outcome of a run ----------------------------------------------------------------
 
-def _tipping(axis_z, L: float, D: float, H: float) -> tuple[float, float]:
-    """(lean, tipping angle), rad, of a stone whose own vertical axis is now ``axis_z``."""
-    zx, zy, zz = (float(v) for v in axis_z)
-    lean = math.acos(max(-1.0, min(1.0, zz)))
-    phi = math.atan2(zy, zx)
-    w = abs(math.cos(phi)) * 0.5 * L + abs(math.sin(phi)) * 0.5 * D
-    return lean, math.atan2(w, 0.5 * H)
-
-
 def collapse_reasons(extent, u, rotvec) -> tuple[list[str], bool]:
-    """The collapse rule for one stone (module docstring): ``extent`` (L, D, H) its
-    bounding box (m), ``u`` its centroid's displacement (m) and ``rotvec`` its rotation
-    (rotation vector, rad) since the reference, platform frame. Returns (reasons among
-    fell, overturned, out_of_plane; [] when it stands) and whether it slid along the
-    wall by more than half its length (reported, not collapse)."""
-    from scipy.spatial.transform import Rotation
+    """The collapse rule for one stone: drystone/mechanics/collapse.py ``stone``."""
+    from drystone.mechanics import collapse
 
-    L, D, H = (float(x) for x in extent)
-    reasons = []
-    if u[2] < -0.5 * H:
-        reasons.append("fell")
-    lean, tip = _tipping(Rotation.from_rotvec(rotvec).apply([0.0, 0.0, 1.0]), L, D, H)
-    if lean > tip:
-        reasons.append("overturned")
-    if abs(u[1]) > 0.5 * D:
-        reasons.append("out_of_plane")
-    return reasons, (not reasons and abs(u[0]) > 0.5 * L)
+    return collapse.stone(extent, u, rotvec)
 
 
 def outcome(run_dir) -> dict:
