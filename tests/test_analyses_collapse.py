@@ -150,3 +150,19 @@ def test_collapse_rule_on_one_stone():
     tip_x = math.atan(0.4 / 0.8)
     assert common.collapse_reasons(ext, np.zeros(3), [0, 0.98 * tip_x, 0])[0] == []
     assert common.collapse_reasons(ext, np.zeros(3), [0, 1.02 * tip_x, 0])[0] == ["overturned"]
+
+
+def test_record_override_replaces_the_motion(tmp_path):
+    from drystone.model import case as casemod
+
+    c = casemod.load(ROCK)
+    rec = tmp_path / "my record.csv"
+    rec.write_text("0,0\n0.01,0.1\n0.02,0\n")
+    over = common.record_override(c, rec) + common.pga_override(c, 0.4)
+    st = casemod.load(ROCK, over)["stages"][1]
+    assert st["motion"] == "record" and Path(st["record"]) == rec.resolve()
+    assert st["frequency_hz"] is None and st["duration"] is None  # the sine's keys do not carry over
+    assert st["pga_g"] == 0.4 and st["direction"] == "y"
+    assert common.safe_name(str(rec)) == "my_record"
+    with pytest.raises(casemod.CaseError, match="gravity stage, not an excitation"):
+        common.excitation_stage(c, 0, "case")  # stage 0 is the gravity stage

@@ -218,10 +218,17 @@ def excitation_stage(case_dict: dict, stage=None, where: str = "case") -> int:
     return found[0]
 
 
+#: the keys of an excitation stage that a record replacing its motion keeps
+RECORD_STAGE_KEYS = ("type", "name", "direction", "pga_g", "site")
+
+
 def record_override(case_dict: dict, record, stage=None, where: str = "case") -> list[str]:
-    """The ``--set`` overrides replacing the record of the case's one excitation stage (or
-    of ``stage``): ``motion = record`` and ``record`` = the file (absolute path) or the
-    catalogue name. CaseError naming the case and stage when the record is neither."""
+    """The ``--set`` override replacing the motion of the case's one excitation stage (or of
+    ``stage``) by ``record``, a file (made absolute) or a catalogue name: the whole stage is
+    rewritten, keeping its direction, PGA, site and name (a sine's frequency, duration or
+    start do not apply to a record; a record's own duration is kept). CaseError naming the
+    case and stage when the record is neither a file nor a catalogue name."""
+    from drystone import tomlio
     from drystone.motions import catalogue
 
     k = excitation_stage(case_dict, stage, where)
@@ -234,11 +241,11 @@ def record_override(case_dict: dict, record, stage=None, where: str = "case") ->
             raise casemod.CaseError(f"{where}: stage {k}: record {r!r} is neither a file nor a catalogue name "
                                     f"({', '.join(catalogue.names())})")
         value = str(p.resolve())
-    over = [f"stages.{k}.motion=record", f"stages.{k}.record={json.dumps(value)}"]
     st = case_dict["stages"][k]
-    if st.get("start", "rest") != "rest":  # Eq. 9's displacement start is a sine's only
-        over.append(f"stages.{k}.start=rest")
-    return over
+    keep = RECORD_STAGE_KEYS + (("duration",) if st.get("motion") == "record" else ())
+    new = {key: st[key] for key in keep if st.get(key) is not None}
+    new.update(motion="record", record=value)
+    return [f"stages.{k}={tomlio.value(new)}"]
 
 
 def pga_override(case_dict: dict, pga_g: float, stage=None, where: str = "case") -> list[str]:
