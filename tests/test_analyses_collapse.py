@@ -166,3 +166,55 @@ def test_record_override_replaces_the_motion(tmp_path):
     assert common.safe_name(str(rec)) == "my_record"
     with pytest.raises(casemod.CaseError, match="gravity stage, not an excitation"):
         common.excitation_stage(c, 0, "case")  # stage 0 is the gravity stage
+
+
+def _fake_runs(collapses, fail_at=None):
+    """A stand-in for common.run_jobs: each run's outcome from its PGA override."""
+    def run_jobs(case_path, runs, root, label, common_=(), workers=None, backend="local", address=None, log=print):
+        out = {}
+        for name, over in runs:
+            g = float([o for o in over if ".pga_g=" in o][-1].split("=")[1])
+            if fail_at is not None and abs(g - fail_at) < 1e-9:
+                out[name] = {"status": "failed", "error": "RunError: the step blew up"}
+                continue
+            c = collapses(g)
+            out[name] = {"status": "done", "collapsed": c, "collapsed_stones": [1] if c else [],
+                         "why": {"1": ["overturned"]} if c else {}, "left_model": [],
+                         "largest_residual_m": 0.5 if c else 0.01 * g, "largest_out_of_plane_m": 0.01 * g,
+                         "in_plane_sliding": [], "wall_s": 1.0}
+        return out
+    return run_jobs
+
+
+def test_collapse_rounds_with_a_fake_runner(tmp_path, monkeypatch):
+    """The analysis around the pure search (no YADE): a non-monotonic response is reported
+    and its lowest collapse kept, a record that never collapses is censored at the cap, a
+    failed run ends its record's search and is reported; JSON, figure and report written."""
+    rec_a, rec_b = tmp_path / "a.csv", tmp_path / "b.csv"
+    for r in (rec_a, rec_b):
+        r.write_text("0,0\n0.01,1\n")
+    responses = {"a": lambda g: 1.0 <= g < 1.25 or g >= 2.0, "b": lambda g: False}
+
+    def by_record(case_path, runs, root, label, *a, **k):
+        out = {}
+        for name, over in runs:
+            out.update(_fake_runs(responses[name.split("-")[0]])(case_path, [(name, over)], root, label))
+        return out
+
+    monkeypatch.setattr(common, "run_jobs", by_record)
+    res = C.collapse(SLIDE, [rec_a, rec_b], tolerance=0.05, cap=3.0, out=tmp_path / "out", log=_quiet)
+    a, b = res["records"]["a"], res["records"]["b"]
+    lo, hi = a["pga_at_collapse_g"]
+    assert lo < 1.0 <= hi and a["non_monotonic"] and 1.6 in a["standing_above_collapse_g"]
+    assert b["pga_at_collapse_g"] is None and b["censored_at_g"] == 3.0 and b["status"] == "censored"
+    assert [r["pga_g"] for r in a["runs"]] == sorted(r["pga_g"] for r in a["runs"])
+    data = json.loads((tmp_path / "out" / "collapse.json").read_text())
+    assert data["records"]["a"]["pga_at_collapse_g"] == [lo, hi]
+    assert (tmp_path / "out" / "ida.png").is_file() and "non-monotonic" in (tmp_path / "out" / "report.md").read_text()
+    assert "non-monotonic" in C.describe(a) and "censored" in C.describe(b)
+
+    monkeypatch.setattr(common, "run_jobs", _fake_runs(lambda g: g >= 1.0, fail_at=0.4))
+    res = C.collapse(SLIDE, [rec_a], tolerance=0.05, cap=3.0, out=tmp_path / "out2", log=_quiet)
+    a = res["records"]["a"]
+    assert a["status"] == "failed" and "blew up" in a["error"] and a["pga_at_collapse_g"] is None
+    assert [r["pga_g"] for r in a["runs"]] == [0.1, 0.2, 0.4]  # nothing run after the failure
