@@ -123,7 +123,8 @@ def test_outputs_and_resumption(sliding):
 def test_bad_input_is_one_line_exit_2(tmp_path, capsys):
     from drystone import cli
 
-    assert cli.main(["collapse", str(SLIDE), "--record", str(tmp_path / "missing.AT2"), "--out", str(tmp_path / "a")]) == 2
+    missing = str(tmp_path / "missing.AT2")
+    assert cli.main(["collapse", str(SLIDE), "--record", missing, "--out", str(tmp_path / "a")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "missing.AT2" in err[0]
     assert cli.main(["collapse", str(paths.ROOT / "cases" / "tilt_wall.toml"), "--out", str(tmp_path / "b")]) == 2
@@ -218,3 +219,18 @@ def test_collapse_rounds_with_a_fake_runner(tmp_path, monkeypatch):
     a = res["records"]["a"]
     assert a["status"] == "failed" and "blew up" in a["error"] and a["pga_at_collapse_g"] is None
     assert [r["pga_g"] for r in a["runs"]] == [0.1, 0.2, 0.4]  # nothing run after the failure
+
+
+def test_a_case_without_excitation_is_shaken_after_its_own_stages(tmp_path):
+    from drystone.model import case as casemod
+
+    wall = paths.ROOT / "cases" / "tilt_wall.toml"  # gravity, then two tilt stages: no excitation
+    rec = tmp_path / "pulse.txt"
+    rec.write_text("# units = g\n0 0\n0.01 0.1\n0.02 0\n")
+    over, k = common.shaking_override(wall, rec, "y")
+    c = casemod.load(wall, over + common.pga_override(casemod.load(wall, over), 0.7))
+    assert [s["type"] for s in c["stages"]] == ["gravity", "excitation", "rest"] and k == 1
+    assert c["stages"][1]["record"] == str(rec.resolve()) and c["stages"][1]["pga_g"] == 0.7
+    assert c["stages"][2]["until_kinetic_below_per_weight"] == common.REST["until_kinetic_below_per_weight"]
+    recs, kk = C._records(wall, casemod.load(wall), [str(rec)], None, "y", ())
+    assert kk == 1 and recs["pulse"][1] == over
