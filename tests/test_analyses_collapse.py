@@ -234,3 +234,21 @@ def test_a_case_without_excitation_is_shaken_after_its_own_stages(tmp_path):
     assert c["stages"][2]["until_kinetic_below_per_weight"] == common.REST["until_kinetic_below_per_weight"]
     recs, kk = C._records(wall, casemod.load(wall), [str(rec)], None, "y", ())
     assert kk == 1 and recs["pulse"][1] == over
+
+
+def test_probes_run_several_pgas_per_round(tmp_path, monkeypatch):
+    rounds = []
+
+    def fake(case_path, runs, root, label, *a, **k):
+        rounds.append(len(runs))
+        return _fake_runs(lambda g: g >= 0.77)(case_path, runs, root, label)
+
+    monkeypatch.setattr(common, "run_jobs", fake)
+    one = C.collapse(SLIDE, None, tolerance=0.05, cap=3.0, out=tmp_path / "p1", log=_quiet)
+    n1 = len(rounds)
+    rounds.clear()
+    two = C.collapse(SLIDE, None, tolerance=0.05, cap=3.0, out=tmp_path / "p2", probes=2, log=_quiet)
+    for res in (one, two):
+        lo, hi = _one(res)["pga_at_collapse_g"]
+        assert lo < 0.77 <= hi and hi - lo <= 0.05 + 1e-9
+    assert max(rounds) == 2 and len(rounds) < n1

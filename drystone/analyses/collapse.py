@@ -12,7 +12,7 @@ fill-in below it; a collapse below a level that stood, a non-monotonic response,
 detected, reported and the lowest collapse kept; a wall standing at ``--cap`` is censored
 there). Collapse is the package's one criterion (drystone/analyses/common.py ``outcome``).
 The searches of all records advance together, one round of runs at a time (one run per
-open record: a sweep, so finished runs are reused when the analysis is run again and the
+open record, or ``--probes`` runs: a sweep, so finished runs are reused when the analysis is run again and the
 rounds can go to a Dask cluster).
 
 Writes into results/<case name>/collapse/ (or ``--out``): ``collapse.json``
@@ -48,6 +48,9 @@ def add_arguments(p) -> None:
     p.add_argument("--fill", type=float, default=0.25,
                    help="fill in below the collapse until no gap exceeds this fraction of it (0.25; 0: no fill-in)")
     p.add_argument("--max-runs", type=int, default=30, help="most runs per record (30)")
+    p.add_argument("--probes", type=int, default=1,
+                   help="PGAs of one record run at once, each round (1; e.g. the cores per record: fewer rounds, "
+                        "a few more runs; drystone/analyses/ida.py plan)")
     p.add_argument("--stage", default=None, help="the excitation stage whose record is replaced (name or index), "
                    "when the case has several")
     p.add_argument("--direction", choices=("x", "y"), default="y",
@@ -62,7 +65,7 @@ def main(args) -> int:
     res = collapse(args.case, args.record, tolerance=args.tolerance, cap=args.cap, stage=args.stage, out=args.out,
                    workers=args.workers, backend=backend, address=address, start=args.start, factor=args.factor,
                    fill=args.fill or None, max_runs=args.max_runs, overrides=args.set,
-                   direction=args.direction)
+                   direction=args.direction, probes=args.probes)
     for stem, r in res["records"].items():
         print(f"{stem}: {describe(r)}")
     print(f"report: {Path(res['out_dir']) / 'report.html'}")
@@ -121,7 +124,7 @@ def _records(case_path, case_dict, records, stage, direction, overrides) -> tupl
 def collapse(case, records, tolerance: float = 0.05, cap: float = 3.0, stage=None, out=None, workers=None,
              backend: str = "local", address=None, start: float = 0.1, factor: float = 2.0,
              fill: float | None = 0.25, max_runs: int = 30, overrides=(), direction: str = "y",
-             log=print) -> dict:
+             probes: int = 1, log=print) -> dict:
     """The PGA at collapse of ``case`` under each of ``records`` (module docstring);
     returns what it writes to collapse.json, with ``out_dir``."""
     from drystone.model import case as casemod
@@ -136,6 +139,8 @@ def collapse(case, records, tolerance: float = 0.05, cap: float = 3.0, stage=Non
         raise casemod.CaseError(f"{case}: {exc}") from None
     recs, k = _records(case_path, case_dict, records, stage, direction, overrides)
     out_dir = common.output_dir(case_path, "collapse", out)
+    if probes < 1:
+        raise casemod.CaseError(f"{case}: --probes must be >= 1, got {probes!r}")
     observed = {stem: {} for stem in recs}
     results = {stem: [] for stem in recs}
     failed = {}
@@ -145,10 +150,9 @@ def collapse(case, records, tolerance: float = 0.05, cap: float = 3.0, stage=Non
         for stem, (_, over) in recs.items():
             if stem in failed:
                 continue
-            s = ida.step(observed[stem], params)
-            if not s.done:
-                name = f"{stem}-pga_{common.number_tag(s.next_g)}"
-                todo.append((stem, s.next_g, name, over + [f"stages.{k}.pga_g={s.next_g!r}"]))
+            for g in ida.plan(observed[stem], params, probes):
+                name = f"{stem}-pga_{common.number_tag(g)}"
+                todo.append((stem, g, name, over + [f"stages.{k}.pga_g={g!r}"]))
         if not todo:
             break
         log(f"[collapse] round {rnd}: {len(todo)} run(s) ({', '.join(n for _, _, n, _ in todo)}); "
@@ -180,7 +184,8 @@ def collapse(case, records, tolerance: float = 0.05, cap: float = 3.0, stage=Non
             "intensity": "pga_g (g) of the excitation stage's motion, as scaled by the stage's pga_g",
             "criterion": common.CRITERION,
             "search": {"method": "hunt-and-fill (drystone/analyses/ida.py)", "start_g": start, "factor": factor,
-                       "cap_g": cap, "tolerance_g": tolerance, "fill": fill, "max_runs": max_runs},
+                       "cap_g": cap, "tolerance_g": tolerance, "fill": fill, "max_runs": max_runs,
+                       "probes": probes},
             "records": summary,
             "cost": {"runs": n_runs, "run_wall_s": sum(wall), "elapsed_s": time.time() - t0}}
     common.write_json(out_dir / "collapse.json", data, case=case_path, overrides=overrides)
