@@ -84,7 +84,7 @@ def describe(r: dict) -> str:
     else:
         txt = "no bracket"
     if r["status"] == "budget":
-        txt += f" (stopped at the run budget; bracket not final)"
+        txt += " (stopped at the run budget; bracket not final)"
     if r["non_monotonic"]:
         txt += f"; non-monotonic: standing at {', '.join(f'{g:g}' for g in r['standing_above_collapse_g'])} g"
     return f"{txt}; {len(r['runs'])} run(s)"

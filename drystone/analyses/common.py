@@ -3,7 +3,7 @@ report, running rounds of runs as sweeps, the record override, and THE one reduc
 finished run folder to its outcome (``outcome``: collapsed? which stones? largest
 residual?), used by every analysis and study.
 
-The collapse criterion (``outcome``; docs/physics.md, "Collapse"): a free stone has
+The collapse criterion (``outcome``; docs/physics.md, "Collapse of a stone"): a free stone has
 collapsed when, at the end of the run, relative to where it stood at the end of the last
 gravity stage (the settlement under its own weight is no collapse; t = 0 without one), in
 the platform frame (x along the wall, y out of plane, z up):
@@ -47,7 +47,7 @@ CRITERION = ("a stone has collapsed when, at the end of the run, it left the mod
              "than half its height, or it leans past its tipping angle (overturned), or its centroid moved out of "
              "plane by more than half its depth; residual displacements short of that are damage, and a stone "
              "sliding along the wall by more than half its length is reported as in-plane sliding, not collapse "
-             "(drystone/analyses/common.py outcome)")
+             "(drystone/mechanics/collapse.py stone, drystone/analyses/common.py outcome; docs/physics.md)")
 
 
 # -- folders and arguments --------------------------------------------------------------
