@@ -252,3 +252,19 @@ def test_probes_run_several_pgas_per_round(tmp_path, monkeypatch):
         lo, hi = _one(res)["pga_at_collapse_g"]
         assert lo < 0.77 <= hi and hi - lo <= 0.05 + 1e-9
     assert max(rounds) == 2 and len(rounds) < n1
+
+
+def test_output_dir_default_and_refusals(tmp_path, monkeypatch):
+    monkeypatch.setattr(paths, "RESULTS", tmp_path / "results")
+    d = common.output_dir(SLIDE, "collapse")
+    assert d == tmp_path / "results" / "sliding_block_pulse" / "collapse" and (d / common.MARKER).is_file()
+    assert common.output_dir(SLIDE, "collapse") == d  # its own folder: reused
+    # results/<case name>/ holding a run of the case (which a rerun replaces whole): beside it
+    run = tmp_path / "results" / "rocking_block_pulse"
+    run.mkdir(parents=True)
+    from drystone.model.spec import SPEC_FORMAT
+    from drystone.simulate import is_run_folder
+    (run / "spec.json").write_text(json.dumps({"format": SPEC_FORMAT}))
+    assert is_run_folder(run)
+    assert common.output_dir(ROCK, "tilt") == tmp_path / "results" / "rocking_block_pulse.analyses" / "tilt"
+    assert sorted(p.name for p in run.iterdir()) == ["spec.json"]  # the run's folder untouched
