@@ -109,7 +109,8 @@ def safe_name(text: str) -> str:
     s = str(text)
     if "/" in s or "\\" in s or Path(s).suffix:
         s = Path(s).stem
-    return re.sub(r"[^A-Za-z0-9_.+-]", "_", s).strip("._") or "x"
+    s = re.sub(r"[^A-Za-z0-9_.+-]", "_", s).strip("._")[:80]  # run names: at most 100 characters
+    return s if s and s[0] not in "+-" else f"r{s}"
 
 
 def number_tag(x: float) -> str:
