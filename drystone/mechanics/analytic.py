@@ -157,7 +157,8 @@ def rectangle_overturning(t1: float, b: float, h: float, g: float = GRAVITY) -> 
 
 
 def min_overturning_pulse(omega_p: float, b: float, h: float, r: float | None = None, g: float = GRAVITY,
-                          hi_g: float = 5.0, tol_g: float = 1e-4, levels: int = 200, shape: str = "sine") -> float | None:
+                          hi_g: float = 5.0, tol_g: float = 1e-4, levels: int = 200,
+                          shape: str = "sine") -> float | None:
     """The least amplitude a_p (in g) of the one-sine pulse of ``rocking_pulse`` that
     overturns the rigid block (Zhang & Makris 2001's minimum overturning acceleration):
     a scan of ``levels`` amplitudes from g tan(alpha) to ``hi_g`` (the overturning region
