@@ -3,8 +3,8 @@
 
 Each direction is one run of the case with its stages replaced (an override of
 ``stages``): the case's stages before its first tilt or excitation stage (its gravity,
-settling, loads; a gravity stage of ``GRAVITY`` is added if it has none), then the platform
-tilted towards the direction at ``--rate`` deg/s until collapse (at most ``--max-deg``;
+settling, loads; a gravity stage, common.py ``GRAVITY``, is added if it has none), then the
+platform tilted towards the direction at ``--rate`` deg/s until collapse (at most ``--max-deg``;
 the run stops ``after_collapse`` s after the detection). Every run is an ordinary run
 folder (``runs/towards_<dir>/``) that ``drystone run CASE --set stages=...`` would make.
 
