@@ -228,10 +228,10 @@ def ida_figure(records: dict, path: Path) -> Path:
     if records:
         ax.legend(fontsize=8)
     fig.tight_layout()
-    tmp = path.with_name(f".{path.stem}.tmp.png")
-    fig.savefig(tmp, dpi=120)
+    from drystone import atomic
+
+    atomic.savefig(fig, path, dpi=120)
     plt.close(fig)
-    tmp.replace(path)
     return path
 
 

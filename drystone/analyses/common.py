@@ -143,12 +143,12 @@ def provenance(case_path=None, overrides=()) -> dict:
 
 
 def write_text(path, text: str) -> Path:
-    """Write ``text`` aside and rename it into place (atomic)."""
+    """Write ``text`` aside and rename it into place (drystone/atomic.py), creating its folder."""
+    from drystone import atomic
+
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
+    atomic.write_text(path, text)
     return path
 
 

@@ -238,10 +238,10 @@ def tilt_figure(directions: dict, out_dir: Path, path: Path) -> Path:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    tmp = path.with_name(f".{path.stem}.tmp.png")
-    fig.savefig(tmp, dpi=120)
+    from drystone import atomic
+
+    atomic.savefig(fig, path, dpi=120)
     plt.close(fig)
-    tmp.replace(path)
     return path
 
 
