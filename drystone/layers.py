@@ -31,10 +31,10 @@ class Layer:
 
 LAYERS = (
     Layer(0, "leaves", ("drystone", "drystone.paths", "drystone.units", "drystone.libm", "drystone.inputfiles",
-                        "drystone.layers"), (),
-          "`drystone/` (`paths.py`, `units.py`, `libm.py`, `inputfiles.py`, `layers.py`)",
+                        "drystone.layers", "drystone.atomic"), (),
+          "`drystone/` (`paths.py`, `units.py`, `libm.py`, `inputfiles.py`, `layers.py`, `atomic.py`)",
           "where things are, units and g, processor-independent sin/cos, reading input files with one-line "
-          "errors, this list of layers"),
+          "errors, this list of layers, every file written aside and renamed into place"),
     Layer(1, "inputs", (), ("drystone.geometry", "drystone.motions"),
           "`drystone/geometry/`, `drystone/motions/`",
           "block files (`blockfile.py`: the format and its checks), hull helpers, generated walls and outlines; "
@@ -52,10 +52,10 @@ LAYERS = (
     Layer(4, "postprocess", (), ("drystone.postprocess",), "`drystone/postprocess/`",
           "`summary.json` from histories, figures, comparison with the papers, identification, VTK"),
     Layer(5, "applications", ("drystone.runner", "drystone.sweep", "drystone.cli", "drystone.bench",
-                              "drystone.free_decay", "drystone.restitution", "drystone.__main__"), (),
-          "`drystone/` (`runner.py`, `sweep.py`, `cli.py`, `bench.py`, `free_decay.py`, `restitution.py`)",
+                              "drystone.free_decay", "drystone.restitution", "drystone.clean", "drystone.__main__"), (),
+          "`drystone/` (`runner.py`, `sweep.py`, `cli.py`, `bench.py`, `free_decay.py`, `restitution.py`, `clean.py`)",
           "run a case, sweeps (local or Dask), the command line, speed figures, the free-decay check and the "
-          "rocking restitution"),
+          "rocking restitution, `make clean` (only what the package wrote)"),
     Layer(6, "studies", (), ("drystone.studies",), "`drystone/studies/`",
           "the papers and beyond, one package each: `tilt/`, `ogawa/`, `sacsayhuaman/`, `fragility/`, `shape/`, "
           "`site/`, `crosscheck/` (LMGC90); `rounds.py` (bisection searches as resumable rounds of sweeps), "
