@@ -253,3 +253,22 @@ def test_a_stone_with_every_dof_blocked_stays_put(outdir):
     h = np.load(outdir / "held" / "histories.npz")
     assert np.all(h["kinetic"] == 0.0) and np.all(h["pos"] == h["pos"][0])  # exact: never integrated
     assert s["blocks"]["1"]["residual_displacement_norm_m"] == 0.0
+
+
+@requires_yade
+def test_a_run_driven_by_an_unconverged_site_response_warns(unconverged, outdir, capfd):
+    """The run prints the warning on stderr before YADE starts and keeps it in the summary's
+    inputs (the excitation's provenance); the console summary repeats it."""
+    p, _, _ = unconverged
+    case = {"case": {"name": "nc", "geometry": {"generator": "boxes_on_platform", "damping": 0.5,
+                                                "boxes": [{"id": 1, "center_xy": [0.0, 0.0], "size": [0.2, 0.2, 0.2]}]}},
+            "stages": [{"type": "gravity", "duration": 0.05, "ramp": 0.025},
+                       {"type": "excitation", "motion": "record", "record": "kobe1995", "pga_g": 0.4,
+                        "duration": 3.0, "direction": "y", "site": str(p)}],
+            "output": {"interval": 0.05}}
+    s = runner.run_dict(case, outdir / "nc.toml", out_dir=outdir / "nc", quiet=True)
+    err = capfd.readouterr().err
+    assert [ln for ln in err.splitlines() if ln.startswith("warning: site response through") and "#2" in ln], err
+    (e,) = s["inputs"]["excitations"]
+    assert e["site"]["converged"] is False and e["site"]["warning"].startswith("warning:")
+    assert any("did not converge" in ln for ln in console.warnings(s))
