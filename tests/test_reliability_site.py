@@ -272,3 +272,12 @@ def test_a_run_driven_by_an_unconverged_site_response_warns(unconverged, outdir,
     (e,) = s["inputs"]["excitations"]
     assert e["site"]["converged"] is False and e["site"]["warning"].startswith("warning:")
     assert any("did not converge" in ln for ln in console.warnings(s))
+
+
+def test_a_column_too_slow_for_the_fundamental_search_is_refused(tmp_path):
+    """3000 m at 20 m/s (each within range): Vs/4H = 0.0017 Hz, below the 0.05 Hz the peak is
+    searched from; its padding would be computed from a wrong f0."""
+    p = tmp_path / "slow.toml"
+    p.write_text(LINEAR.format(xi=0.05, n=1).replace("20.0", "2000.0").replace("200.0", "20.0"))
+    with pytest.raises(site.SiteError, match=r"travel time 100 s .* below the 0.05 Hz searched"):
+        site.read_profile(p)

@@ -276,6 +276,11 @@ def read_profile(path) -> SiteProfile:
     for key in ("name", "assumed", "source"):
         if key in d and not isinstance(d[key], str):
             raise SiteError(f"{f}: '{key}' must be a string")
+    travel = sum(la.thickness_m / la.vs_m_s for la in layers)
+    if 1.0 / (4.0 * travel) < F_SEARCH_HZ[0]:
+        raise SiteError(f"{f}: the column's travel time {travel:.4g} s puts its fundamental near 1/(4 x travel) = "
+                        f"{1.0 / (4.0 * travel):.3g} Hz, below the {F_SEARCH_HZ[0]:g} Hz searched for it: thinner "
+                        "layers ('thickness_m') or faster ones ('vs_m_s')")
     return SiteProfile(path=str(p.resolve()), sha256=hashlib.sha256(raw or b"").hexdigest(),
                        name=d.get("name", p.stem), assumed=d.get("assumed", ""), source=d.get("source", ""),
                        layers=layers, bedrock=bedrock,
