@@ -233,12 +233,6 @@ def test_absurd_earth_pressure_inputs_are_refused_naming_the_key(override, words
     assert words in str(e.value) and "\n" not in str(e.value)
 
 
-def test_an_absurd_retained_height_is_refused():
-    from drystone.mechanics.earth_pressure import EarthPressure
-    with pytest.raises(ValueError, match=r"z_top - z_base = 1e\+06 m: must be in \[0, 100\] m"):
-        EarthPressure(gamma=18e3, phi=0.6, z_top=1e6, z_base=0.0)
-
-
 @requires_yade
 def test_a_stone_with_every_dof_blocked_stays_put(outdir):
     """blocked_dofs = "xyzXYZ" (documented, legal) stopped with "non-finite kinetic_energy":

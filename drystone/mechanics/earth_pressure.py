@@ -91,7 +91,6 @@ RANGES = {
     "gamma": (0.0, 3e4, "N/m^3", "unit weights of soils and fills are 12-23 kN/m^3"),
     "gamma_sat": (0.0, 3e4, "N/m^3", "unit weights of soils and fills are 12-23 kN/m^3"),
     "gamma_w": (9e3, 1.2e4, "N/m^3", "fresh to muddy or saline water"),
-    "height": (0.0, 100.0, "m", "z_top - z_base: retained heights of masonry walls are at most tens of m"),
 }
 #: a face is on the back plane when its outward normal is within this angle (rad) of the plane's
 #: and every corner within ``plane_tol`` (m, default below) of it: 1e-6 rad and 1e-6 m are far
@@ -220,11 +219,10 @@ class EarthPressure:
         if not self.surcharge >= 0:
             raise ValueError(f"surcharge = {self.surcharge} Pa: must be >= 0")
         for key, v in (("surcharge", self.surcharge), ("gamma", self.gamma), ("gamma_sat", self.gamma_sat_),
-                       ("gamma_w", self.gamma_w), ("height", self.z_top - self.z_base)):
+                       ("gamma_w", self.gamma_w)):
             lo, hi, unit, why = RANGES[key]
             if not lo <= v <= hi:
-                name = "z_top - z_base" if key == "height" else key
-                raise ValueError(f"{name} = {v:g} {unit}: must be in [{lo:g}, {hi:g}] {unit} ({why})")
+                raise ValueError(f"{key} = {v:g} {unit}: must be in [{lo:g}, {hi:g}] {unit} ({why})")
         if self.water_level is not None:
             if self.water_level > self.z_top:
                 raise ValueError(f"water_level = {self.water_level} m above z_top = {self.z_top} m: free water "
