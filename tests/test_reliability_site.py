@@ -275,3 +275,18 @@ def test_a_column_too_slow_for_the_fundamental_search_is_refused(tmp_path):
     p.write_text(LINEAR.format(xi=0.05, n=1).replace("20.0", "2000.0").replace("200.0", "20.0"))
     with pytest.raises(site.SiteError, match=r"travel time 100 s .* below the 0.05 Hz searched"):
         site.read_profile(p)
+
+
+def test_spectrum_on_a_full_disk_names_the_file_and_leaves_nothing(tmp_path, monkeypatch, capsys):
+    """A traceback before; now one line naming the figure, and no temporary left behind."""
+    from drystone.motions import plots
+
+    def full(*a, **k):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(plots, "plot_record", full)
+    out = tmp_path / "s"
+    assert cli.main(["spectrum", "kobe1995", "--out", str(out)]) == 2
+    cap = capsys.readouterr()
+    assert cap.err.strip() == f"error: {out / 'kobe1995_NIS000.png'}: No space left on device" and cap.out == ""
+    assert list(out.iterdir()) == []
