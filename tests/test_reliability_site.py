@@ -254,8 +254,8 @@ def test_a_run_driven_by_an_unconverged_site_response_warns(unconverged, outdir,
     """The run prints the warning on stderr before YADE starts and keeps it in the summary's
     inputs (the excitation's provenance); the console summary repeats it."""
     p, _, _ = unconverged
-    case = {"case": {"name": "nc", "geometry": {"generator": "boxes_on_platform", "damping": 0.5,
-                                                "boxes": [{"id": 1, "center_xy": [0.0, 0.0], "size": [0.2, 0.2, 0.2]}]}},
+    box = {"id": 1, "center_xy": [0.0, 0.0], "size": [0.2, 0.2, 0.2]}
+    case = {"case": {"name": "nc", "geometry": {"generator": "boxes_on_platform", "damping": 0.5, "boxes": [box]}},
             "stages": [{"type": "gravity", "duration": 0.05, "ramp": 0.025},
                        {"type": "excitation", "motion": "record", "record": "kobe1995", "pga_g": 0.4,
                         "duration": 3.0, "direction": "y", "site": str(p)}],
