@@ -290,3 +290,22 @@ def test_spectrum_on_a_full_disk_names_the_file_and_leaves_nothing(tmp_path, mon
     cap = capsys.readouterr()
     assert cap.err.strip() == f"error: {out / 'kobe1995_NIS000.png'}: No space left on device" and cap.out == ""
     assert list(out.iterdir()) == []
+
+
+def test_a_non_finite_surface_motion_names_the_layer_or_the_column(tmp_path):
+    """Within the ranges no case found reaches it (PI 200, OCR 100, 0.1 kPa under 2 g: damping
+    0.45 at most); should one, the layer whose strain-compatible damping left pystrata's
+    range is named instead of the record ("non-finite samples")."""
+    from types import SimpleNamespace
+
+    p = tmp_path / "p.toml"
+    p.write_text(LINEAR.format(xi=0.05, n=2))
+    sp = site.read_profile(p)
+    bad = np.array([0.0, np.nan])
+    layers = [SimpleNamespace(damping=np.array([0.1])), SimpleNamespace(damping=np.array([0.7])), None]
+    with pytest.raises(site.SiteError, match=r"layer 'sand \(2/2\)': its strain-compatible damping reached 0.7"):
+        site._check_finite(sp, layers, bad)
+    layers[1] = SimpleNamespace(damping=np.array([0.2]))
+    with pytest.raises(site.SiteError, match=r"the surface motion through the column is not finite \(thickness 20 m"):
+        site._check_finite(sp, layers, bad)
+    site._check_finite(sp, layers, np.zeros(3))  # finite: nothing to say
