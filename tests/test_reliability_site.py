@@ -78,7 +78,7 @@ def test_layer_counts_are_bounded_before_the_layers_are_built(tmp_path):
     with pytest.raises(site.SiteError, match=f"10000 \\[\\[layers\\]\\], more than {site.MAX_LAYERS}"):
         site.read_profile(p)
     p.write_text(LINEAR.format(xi=0.05, n=site.MAX_LAYERS) + LINEAR.split("\n", 1)[1].format(xi=0.05, n=1))
-    with pytest.raises(site.SiteError, match=r"\[\[layers\]\] #2: 'sublayers' = 1 makes the column"):
+    with pytest.raises(site.SiteError, match=r"\[\[layers\]\] #2: 'sublayers' = 1 brings the column to 201 layers"):
         site.read_profile(p)
 
 

@@ -239,7 +239,7 @@ def read_profile(path) -> SiteProfile:
         sm = _num(la, "stress_mean_kpa", w) if "stress_mean_kpa" in la else None
         name = str(la.get("name", f"layer {i + 1}"))
         if len(layers) + n > MAX_LAYERS:
-            raise SiteError(f"{w}: 'sublayers' = {n} makes the column {len(layers) + n} layers or more, more than "
+            raise SiteError(f"{w}: 'sublayers' = {n} brings the column to {len(layers) + n} layers, more than "
                             f"{MAX_LAYERS} (site.MAX_LAYERS)")
         if depth + h > RANGES["thickness_m"][1]:
             raise SiteError(f"{w}: 'thickness_m' = {h:g} makes the column {depth + h:g} m thick, more than "
