@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import shutil
+import sys
 import time
 from pathlib import Path
 
@@ -57,6 +58,9 @@ def run(case_path, overrides=None, out_dir=None, threads=1, quiet=False, check_o
         # a Spec is frozen: a new one with where the run will live (YADE writes beside its
         # spec.json) and how it was made
         spec = spec.replace(out_dir=str(out), provenance=provenance.collect(case_path, case, overrides or []))
+        for e in spec["excitations"]:  # a site response that did not converge (recorded in the excitation too)
+            if (e.get("site") or {}).get("warning"):
+                print(f"{e['site']['warning']} ([[stages]] #{e.get('stage')})", file=sys.stderr, flush=True)
         if not quiet:
             print(f"[{spec['name']}] dt = {spec['dt']:.3g} s (critical {spec['dt_critical']:.3g} s), "
                   f"{len(spec['blocks'])} blocks, {spec['stages'][-1]['end']:.2f} s simulated, law {spec['law']}, "

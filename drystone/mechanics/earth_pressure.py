@@ -84,6 +84,14 @@ INTO_SOIL = {"+x": (0, 1.0), "-x": (0, -1.0), "+y": (1, 1.0), "-y": (1, -1.0)}
 #: static distribution (see the module docstring for the sources)
 INCREMENTS = {"seed_whitman": 0.6, "inverted_triangle": 2.0 / 3.0, "static": None}
 DEFAULT_INCREMENT = "seed_whitman"
+#: physical ranges (low, high, why) of the soil's numbers, SI: beyond them a case is in the wrong
+#: unit or absurd (a surcharge of 1e300 Pa reached YADE as a non-finite kinetic energy)
+RANGES = {
+    "surcharge": (0.0, 1e6, "Pa", "1 MPa is the weight of about 50 m of soil over the backfill"),
+    "gamma": (0.0, 3e4, "N/m^3", "unit weights of soils and fills are 12-23 kN/m^3"),
+    "gamma_sat": (0.0, 3e4, "N/m^3", "unit weights of soils and fills are 12-23 kN/m^3"),
+    "gamma_w": (9e3, 1.2e4, "N/m^3", "fresh to muddy or saline water"),
+}
 #: a face is on the back plane when its outward normal is within this angle (rad) of the plane's
 #: and every corner within ``plane_tol`` (m, default below) of it: 1e-6 rad and 1e-6 m are far
 #: above the round-off of generated coordinates (~1e-15 m) and far below a real step between two
@@ -210,6 +218,11 @@ class EarthPressure:
             raise ValueError(f"z_top = {self.z_top} m, z_base = {self.z_base} m: the top must be above the base")
         if not self.surcharge >= 0:
             raise ValueError(f"surcharge = {self.surcharge} Pa: must be >= 0")
+        for key, v in (("surcharge", self.surcharge), ("gamma", self.gamma), ("gamma_sat", self.gamma_sat_),
+                       ("gamma_w", self.gamma_w)):
+            lo, hi, unit, why = RANGES[key]
+            if not lo <= v <= hi:
+                raise ValueError(f"{key} = {v:g} {unit}: must be in [{lo:g}, {hi:g}] {unit} ({why})")
         if self.water_level is not None:
             if self.water_level > self.z_top:
                 raise ValueError(f"water_level = {self.water_level} m above z_top = {self.z_top} m: free water "

@@ -31,6 +31,11 @@ def smoothed_spectrum(r: Record) -> dict:
     f, a = sp.fourier_amplitude(r.acc, r.dt, window=SETTINGS["window"], detrend=SETTINGS["detrend"])
     fmax = min(SETTINGS["fmax_hz"], 0.8 * 0.5 / r.dt)
     fmin = max(SETTINGS["fmin_hz"], f[1])
+    if not fmin < fmax:
+        raise ValueError(f"{r.source}: {r.n} samples at dt {r.dt:g} s ({r.duration:g} s) resolve no frequency in the "
+                         f"spectrum's band ({SETTINGS['fmin_hz']:g}-{SETTINGS['fmax_hz']:g} Hz, below 0.8 x Nyquist "
+                         f"{0.5 / r.dt:g} Hz): its first frequency 1/(n dt) is {f[1]:.3g} Hz; a record of at least "
+                         f"{1 / fmax:.3g} s is needed at this step")
     grid = sp.log_grid(fmin, fmax, SETTINGS["per_decade"])
     s = sp.smooth(f, a, SETTINGS["konno_ohmachi_b"], grid)
     return {"freq_hz": f, "amplitude": a, "grid_hz": grid, "smoothed": s, "fmin_hz": fmin, "fmax_hz": fmax}

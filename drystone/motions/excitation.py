@@ -99,6 +99,11 @@ def stage_meta(s: dict, m: StageMotion) -> dict:
                         "f0_compatible_hz": i["f0_compatible_hz"], "iterations": i["iterations"],
                         "converged": i["converged"], "method": i["method"],
                         "scaling": "pga_g is the PGA at rock (before propagation); the surface PGA is the site's"}
+        from drystone.motions.site import convergence_warning
+
+        warn = convergence_warning(i)
+        if warn:
+            meta["site"]["warning"] = warn
     return meta
 
 

@@ -63,8 +63,10 @@ def plot_record(record, path, spec: dict | None = None, summary: dict | None = N
         ax3.set_xlim(min(per), max(per))
         ax3.set_ylim(bottom=0)
         ax3.grid(alpha=0.3, which="both")
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    try:
+        fig.savefig(path, dpi=120, format="png")  # as named (callers write aside: drystone/atomic.py)
+    finally:
+        plt.close(fig)
     return path
 
 
@@ -101,6 +103,8 @@ def plot_site(rock, surface, info: dict, freqs_hz, tf_linear, tf_compatible, pat
     ax2.set_ylabel("|surface / rock|")
     ax2.grid(alpha=0.3, which="both")
     ax2.legend(loc="lower left", fontsize=8)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    try:
+        fig.savefig(path, dpi=120, format="png")  # as named (callers write aside: drystone/atomic.py)
+    finally:
+        plt.close(fig)
     return path

@@ -60,6 +60,35 @@ F_INFO_HZ = np.geomspace(0.1, 25.0, 241)
 STRAIN_RATIO, MAX_ITERATIONS, TOLERANCE_PERCENT = 0.65, 15, 0.01
 #: coefficient of earth pressure at rest used for the mean stress of Darendeli's curves
 K0 = 0.5
+#: most layers in a column after splitting into ``sublayers`` (a 1-D profile has tens; pystrata's
+#: time and memory grow with layers x FFT samples: 100 sublayers about 45 s, 400 about 150 s, 1.5 GB)
+MAX_LAYERS = 200
+#: most FFT samples (record + padding) and most layers x FFT samples of one propagation (pystrata
+#: keeps several complex arrays per layer and frequency: about 50 bytes each, 2**26 about 3 GB)
+MAX_FFT_SAMPLES, MAX_LAYER_SAMPLES = 2 ** 22, 2 ** 26
+
+#: the physical range of every number of a profile file: key -> (low, high, unit, why); both ends
+#: allowed unless the low end is listed in OPEN_LOW (then it must be exceeded) or the high in OPEN_HIGH
+RANGES = {
+    "thickness_m": (0.0, 3000.0, "m", "a layer of soil or rock above the bedrock, at most the deepest basins' fill"),
+    "vs_m_s": (20.0, 5000.0, "m/s", "from peat and very soft clay (30-60 m/s) to hard rock (3500 m/s)"),
+    "unit_weight_kn_m3": (5.0, 35.0, "kN/m^3", "from peat (10) to dense rock (28); a unit weight, not a density"),
+    "damping": (1e-4, MAX_DAMPING, "fraction", "measured small-strain damping is 0.2-5 %; pystrata's complex "
+                "modulus needs < 0.5"),
+    "bedrock_damping": (0.0, MAX_DAMPING, "fraction", "pystrata's complex modulus needs < 0.5"),
+    "pi_percent": (0.0, 200.0, "percent", "plasticity index of soils (Darendeli's data: up to 132)"),
+    "ocr": (1.0, 100.0, "-", "over-consolidation ratio (Darendeli's data: 1-8)"),
+    "stress_mean_kpa": (0.1, 1e5, "kPa", "mean effective stress, up to that at a few km depth"),
+    "k0": (0.1, 5.0, "-", "coefficient of earth pressure at rest (0.4-0.6 normally consolidated, up to 3 "
+           "heavily over-consolidated)"),
+    "strain_ratio": (0.0, 1.0, "-", "effective / peak strain (Idriss and Sun: (M - 1)/10, 0.4-0.8)"),
+    "tolerance_percent": (0.0, 50.0, "percent", "the change of G and damping at which iterations stop"),
+    "max_iterations": (1, 100, "-", "equivalent-linear iterations (pystrata's default 15)"),
+    "sublayers": (1, MAX_LAYERS, "-", f"at most {MAX_LAYERS} layers in the column after splitting"),
+    "amplification": (0.0, 1000.0, "-", "a target amplification"),
+}
+OPEN_LOW = {"thickness_m", "strain_ratio", "tolerance_percent", "amplification"}
+OPEN_HIGH = {"damping", "bedrock_damping"}
 
 
 class SiteError(ValueError):
@@ -141,8 +170,9 @@ CURVES = ("linear", "darendeli")
 DARENDELI_ONLY = ("pi_percent", "ocr", "stress_mean_kpa", "k0")
 
 
-def _num(d: dict, key: str, where: str, *, default=None, lo=None, hi=None, lo_open=True, integer=False):
-    """d[key] as a float (int) within (lo, hi); SiteError naming ``where`` and the key."""
+def _num(d: dict, key: str, where: str, *, default=None, integer=False, rng: str | None = None):
+    """d[key] as a float (int) within its physical range ``RANGES[rng or key]``; SiteError
+    naming ``where``, the key and the range."""
     if key not in d:
         if default is None:
             raise SiteError(f"{where}: '{key}' is missing")
@@ -150,13 +180,19 @@ def _num(d: dict, key: str, where: str, *, default=None, lo=None, hi=None, lo_op
     v = d[key]
     if isinstance(v, bool) or not isinstance(v, (int, float)) or (integer and not isinstance(v, int)):
         raise SiteError(f"{where}: '{key}' = {v!r} must be {'an integer' if integer else 'a number'}")
+    if integer and abs(v) > 2 ** 53:
+        raise SiteError(f"{where}: '{key}' = {v} is out of range")
     v = int(v) if integer else float(v)
     if not math.isfinite(v):
         raise SiteError(f"{where}: '{key}' = {v!r} must be finite")
-    if lo is not None and (v <= lo if lo_open else v < lo):
-        raise SiteError(f"{where}: '{key}' = {v:g} must be {'>' if lo_open else '>='} {lo:g}")
-    if hi is not None and v >= hi:
-        raise SiteError(f"{where}: '{key}' = {v:g} must be < {hi:g}")
+    name = rng or key
+    lo, hi, unit, why = RANGES[name]
+    lo_open, hi_open = name in OPEN_LOW, name in OPEN_HIGH
+    allowed = f"{'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'} {unit}: {why}"
+    if v <= lo if lo_open else v < lo:
+        raise SiteError(f"{where}: '{key}' = {v:g} must be {'>' if lo_open else '>='} {lo:g} (allowed {allowed})")
+    if v >= hi if hi_open else v > hi:
+        raise SiteError(f"{where}: '{key}' = {v:g} must be {'<' if hi_open else '<='} {hi:g} (allowed {allowed})")
     return v
 
 
@@ -176,6 +212,9 @@ def read_profile(path) -> SiteProfile:
     layers_in = d.get("layers")
     if not isinstance(layers_in, list) or not layers_in or not all(isinstance(x, dict) for x in layers_in):
         raise SiteError(f"{f}: 'layers' must be an array of tables ([[layers]]), at least one")
+    if len(layers_in) > MAX_LAYERS:
+        raise SiteError(f"{f}: {len(layers_in)} [[layers]], more than {MAX_LAYERS} (the column's limit, "
+                        "sublayers included: site.MAX_LAYERS)")
     layers: list[SoilLayer] = []
     depth, stress_v = 0.0, 0.0  # m, kPa at the top of the next layer (dry column: total = effective)
     for i, la in enumerate(layers_in):
@@ -188,17 +227,23 @@ def read_profile(path) -> SiteProfile:
             bad = [k for k in DARENDELI_ONLY if k in la]
             if bad:
                 raise SiteError(f"{w}: '{bad[0]}' is a parameter of curves = \"darendeli\" only")
-        h = _num(la, "thickness_m", w, lo=0.0)
-        vs = _num(la, "vs_m_s", w, lo=0.0)
-        gam = _num(la, "unit_weight_kn_m3", w, lo=0.0)
-        damping = (_num(la, "damping", w, lo=0.0, hi=MAX_DAMPING) if curves == "linear" or "damping" in la
+        h = _num(la, "thickness_m", w)
+        vs = _num(la, "vs_m_s", w)
+        gam = _num(la, "unit_weight_kn_m3", w)
+        damping = (_num(la, "damping", w) if curves == "linear" or "damping" in la
                    else None)  # darendeli without it: its own small-strain damping
-        n = _num(la, "sublayers", w, default=1, lo=1, lo_open=False, integer=True)
-        pi = _num(la, "pi_percent", w, default=0.0, lo=0.0, lo_open=False)
-        ocr = _num(la, "ocr", w, default=1.0, lo=0.0)
-        k0 = _num(la, "k0", w, default=K0, lo=0.0)
-        sm = _num(la, "stress_mean_kpa", w, lo=0.0) if "stress_mean_kpa" in la else None
+        n = _num(la, "sublayers", w, default=1, integer=True)
+        pi = _num(la, "pi_percent", w, default=0.0)
+        ocr = _num(la, "ocr", w, default=1.0)
+        k0 = _num(la, "k0", w, default=K0)
+        sm = _num(la, "stress_mean_kpa", w) if "stress_mean_kpa" in la else None
         name = str(la.get("name", f"layer {i + 1}"))
+        if len(layers) + n > MAX_LAYERS:
+            raise SiteError(f"{w}: 'sublayers' = {n} brings the column to {len(layers) + n} layers, more than "
+                            f"{MAX_LAYERS} (site.MAX_LAYERS)")
+        if depth + h > RANGES["thickness_m"][1]:
+            raise SiteError(f"{w}: 'thickness_m' = {h:g} makes the column {depth + h:g} m thick, more than "
+                            f"{RANGES['thickness_m'][1]:g} m (allowed for the whole column above the bedrock)")
         for j in range(n):
             hj = h / n
             mean = sm if sm is not None else (stress_v + 0.5 * gam * hj) * (1.0 + 2.0 * k0) / 3.0
@@ -211,9 +256,9 @@ def read_profile(path) -> SiteProfile:
         bedrock = None
     elif isinstance(b, dict):
         _unknown(b, BEDROCK_KEYS, f"{f}: [bedrock]")
-        bedrock = {"vs_m_s": _num(b, "vs_m_s", f"{f}: [bedrock]", lo=0.0),
-                   "unit_weight_kn_m3": _num(b, "unit_weight_kn_m3", f"{f}: [bedrock]", lo=0.0),
-                   "damping": _num(b, "damping", f"{f}: [bedrock]", lo=0.0, lo_open=False, hi=MAX_DAMPING)}
+        bedrock = {"vs_m_s": _num(b, "vs_m_s", f"{f}: [bedrock]"),
+                   "unit_weight_kn_m3": _num(b, "unit_weight_kn_m3", f"{f}: [bedrock]"),
+                   "damping": _num(b, "damping", f"{f}: [bedrock]", rng="bedrock_damping")}
     else:
         raise SiteError(f"{f}: 'bedrock' must be a table [bedrock] (vs_m_s, unit_weight_kn_m3, damping) or "
                         f"\"rigid\", got {b!r}")
@@ -227,17 +272,21 @@ def read_profile(path) -> SiteProfile:
         if not (ok and 0 < r[0] <= r[1]):
             raise SiteError(f"{f}: [target] 'f0_hz' must be [low, high] in Hz, 0 < low <= high")
     if "amplification" in target:
-        _num(target, "amplification", f"{f}: [target]", lo=0.0)
+        _num(target, "amplification", f"{f}: [target]")
     for key in ("name", "assumed", "source"):
         if key in d and not isinstance(d[key], str):
             raise SiteError(f"{f}: '{key}' must be a string")
+    travel = sum(la.thickness_m / la.vs_m_s for la in layers)
+    if 1.0 / (4.0 * travel) < F_SEARCH_HZ[0]:
+        raise SiteError(f"{f}: the column's travel time {travel:.4g} s puts its fundamental near 1/(4 x travel) = "
+                        f"{1.0 / (4.0 * travel):.3g} Hz, below the {F_SEARCH_HZ[0]:g} Hz searched for it: thinner "
+                        "layers ('thickness_m') or faster ones ('vs_m_s')")
     return SiteProfile(path=str(p.resolve()), sha256=hashlib.sha256(raw or b"").hexdigest(),
                        name=d.get("name", p.stem), assumed=d.get("assumed", ""), source=d.get("source", ""),
                        layers=layers, bedrock=bedrock,
-                       strain_ratio=_num(d, "strain_ratio", f, default=STRAIN_RATIO, lo=0.0),
-                       max_iterations=_num(d, "max_iterations", f, default=MAX_ITERATIONS, lo=1, lo_open=False,
-                                           integer=True),
-                       tolerance_percent=_num(d, "tolerance_percent", f, default=TOLERANCE_PERCENT, lo=0.0),
+                       strain_ratio=_num(d, "strain_ratio", f, default=STRAIN_RATIO),
+                       max_iterations=_num(d, "max_iterations", f, default=MAX_ITERATIONS, integer=True),
+                       tolerance_percent=_num(d, "tolerance_percent", f, default=TOLERANCE_PERCENT),
                        target=dict(target))
 
 
@@ -351,13 +400,66 @@ def _counting_eql(sp: SiteProfile):
     return Counting(strain_ratio=sp.strain_ratio, tolerance=sp.tolerance_percent, max_iterations=sp.max_iterations)
 
 
+def fft_samples(record: Record, sp: SiteProfile) -> tuple[float, int]:
+    """(padding s, FFT length) of ``record`` through ``sp``, refused (SiteError naming the
+    profile, the layer and key responsible) beyond MAX_FFT_SAMPLES or MAX_LAYER_SAMPLES,
+    before pystrata allocates anything."""
+    pad = padding_s(sp)
+    need = record.n + pad / record.dt
+    nfft = 1 << max(0, int(math.ceil(math.log2(need)))) if math.isfinite(need) else math.inf
+    if nfft <= MAX_FFT_SAMPLES and nfft * (len(sp.layers) + 1) <= MAX_LAYER_SAMPLES:
+        return pad, int(nfft)
+    pad_samples = pad / record.dt if math.isfinite(pad) else math.inf
+    limit = (f"more than {MAX_FFT_SAMPLES} FFT samples, or {MAX_LAYER_SAMPLES} layers x samples "
+             f"(site.MAX_FFT_SAMPLES, MAX_LAYER_SAMPLES; {len(sp.layers)} layers)")
+    if pad_samples > record.n:  # the padding makes the FFT long: the least damped layer's
+        i = min(range(len(sp.layers)), key=lambda k: small_strain_damping(sp.layers[k]))
+        la = sp.layers[i]
+        given = "'damping'" if la.damping is not None else "its Darendeli D_min: set 'damping'"
+        raise SiteError(
+            f"{sp.path}: layer '{la.name}': small-strain damping {small_strain_damping(la):.3g} ({given}) lets the "
+            f"column ring for {pad:.4g} s after the record (padding 2 ln(1e4)/(xi w0), f0 {fundamental(sp)[0]:.3g} "
+            f"Hz), {pad_samples:.4g} samples at dt {record.dt:g} s: {limit}; raise the damping")
+    raise SiteError(
+        f"{sp.path}: {len(sp.layers)} layers (after 'sublayers') and {nfft} FFT samples ({record.n} samples of the "
+        f"record at dt {record.dt:g} s, {pad:.4g} s of padding): {limit}; fewer 'sublayers' or a shorter record")
+
+
+def _check_finite(sp: SiteProfile, profile, acc) -> None:
+    """Refuse a non-finite surface motion, naming the layer whose strain-compatible
+    damping left pystrata's range (0, 0.5) or, if none did, the column."""
+    if np.all(np.isfinite(acc)):
+        return
+    for la, pl in zip(sp.layers, profile[:-1]):
+        xi = np.atleast_1d(np.asarray(pl.damping, float))
+        if not np.all(np.isfinite(xi)) or np.max(xi) >= MAX_DAMPING:
+            raise SiteError(f"{sp.path}: layer '{la.name}': its strain-compatible damping reached "
+                            f"{float(np.max(xi)):.3g} (curves {la.curves!r}, pi_percent {la.pi_percent:g}, ocr "
+                            f"{la.ocr:g}, mean stress {la.stress_mean_kpa} kPa), beyond pystrata's < {MAX_DAMPING:g}: "
+                            "the surface motion is not finite")
+    raise SiteError(f"{sp.path}: the surface motion through the column is not finite (thickness "
+                    f"{sp.thickness_m:.4g} m, travel time {sum(la.thickness_m / la.vs_m_s for la in sp.layers):.3g} s: "
+                    "the waves' attenuation over the column overflows); check 'thickness_m', 'vs_m_s', 'damping'")
+
+
+def convergence_warning(info: dict) -> str | None:
+    """The ``warning:`` line for a propagation (``propagate``'s info) whose equivalent-linear
+    iterations did not converge, or None when they did."""
+    if info["converged"]:
+        return None
+    p = info["profile"]
+    return (f"warning: site response through {p['file']} did not converge: G and damping still changed "
+            f"{info['max_change_percent']:.3g} % at the last of {info['iterations']} iterations (tolerance "
+            f"{p['tolerance_percent']:g} %, max_iterations {p['max_iterations']}): the surface motion is that of "
+            "the last iteration; raise 'max_iterations' or check the profile")
+
+
 def propagate(record: Record, sp: SiteProfile) -> tuple[Record, dict]:
     """The surface motion of ``record`` (taken at rock, module docstring) through the site
     profile ``sp``: (Record at the record's step and length, m/s^2; info, JSON-ready)."""
     ps = _pystrata()
     n = record.n
-    pad = padding_s(sp)
-    nfft = 1 << int(math.ceil(math.log2(n + int(math.ceil(pad / record.dt)))))
+    pad, nfft = fft_samples(record, sp)
     motion = ps.motion.TimeSeriesMotion(record.source, record.event, record.dt, record.acc / G_STANDARD,
                                         fa_length=nfft)
     profile = _profile(sp)
@@ -368,6 +470,7 @@ def propagate(record: Record, sp: SiteProfile) -> tuple[Record, dict]:
         calc(motion, profile, lin)
     full = motion.calc_time_series(calc.calc_accel_tf(lin, lout)) * G_STANDARD  # m/s^2, nfft samples
     acc = full[:n]
+    _check_finite(sp, profile, full)
     f0_lin, amp_lin = fundamental(sp)
     f0_eq, amp_eq = fundamental(sp, profile)
     max_err = float(max(np.max(np.atleast_1d(la.max_error)) for la in profile[:-1]))

@@ -183,8 +183,8 @@ def energy_lines(summary: dict) -> list[str]:
 
 
 def warnings(summary: dict) -> list[str]:
-    """Lines starting ``warning:``: motion not settled, stones that left the model, contact
-    integration beyond its stability limit."""
+    """Lines starting ``warning:``: motion not settled, stones that left the model, a site
+    response that did not converge, contact integration beyond its stability limit."""
     r = summary.get("run") or {}
     out = []
     settle = r.get("settle")
@@ -195,6 +195,9 @@ def warnings(summary: dict) -> list[str]:
         out.append(f"warning: {left['count']} of {left.get('free_blocks', '?')} free stone(s) left the model "
                    f"({_ids(b['block'] for b in left.get('blocks', []))}): their motion is unbounded and has no "
                    "residual (run.left_model)")
+    for e in (summary.get("inputs") or {}).get("excitations") or []:
+        if (e.get("site") or {}).get("warning"):
+            out.append(f"{e['site']['warning']} (stage {e.get('stage', '?')}; inputs.excitations.site)")
     cs = r.get("contact_stability")
     if cs and not cs.get("within"):
         out.append(f"warning: contact integration beyond its stability limit (omega dt {cs['max_omega_dt']:.3g} > "

@@ -55,9 +55,11 @@ class Driver:
         self.dyn = np.array(tables["dynamic"], int)
         O, nb = self.O, len(self.O.bodies)
         self.states = [O.bodies[i].state for i in range(nb)]
-        # a clump's members move with it: never integrated themselves (mass inf here)
-        self.mass = np.array([O.bodies[i].state.mass if O.bodies[i].dynamic and not O.bodies[i].isClumpMember
-                              else np.inf for i in range(nb)])
+        # a clump's members move with it: never integrated themselves (mass inf here). A moving
+        # stone keeps its mass even with every dof blocked (blocked_dofs "xyzXYZ"), which YADE
+        # reports as dynamic = False: it is a free stone that cannot move, not a fixed one
+        moving = set(tables["dynamic"])
+        self.mass = np.array([O.bodies[i].state.mass if i in moving else np.inf for i in range(nb)])
         self.inertia = np.array([tuple(O.bodies[i].state.inertia) for i in range(nb)])
         self.blocks = {b["id"]: b for b in spec.blocks}
         self.pos = np.array([tuple(O.bodies[i].state.pos) for i in range(nb)])
