@@ -17,6 +17,14 @@ X Y Z rotations) are left out. The generalised forces Q(q) are those of the proj
   tangential force: the static configuration's shear forces are not recorded);
 * gravity: m g at each centroid.
 
+A stone of several convex parts (a re-entrant stone; a YADE clump) is one rigid body: its
+mass, centroid and inertia are the union's (``drystone.geometry.massprops``), its parts are
+shapes of that body in the overlap search (``overlap.contacts_of_shapes``: parts of one
+stone never pair), so there is one contact per pair of parts of different stones, each with
+its own normal and tangential springs as above, and their forces and moments are summed
+on the stones. A stone cut into parts along planes that no other stone touches has the
+contacts, hence the modes, of the same stone in one piece.
+
 The recorded settled state is not an equilibrium of this model: the tangential forces
 the joints stored while settling are not recorded, so the springs start unloaded there and
 inclined joints are out of balance (up to ~40 % of a stone's weight on the Sacsayhuaman
@@ -45,8 +53,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import linalg
-from scipy.spatial import ConvexHull
 
+from drystone.geometry import massprops
 from drystone.mechanics import contact as law
 from drystone.mechanics import overlap
 from drystone.mechanics.contact import combine
@@ -56,23 +64,19 @@ _LETTERS = "xyzXYZ"
 
 def mass_properties(vertices, density: float) -> tuple[float, np.ndarray, np.ndarray]:
     """Mass (kg), centroid (m) and inertia tensor about the centroid (kg m^2, axes of the
-    vertices' frame) of a convex polyhedron of uniform density (kg/m^3)."""
-    v = np.asarray(vertices, float)
-    hull = ConvexHull(v)
-    ref = v.mean(axis=0)
-    vol, first, second = 0.0, np.zeros(3), np.zeros((3, 3))
-    for tri in hull.simplices:
-        a, b, c = v[tri] - ref
-        d = np.dot(a, np.cross(b, c)) / 6.0
-        d = abs(d)  # every tetrahedron (ref, face) is positively counted: ref is inside
-        s = a + b + c
-        vol += d
-        first += d * s / 4.0
-        second += d / 20.0 * (np.outer(a, a) + np.outer(b, b) + np.outer(c, c) + np.outer(s, s))
-    cen = first / vol
-    cc = second - vol * np.outer(cen, cen)
-    inertia = density * (np.trace(cc) * np.eye(3) - cc)
-    return density * vol, ref + cen, inertia
+    vertices' frame) of a stone of uniform density (kg/m^3): a convex polyhedron (its
+    vertices, (n, 3)) or the union of convex parts (a list of such arrays), exact
+    (``drystone.geometry.massprops``, the one home of a stone's mass properties)."""
+    mp = massprops.mass_properties(_parts(vertices), density)
+    return mp.mass, mp.centroid, mp.inertia
+
+
+def _parts(vertices) -> list:
+    """A block's convex parts: [its (n, 3) vertices] for a convex block, else the list
+    of its parts' vertex arrays."""
+    if isinstance(vertices, (list, tuple)) and len(vertices) and np.ndim(vertices[0]) == 2:
+        return [np.asarray(p, float) for p in vertices]
+    return [np.asarray(vertices, float)]
 
 
 def _skew(w) -> np.ndarray:
@@ -103,7 +107,8 @@ def _tangent(theta) -> np.ndarray:
 class Assembly:
     """Blocks at a static configuration.
 
-    vertices: per block, world vertices (n, 3) m; moving: per block bool; density kg/m^3,
+    vertices: per block, world vertices (n, 3) m, or for a stone of several convex parts
+    (a re-entrant stone, a YADE clump) the list of its parts' world vertices; moving: per block bool; density kg/m^3,
     kn, kt N/m^3 per block (pairs combine in series, ``drystone.mechanics.contact.combine``);
     blocked: per block a string of blocked DOF letters (x y z X Y Z; "" for none); ids:
     block ids for the tables; gravity: m/s^2 vector, default (0, 0, -GRAVITY) (the analysis of a
@@ -131,12 +136,17 @@ class Assembly:
         for b in self.blocked:
             if set(b) - set(_LETTERS):
                 raise ValueError(f"blocked DOFs {b!r}: letters must be among {_LETTERS}")
-        props = [mass_properties(v, rho) for v, rho in zip(self.vertices, self.density)]
+        self.parts = [_parts(v) for v in self.vertices]
+        props = [mass_properties(p, rho) for p, rho in zip(self.parts, self.density)]
         self.mass = np.array([p[0] for p in props])
         self.pos0 = np.array([p[1] for p in props])
         self.inertia = np.array([p[2] for p in props])
-        self.size = np.array([float(np.ptp(np.asarray(v), axis=0).max()) for v in self.vertices])
-        self.shapes = overlap.Shapes([np.asarray(v, float) - c for v, c in zip(self.vertices, self.pos0)])
+        self.size = np.array([float(np.ptp(np.vstack(p), axis=0).max()) for p in self.parts])
+        # one convex shape per part, in its stone's frame (centred on the stone's centroid);
+        # owner: the stone of each shape. Contacts are per pair of parts of different stones
+        # (``overlap.contacts_of_shapes``), their forces summed on the stones
+        self.owner = np.array([b for b, p in enumerate(self.parts) for _ in p], np.int64)
+        self.shapes = overlap.Shapes([v - self.pos0[b] for b, p in enumerate(self.parts) for v in p])
         # the DOFs: (block index, component 0-5) of the moving blocks, blocked ones left out
         self.dofs = [(b, c) for b in np.flatnonzero(self.moving) for c in range(6)
                      if _LETTERS[c] not in self.blocked[b]]
@@ -158,13 +168,20 @@ class Assembly:
         rot = np.array([rotation(u[b, 3:]) for b in range(nb)])
         return self.pos0 + u[:, :3], rot, u
 
-    def contacts(self, q) -> dict:
-        """The overlaps of the configuration q (``overlap.all_contacts``' arrays)."""
+    def _shape_contacts(self, q):
         pos, rot, _ = self._configuration(q)
         s = self.shapes
-        out = overlap.all_contacts(s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, pos, rot,
-                                   self.moving, overlap.TOL)
-        return dict(zip(("id1", "id2", "volume", "centroid", "normal", "area"), out))
+        return overlap.contacts_of_shapes(s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, self.owner, pos,
+                                          rot, self.moving, overlap.TOL)
+
+    def contacts(self, q) -> dict:
+        """The overlaps of the configuration q (``overlap.all_contacts``' arrays): id1, id2
+        the shapes (parts) in contact, block1, block2 their stones (indices into the
+        blocks; equal to id1, id2 when every stone is convex)."""
+        out = self._shape_contacts(q)[:6]
+        c = dict(zip(("id1", "id2", "volume", "centroid", "normal", "area"), out))
+        c["block1"], c["block2"] = self.owner[c["id1"]], self.owner[c["id2"]]
+        return c
 
     def generalised_forces(self, q) -> np.ndarray:
         """Q(q): per DOF, force (N) or T(theta)^T moment (N m) on the block (module docstring)."""
@@ -174,9 +191,10 @@ class Assembly:
         force = np.zeros((nb, 3))
         moment = np.zeros((nb, 3))
         force[self.moving] += self.mass[self.moving, None] * self.gravity
-        for i, j, v, x, n in zip(c["id1"], c["id2"], c["volume"], c["centroid"], c["normal"]):
+        for si, sj, i, j, v, x, n in zip(c["id1"], c["id2"], c["block1"], c["block2"], c["volume"], c["centroid"],
+                                         c["normal"]):
             fb = combine(self.kn[i], self.kn[j]) * v * n
-            ref = self.reference.get((int(i), int(j)))
+            ref = self.reference.get((int(si), int(sj)))
             if ref is not None:
                 x0, a0 = ref
                 ub = pos[j] - self.pos0[j] + (rot[j] - np.eye(3)) @ (x0 - self.pos0[j])
@@ -280,9 +298,8 @@ class Assembly:
         q = np.zeros(self.ndof) if at is None else np.asarray(at, float)
         xi_b = np.broadcast_to(np.asarray(xi, float), (len(self.vertices),))
         pos, rot, _ = self._configuration(q)
-        s = self.shapes
-        ia, ib, _, _, n, area, pc, pj = overlap.contacts_with_patches(s.verts, s.nv, s.normals, s.offsets, s.nf,
-                                                                      s.faces, s.fk, pos, rot, self.moving, overlap.TOL)
+        ia, ib, _, _, n, area, pc, pj = self._shape_contacts(q)
+        ia, ib = self.owner[ia], self.owner[ib]
         C = np.zeros((self.ndof, self.ndof))
         if len(ia) == 0:
             return C
