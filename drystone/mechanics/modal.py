@@ -109,7 +109,8 @@ class Assembly:
 
     vertices: per block, world vertices (n, 3) m, or for a stone of several convex parts
     (a re-entrant stone, a YADE clump) the list of its parts' world vertices; moving: per block bool; density kg/m^3,
-    kn, kt N/m^3 per block (pairs combine in series, ``drystone.mechanics.contact.combine``);
+    kn, kt N/m^3 per block (pairs combine in series, ``drystone.mechanics.contact.combine``); mu
+    (optional) per block, the pair's the smaller (``drystone.mechanics.contact.PAIR_RULES``);
     blocked: per block a string of blocked DOF letters (x y z X Y Z; "" for none); ids:
     block ids for the tables; gravity: m/s^2 vector, default (0, 0, -GRAVITY) (the analysis of a
     run takes the run's own: ``drystone.postprocess.identification.wall_assembly``)."""
@@ -121,6 +122,7 @@ class Assembly:
     blocked: list = field(default_factory=list)
     ids: list = field(default_factory=list)
     gravity: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, -G]))
+    mu: np.ndarray | None = None  # friction coefficient per block (pairs take the smaller), for ``balance``
 
     def __post_init__(self):
         nb = len(self.vertices)
@@ -131,6 +133,8 @@ class Assembly:
         self.blocked = list(self.blocked) or [""] * nb
         self.ids = list(self.ids) or list(range(nb))
         self.gravity = np.asarray(self.gravity, float)
+        if self.mu is not None:
+            self.mu = np.broadcast_to(np.asarray(self.mu, float), (nb,)).copy()
         if not (len(self.moving) == len(self.blocked) == len(self.ids) == nb):
             raise ValueError("vertices, moving, blocked and ids must have one entry per block")
         for b in self.blocked:
@@ -159,6 +163,10 @@ class Assembly:
     @property
     def ndof(self) -> int:
         return len(self.dofs)
+
+    def dofs_of(self, b: int) -> list:
+        """Indices of block ``b``'s DOFs (none for a block that does not move)."""
+        return [k for k, (bb, _) in enumerate(self.dofs) if bb == b]
 
     def _configuration(self, q) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         nb = len(self.vertices)
@@ -373,3 +381,176 @@ class Assembly:
                 "equilibrium_max_translation_m": float(tr_q.max()) if len(tr_q) else 0.0,
                 "K": K, "M": M, "q_star": q_star, "dofs": [(self.ids[b], _LETTERS[c]) for b, c in self.dofs],
                 "contacts": len(self.reference)}
+
+
+#: an eigenvalue is zero (no stiffness) when |lambda| <= ZERO_EIGENVALUE_REL x the largest
+#: |lambda|: the central-difference stiffness is exact to O(rel_step^2) = 1e-6 of its
+#: largest entries (module docstring), so an eigenvalue within 10 times that of zero cannot
+#: be told from it (a frequency below 0.3 % of the highest)
+ZERO_EIGENVALUE_REL = 1e-5
+
+_MOTION = {"x": "translation along x", "y": "translation along y", "z": "translation along z",
+           "X": "rotation about x", "Y": "rotation about y", "Z": "rotation about z"}
+
+
+def stone_contacts(asm: Assembly) -> dict:
+    """{stone id: number of contacts (pairs of parts) it has at the static configuration}."""
+    rc = asm.contacts(np.zeros(asm.ndof))
+    n = {i: 0 for i in asm.ids}
+    for a, b in zip(rc["block1"], rc["block2"]):
+        n[asm.ids[a]] += 1
+        n[asm.ids[b]] += 1
+    return n
+
+
+def interpret(asm: Assembly, res: dict, zero_rel: float = ZERO_EIGENVALUE_REL) -> dict:
+    """Read the eigenpairs of ``Assembly.modes`` (``res``) physically: per eigenpair (in
+    ``res``'s order) its kind, "mode" (lambda > 0: a frequency), "zero" (|lambda| within
+    ``zero_rel`` of the largest: no stiffness, a mechanism) or "unstable" (lambda < 0: the
+    configuration is not a stable equilibrium), the share of the mode's kinetic energy of
+    each stone (mass-normalised shapes: the shares sum to 1) and of each DOF letter (x y z
+    translations, X Y Z rotations), the effective mass ratios for base motions along x, y
+    and z, and for "zero" and "unstable" ones a one-line explanation naming the stone.
+    Returns {"eigen": [per eigenpair], "contacts": {stone id: contacts}}."""
+    f = np.asarray(res["frequency_hz"], float)
+    lam = np.sign(f) * (2 * np.pi * f) ** 2
+    scale = float(np.abs(lam).max()) if len(lam) else 0.0
+    phi, M = res["shapes"], res["M"]
+    total = float(asm.mass[asm.moving].sum())
+    gammas = {a: phi.T @ M @ asm.influence(np.eye(3)[k]) for k, a in enumerate("xyz")}
+    ncont = stone_contacts(asm)
+    out = []
+    for k in range(len(lam)):
+        p = phi[:, k]
+        e = p * (M @ p)
+        e = e / e.sum() if e.sum() > 0 else e
+        stones, letters = {}, {}
+        for d, (b, c) in enumerate(asm.dofs):
+            stones[asm.ids[b]] = stones.get(asm.ids[b], 0.0) + e[d]
+            letters[_LETTERS[c]] = letters.get(_LETTERS[c], 0.0) + e[d]
+        top = max(stones, key=stones.get)
+        kind = "zero" if abs(lam[k]) <= zero_rel * scale else ("mode" if lam[k] > 0 else "unstable")
+        item = {"kind": kind, "eigenvalue_rad2_s2": float(lam[k]),
+                "effective_mass_ratio": {a: float(g[k] ** 2 / total) for a, g in gammas.items()},
+                "stone_share": {b: float(s) for b, s in sorted(stones.items(), key=lambda x: -x[1])},
+                "motion_share": {c: float(s) for c, s in letters.items()}, "dominant_stone": top}
+        if kind != "mode":
+            b = asm.ids.index(top)
+            own = {_LETTERS[c]: e[d] for d, (bb, c) in enumerate(asm.dofs) if bb == b}
+            motion = _MOTION[max(own, key=own.get)]
+            share = f"{100 * stones[top]:.0f} % of the mode"
+            if kind == "unstable":
+                item["explanation"] = (f"negative stiffness ({lam[k]:.3g} rad^2/s^2): stone {top} ({share}, mostly "
+                                       f"{motion}, {ncont[top]} contact(s)) is not in stable equilibrium")
+            elif ncont[top] == 0:
+                item["explanation"] = f"stone {top} touches nothing: a free rigid-body motion ({motion})"
+            elif motion.startswith("rotation") and ncont[top] == 1:
+                item["explanation"] = (f"stone {top} ({share}) on a single contact: {motion} has no stiffness (the "
+                                       "law's tangential spring acts at one point of a contact, so a joint does not "
+                                       "resist a twist about its normal)")
+            else:
+                item["explanation"] = (f"a mechanism: the joints give no stiffness to this motion of stone {top} "
+                                       f"({share}, mostly {motion}, {ncont[top]} contact(s))")
+        out.append(item)
+    return {"eigen": out, "contacts": ncont}
+
+
+#: the octagonal friction pyramid of ``balance``: |s| <= mu F_n imposed on 8 directions of
+#: the tangent plane, which admits |s| up to mu F_n / cos(pi / 8) (8 % above the cone)
+_CONE_SIDES = 8
+
+
+def balance(asm: Assembly) -> dict:
+    """Is the static configuration (q = 0) an equilibrium once the joints carry shear?
+
+    The recorded settled state of a run is balanced by the normal forces K_n V (which the
+    model sees) and by the tangential forces the joints stored while settling (which it does
+    not: ``Assembly`` starts its springs unloaded). This finds the shear forces s_c in the
+    tangent planes of the contacts, acting at the overlap centroids, that balance every free
+    stone (forces and moments) and use the least friction, min over s of max_c |s_c| /
+    (mu_c F_n,c), a linear programme (octagonal pyramids, ``_CONE_SIDES``) solved with
+    HiGHS. When none balances the stones (a stone with no support, or held by too few
+    contacts), the least-squares shear is taken instead and the stone left most out of
+    balance is named.
+
+    Returns {"balanced": bool (no residual force above 1e-3 of a stone's weight once the
+    shear is in), "residual": largest residual force over the stones / its weight (-),
+    "residual_stone": its id, "as_built_residual": the same without shear, "as_built_stone",
+    "friction_use": the least, over the balancing shears, of max_c |s_c| / (mu_c F_n,c)
+    measured on the octagonal pyramid (the true cone's is between this and 1.082 times it;
+    None without ``mu``), "friction_contact": (id, id) of the contact that sets it}. A
+    friction use above 1 means no shear within the friction limits holds the wall: it is
+    sliding there."""
+    from scipy.optimize import linprog
+
+    q0 = np.zeros(asm.ndof)
+    Q0 = asm.generalised_forces(q0)
+    rc = asm.contacts(q0)
+    g = float(np.linalg.norm(asm.gravity))
+    nc = len(rc["id1"])
+    A = np.zeros((asm.ndof, 2 * nc))
+    scale = np.array([asm.mass[b] * g * (1.0 if c < 3 else asm.size[b]) for b, c in asm.dofs])
+    fn = np.zeros(nc)
+    mu = np.zeros(nc)
+    for k in range(nc):
+        i, j = int(rc["block1"][k]), int(rc["block2"][k])
+        n, x = rc["normal"][k], rc["centroid"][k]
+        fn[k] = combine(asm.kn[i], asm.kn[j]) * rc["volume"][k]
+        mu[k] = min(asm.mu[i], asm.mu[j]) if asm.mu is not None else np.inf
+        t1 = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
+        t1 /= np.linalg.norm(t1)
+        t2 = np.cross(n, t1)
+        for col, t in ((2 * k, t1), (2 * k + 1, t2)):
+            for b, sign in ((j, 1.0), (i, -1.0)):
+                for d in asm.dofs_of(b):
+                    c = asm.dofs[d][1]
+                    A[d, col] += sign * (t[c] if c < 3 else np.cross(x - asm.pos0[b], t)[c - 3])
+    As, bs = A / scale[:, None], -Q0 / scale
+
+    def residual(r):
+        tr = [d for d, (b, c) in enumerate(asm.dofs) if c < 3]
+        if not tr:
+            return 0.0, None
+        k = max(tr, key=lambda d: abs(r[d]))
+        return float(abs(r[k])), asm.ids[asm.dofs[k][0]]
+
+    built, built_stone = residual(bs)
+    cap = np.where(np.isfinite(mu), mu * fn, 0.0)
+    res = None
+    if nc and asm.mu is not None and (cap > 0).any():
+        # variables: y_c = s_c / (mu F_n) (2 per contact) and t; minimise t with
+        # d_k . y_c <= t for the pyramid's sides; contacts without a normal force carry none
+        ang = 2 * np.pi * np.arange(_CONE_SIDES) / _CONE_SIDES
+        dirs = np.stack([np.cos(ang), np.sin(ang)], axis=1)
+        nv = 2 * nc + 1
+        rows = []
+        for k in range(nc):
+            for d in dirs:
+                r = np.zeros(nv)
+                r[2 * k:2 * k + 2] = d
+                r[-1] = -1.0
+                rows.append(r)
+        w = np.repeat(cap, 2)
+        Aeq = np.hstack([As * w[None, :], np.zeros((asm.ndof, 1))])
+        cost = np.zeros(nv)
+        cost[-1] = 1.0
+        lp = linprog(cost, A_ub=np.array(rows), b_ub=np.zeros(len(rows)), A_eq=Aeq, b_eq=bs,
+                     bounds=[(None, None)] * nv, method="highs")
+        if lp.status == 0:
+            y = lp.x[:-1].reshape(nc, 2)
+            k = int(np.argmax((y @ dirs.T).max(axis=1)))
+            r, stone = residual(bs - Aeq[:, :-1] @ lp.x[:-1])
+            res = {"residual": r, "residual_stone": stone, "friction_use": float(lp.x[-1]),
+                   "friction_contact": (asm.ids[int(rc["block1"][k])], asm.ids[int(rc["block2"][k])])}
+    if res is None:  # no friction data, or no shear balances the stones: the least-squares shear
+        y = np.linalg.lstsq(As, bs, rcond=None)[0]
+        r, stone = residual(bs - As @ y)
+        res = {"residual": r, "residual_stone": stone, "friction_use": None, "friction_contact": None}
+    res.update(balanced=res["residual"] <= BALANCE_TOL, as_built_residual=built, as_built_stone=built_stone)
+    return res
+
+
+#: a stone is out of balance when the force left on it, shear included, exceeds 1e-3 of its
+#: weight: the linearisation's preload (the normal forces that give gravity's geometric
+#: stiffness) is then wrong by as much
+BALANCE_TOL = 1e-3

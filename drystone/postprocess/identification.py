@@ -267,6 +267,6 @@ def wall_assembly(out, time_s: float | None = None):
     asm = modal.Assembly([verts[b["id"]] for b in blocks], moving=[b["role"] == "free" for b in blocks],
                          density=[m["density"] for m in mats], kn=[m["kn"] for m in mats],
                          kt=[m["kt"] for m in mats], blocked=[b.get("blocked_dofs") or "" for b in blocks],
-                         ids=[b["id"] for b in blocks], gravity=gvec)
+                         ids=[b["id"] for b in blocks], gravity=gvec, mu=[m["mu"] for m in mats])
     asm.sample_time_s = float(t)
     return asm
