@@ -1,0 +1,437 @@
+"""Frequencies and mode shapes of any wall: ``python -m drystone modal CASE``.
+
+1. **Settle.** One run of the case's stages up to and including its last gravity stage
+   (a case without one gets ``DEFAULT_GRAVITY``, ASSUMED and said so), through the sweeps
+   (resumable: a finished run with the same fingerprint is reused). Refused when a stone
+   collapsed or left the model while settling (``common.outcome``), or still moves at the
+   end of gravity (``settled``).
+2. **Linearise.** The blocks at the end of that gravity stage, a stone of several parts as
+   one rigid body of the union's mass properties with one contact per pair of parts
+   (drystone/mechanics/modal.py), the stiffness K = -dQ/dq of the project's law there
+   (central differences) and the mass matrix M. The recorded state is balanced by shear
+   forces the joints stored while settling, which the linear model does not record:
+   ``modal.balance`` finds the least-friction shear that balances every stone. Refused,
+   naming the stone or the contact, when none does (a stone out of balance) or when it
+   needs more than the friction available (a contact sliding): such a wall is not in
+   equilibrium and must be settled (a longer gravity stage).
+3. **Modes.** eigh(K, M), K symmetrised. Each eigenvalue is read (``modal.interpret``): a
+   positive one is a mode (a frequency, its effective mass along x, y, z, its dominant
+   direction and stones); one within ``modal.ZERO_EIGENVALUE_REL`` of zero is a motion the
+   joints do not resist (a stone touching nothing; a stone twisting on a single joint,
+   which the law's one-point tangential spring does not resist), listed apart with its
+   stone and never as a frequency; a negative one (an unstable equilibrium) refuses the
+   analysis, naming the stone.
+4. **Check (``--identify``).** A white-noise run after the same settling (``NOISE``:
+   band-limited 0-20 Hz, scaled to ``--noise-pga``, ASSUMED small so that the joints stay
+   closed) along ``--direction``; the H1 transfer function from the base acceleration to
+   the mass-weighted mean displacement of the free stones relative to the base
+   (drystone/postprocess/identification.py) and its coherent peaks, set beside the
+   linearised modes that move mass along that direction.
+
+Output (results/<case name>/modal/, or --out): modal.json (keys: ``frequencies_hz``, the
+first ``--modes`` frequencies, Hz; ``modes``: per mode frequency_hz, period_s,
+effective_mass_ratio {x, y, z}, dominant_direction, stones (kinetic-energy share of the
+stones moving most); ``zero_modes``: [{explanation, dominant_stone}]; ``model``: DOFs,
+contacts, balance; ``settle``, ``identification``, ``timing_s``), modes.png (the first mode
+shapes on the wall's elevation) and report.html.
+"""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+from drystone.analyses import common
+
+HELP = "frequencies and mode shapes of the settled wall (linearised joints; --identify: a white-noise check)"
+
+#: the gravity stage a case without one is settled with (ASSUMED): gravity ramped over 0.5 s,
+#: held to 1 s (the examples settle in 0.4 s, the Sacsayhuaman wall in 2 s; ``settled``
+#: refuses a wall still moving at its end)
+DEFAULT_GRAVITY = {"type": "gravity", "duration": 1.0, "ramp": 0.5}
+#: a stone has settled when its kinetic energy is below 1 % of the elastic energy its weight
+#: stores in the joints, (1/2) m g delta (delta the median overlap depth of the wall's
+#: contacts): speed below 0.1 sqrt(g delta), a vibration amplitude below a tenth of the
+#: static deflection
+SETTLED_SPEED_FRACTION = 0.1
+#: a friction use above 1 (``modal.balance``) beyond the linear programme's tolerance
+FRICTION_SLACK = 1e-6
+#: the white-noise check (ASSUMED): 0-20 Hz band-limited noise (drystone.motions.generators),
+#: scaled to a PGA small enough that the joints stay closed; the run's output sampled at
+#: 200 Hz (10 samples per period at 20 Hz); H1 with Hann segments of the largest power of 2
+#: giving at least 7 averages (50 % overlap); peaks 0.1 decade out of |H| with coherence >= 0.9
+NOISE = {"pga_g": 0.05, "duration_s": 20.0, "interval_s": 0.005, "fmax_hz": 20.0, "coherence_min": 0.9,
+         "prominence_decades": 0.1, "min_segments": 7}
+#: a linearised mode takes part in the check when its effective mass along the noise's
+#: direction is at least this fraction of the wall's
+PARTICIPATING = 0.05
+
+
+def add_arguments(p) -> None:
+    common.add_common_arguments(p)
+    p.add_argument("--modes", type=int, default=6, help="modes to report (default 6)")
+    p.add_argument("--identify", action="store_true",
+                   help="also a white-noise run and its transfer function, as a check of the frequencies")
+    p.add_argument("--direction", choices=("x", "y", "z"), default="y",
+                   help="direction of the white noise (default y, out of plane)")
+    p.add_argument("--noise-pga", type=float, default=NOISE["pga_g"], metavar="G",
+                   help=f"PGA of the white noise, g (default {NOISE['pga_g']}, ASSUMED)")
+    p.add_argument("--noise-duration", type=float, default=NOISE["duration_s"], metavar="S",
+                   help=f"length of the white noise, s (default {NOISE['duration_s']:g})")
+
+
+def main(args) -> int:
+    backend, address = common.backend_of(args)
+    r = modal(args.case, out=args.out, modes=args.modes, identify=args.identify, direction=args.direction,
+              noise_pga_g=args.noise_pga, noise_duration_s=args.noise_duration, workers=args.workers,
+              backend=backend, address=address)
+    f = ", ".join(f"{x:.3g}" for x in r["frequencies_hz"])
+    print(f"[modal] frequencies (Hz): {f}; results in {r['out_dir']}")
+    if r["zero_modes"]:
+        print(f"[modal] {len(r['zero_modes'])} motion(s) without stiffness (not frequencies): "
+              + "; ".join(z["explanation"] for z in r["zero_modes"][:3]))
+    if r["identification"]:
+        pk = ", ".join(f"{p['frequency_hz']:.3g}" for p in r["identification"]["peaks"]) or "none"
+        print(f"[modal] white-noise check along {r['identification']['direction']}: peaks (Hz) {pk}")
+    return 0
+
+
+# -- the settling run ----------------------------------------------------------------------
+
+def settle_stages(case_path) -> tuple[list, bool]:
+    """The case's stages up to and including its last gravity stage, as written in the file
+    (its raw tables), or [``DEFAULT_GRAVITY``] when it has none; and whether it was added."""
+    from drystone import inputfiles
+    from drystone.model import case as casemod
+
+    raw = inputfiles.load_toml(Path(case_path), casemod.CaseError, "case file")
+    stages = raw.get("stages") or []
+    last = [k for k, st in enumerate(stages) if isinstance(st, dict) and st.get("type") == "gravity"]
+    if not last:
+        return [dict(DEFAULT_GRAVITY)], True
+    return [dict(st) for st in stages[:last[-1] + 1]], False
+
+
+def stages_override(stages: list) -> str:
+    """The --set override replacing the case's stages by ``stages``."""
+    from drystone import tomlio
+
+    return f"stages={tomlio.value(stages)}"
+
+
+def settled(run_dir, asm) -> dict:
+    """The free stones' speeds at the sample the modes are taken at: {"speed_m_s": largest,
+    "stone", "limit_m_s": SETTLED_SPEED_FRACTION sqrt(g delta), "settled": bool}."""
+    import numpy as np
+
+    from drystone.postprocess import summary as summ
+
+    h = summ.load_histories(run_dir)
+    i = int(np.argmin(np.abs(np.asarray(h["t"]) - asm.sample_time_s)))
+    v = np.linalg.norm(np.asarray(h["vel"])[i], axis=1)
+    rc = asm.reference_contacts
+    delta = float(np.median(rc["volume"] / rc["area"])) if len(rc["volume"]) else 0.0
+    limit = SETTLED_SPEED_FRACTION * float(np.sqrt(np.linalg.norm(asm.gravity) * delta))
+    j = int(np.argmax(v)) if len(v) else 0
+    return {"speed_m_s": float(v[j]) if len(v) else 0.0, "stone": int(h["block_ids"][j]) if len(v) else None,
+            "limit_m_s": limit, "settled": bool(len(v) == 0 or v[j] <= limit), "time_s": float(h["t"][i])}
+
+
+# -- the linearised modes -------------------------------------------------------------------
+
+def analyse(asm, modes: int = 6, where: str = "wall") -> dict:
+    """The modal analysis of an ``Assembly`` at its static configuration (steps 2-3 of the
+    module docstring): {"frequencies_hz", "modes", "zero_modes", "model", "_res", "_all"}
+    (``_res``: ``Assembly.modes``' arrays, for the figure; ``_all``: every mode's row). RunError (one line, naming the stone or
+    contact) for a wall out of balance, sliding, or in unstable equilibrium."""
+    import numpy as np
+
+    from drystone.mechanics import modal as mm
+    from drystone.simulate import RunError
+
+    if len(asm.reference_contacts["volume"]) == 0:
+        raise RunError(f"{where}: no stone touches another: nothing holds the wall")
+    bal = mm.balance(asm)
+    if not bal["balanced"]:
+        raise RunError(f"{where}: stone {bal['residual_stone']} is out of balance by {100 * bal['residual']:.2g} % of "
+                       "its weight even with its joints carrying shear: the wall is not in equilibrium; settle it "
+                       "(a longer gravity stage) and rerun")
+    if bal["friction_use"] is not None and bal["friction_use"] > 1 + FRICTION_SLACK:
+        a, b = bal["friction_contact"]
+        raise RunError(f"{where}: the contact of stones {a} and {b} needs {bal['friction_use']:.3g} times its friction "
+                       "to hold the wall: it is sliding, the wall is not in equilibrium; settle it (a longer gravity "
+                       "stage) and rerun")
+    res = asm.modes(equilibrate=False)
+    info = mm.interpret(asm, res)
+    order = np.argsort(res["frequency_hz"])
+    unstable = [info["eigen"][k] for k in order if info["eigen"][k]["kind"] == "unstable"]
+    if unstable:
+        raise RunError(f"{where}: {len(unstable)} negative eigenvalue(s): {unstable[0]['explanation']}; the settled "
+                       "state is not a stable equilibrium: settle it (a longer gravity stage) and rerun")
+    table, zero = [], []
+    for k in order:
+        e = info["eigen"][k]
+        if e["kind"] == "zero":
+            zero.append({"explanation": e["explanation"], "dominant_stone": e["dominant_stone"],
+                         "eigenvalue_rad2_s2": e["eigenvalue_rad2_s2"]})
+            continue
+        f = float(res["frequency_hz"][k])
+        em = e["effective_mass_ratio"]
+        top = max(em, key=em.get)
+        motion = max(e["motion_share"], key=e["motion_share"].get)
+        stones = {str(b): round(s, 4) for b, s in list(e["stone_share"].items())[:3]}
+        table.append({"mode": len(table) + 1, "frequency_hz": f, "period_s": 1.0 / f,
+                      "effective_mass_ratio": em, "dominant_direction": top if em[top] >= 0.01 else None,
+                      "dominant_motion": mm._MOTION[motion], "stones": stones, "index": int(k)})
+    n = min(int(modes), len(table))
+    total = {a: float(sum(m["effective_mass_ratio"][a] for m in table[:n])) for a in "xyz"}
+    rc = asm.reference_contacts
+    model = {"free_stones": int(asm.moving.sum()), "multi_part_stones": [asm.ids[b] for b, p in enumerate(asm.parts)
+                                                                          if len(p) > 1 and asm.moving[b]],
+             "ndof": asm.ndof, "contacts": int(len(rc["volume"])), "contacts_per_stone": info["contacts"],
+             "median_overlap_depth_m": float(np.median(rc["volume"] / rc["area"])),
+             "asymmetry": res["asymmetry"], "zero_eigenvalue_rel": mm.ZERO_EIGENVALUE_REL,
+             "balance": {k: (list(v) if isinstance(v, tuple) else v) for k, v in bal.items()},
+             "all_frequencies_hz": [m["frequency_hz"] for m in table]}
+    return {"frequencies_hz": [m["frequency_hz"] for m in table[:n]], "modes": table[:n], "zero_modes": zero,
+            "cumulative_effective_mass_ratio": total, "model": model, "_res": res, "_all": table}
+
+
+# -- the white-noise check ------------------------------------------------------------------
+
+def identification(run_dir, asm, direction: str) -> dict:
+    """The H1 transfer function base acceleration -> mass-weighted mean displacement of the
+    free stones relative to the base, along ``direction``, during a white-noise run, and its
+    coherent peaks (``NOISE``)."""
+    import numpy as np
+
+    from drystone.postprocess import identification as idf
+    from drystone.postprocess import summary as summ
+
+    comp = "xyz".index(direction)
+    h = summ.load_histories(run_dir)
+    b = idf.base_motion(run_dir)
+    t = np.asarray(h["t"])
+    win = (t >= b["start"]) & (t <= min(b["end"], b["t"][-1]))
+    ids = [int(i) for i in h["block_ids"]]
+    mass = np.array([asm.mass[asm.ids.index(i)] for i in ids])
+    pos = np.asarray(h["pos"])[win][:, :, comp]
+    rel = (pos - pos[0]) @ mass / mass.sum()
+    acc = np.interp(t[win], b["t"], b["acc"]) * float(b["direction"][comp])
+    fs = 1.0 / float(np.median(np.diff(t[win])))
+    nseg = 2 ** int(np.floor(np.log2(2 * len(rel) / (NOISE["min_segments"] + 1))))
+    tf = idf.transfer_function(acc, rel, fs, nseg)
+    fmin = max(0.3, 2.0 / (nseg / fs))  # two cycles per segment at least
+    peaks = idf.modal_peaks(tf, coherence_min=NOISE["coherence_min"], fmin_hz=fmin, fmax_hz=NOISE["fmax_hz"],
+                            prominence=NOISE["prominence_decades"])
+    return {"direction": direction, "fs_hz": fs, "nperseg": int(nseg), "n_segments": tf["n_segments"],
+            "df_hz": tf["df_hz"], "band_hz": [fmin, NOISE["fmax_hz"]],
+            "peaks": [{"frequency_hz": p["frequency_hz"], "coherence": p["coherence"],
+                       "damping_ratio": p["damping_ratio"]} for p in peaks],
+            "_tf": tf}
+
+
+def compare(table: list, peaks: list, direction: str, fmax_hz: float) -> list:
+    """Per linearised mode with effective mass >= PARTICIPATING along ``direction`` below
+    ``fmax_hz``: the nearest identified peak and the difference (%)."""
+    out = []
+    for m in table:
+        if m["effective_mass_ratio"][direction] < PARTICIPATING or m["frequency_hz"] > fmax_hz:
+            continue
+        near = min(peaks, key=lambda p: abs(p["frequency_hz"] - m["frequency_hz"])) if peaks else None
+        out.append({"mode": m["mode"], "linearised_hz": m["frequency_hz"],
+                    "effective_mass_ratio": m["effective_mass_ratio"][direction],
+                    "identified_hz": near["frequency_hz"] if near else None,
+                    "difference_pct": 100 * (near["frequency_hz"] / m["frequency_hz"] - 1) if near else None})
+    return out
+
+
+# -- figure ----------------------------------------------------------------------------------
+
+def figure(asm, res: dict, table: list, path, panels: int = 4) -> Path:
+    """The first ``panels`` mode shapes on the wall's elevation (x along the wall, z up): each
+    stone's parts displaced along the mode (u + theta x r, scaled so that the largest
+    displacement is 8 % of the wall's height) over the stones at rest (grey outlines),
+    coloured by the out-of-plane (y) displacement of their centroid."""
+    import os
+
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+    from matplotlib.patches import Polygon
+    from scipy.spatial import ConvexHull
+
+    path = Path(path)
+    shown = table[:panels]
+    free = np.flatnonzero(asm.moving)
+    pts = np.vstack([v for b in free for v in asm.parts[b]])
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    height = float(hi[2] - lo[2]) or 1.0
+    ncol = max(1, min(2, len(shown)))
+    nrow = max(1, int(np.ceil(len(shown) / ncol)))
+    fig, axes = plt.subplots(nrow, ncol, figsize=(6.0 * ncol, 3.2 * nrow + 0.4), squeeze=False)
+    cmap = plt.get_cmap("coolwarm")
+
+    def outline(v):
+        p = v[:, [0, 2]]
+        try:
+            return p[ConvexHull(p).vertices]
+        except Exception:  # noqa: BLE001 - a part seen edge-on: its extent as a segment
+            return p[[int(np.argmin(p[:, 0])), int(np.argmax(p[:, 0]))]]
+
+    for ax, m in zip(axes.flat, shown):
+        phi = res["shapes"][:, m["index"]]
+        disp = {b: (lambda pts_, b=b: np.array([asm.point_displacement(phi, asm.ids[b], x) for x in pts_]))
+                for b in free}
+        dmax = max(float(np.abs(disp[b](np.vstack(asm.parts[b]))).max()) for b in free) or 1.0
+        scale = 0.08 * height / dmax
+        uy = {b: float(asm.point_displacement(phi, asm.ids[b], asm.pos0[b])[1]) * scale / (0.08 * height)
+              for b in free}
+        for b in range(len(asm.parts)):
+            for v in asm.parts[b]:
+                if asm.moving[b]:
+                    ax.add_patch(Polygon(outline(v), closed=True, fill=False, ec="0.6", lw=0.6, ls="--"))
+                    dv = v + scale * disp[b](v)
+                    ax.add_patch(Polygon(outline(dv), closed=True, fc=cmap(0.5 + 0.5 * uy[b]), ec="k", lw=0.6))
+                else:
+                    ax.add_patch(Polygon(outline(v), closed=True, fc="0.8", ec="0.5", lw=0.5))
+        for b in free:
+            ax.annotate(str(asm.ids[b]), (asm.pos0[b][0], asm.pos0[b][2]), fontsize=6, ha="center", va="center",
+                        color="0.3")
+        pad = 0.1 * max(hi[0] - lo[0], height)
+        ax.set_xlim(lo[0] - pad, hi[0] + pad)
+        ax.set_ylim(lo[2] - pad, hi[2] + pad)
+        ax.set_aspect("equal")
+        d = m["dominant_direction"]
+        em = f", {100 * m['effective_mass_ratio'][d]:.0f} % of the mass along {d}" if d else ""
+        ax.set_title(f"mode {m['mode']}: {m['frequency_hz']:.3g} Hz{em}", fontsize=9)
+        ax.set_xlabel("x (m)", fontsize=8)
+        ax.set_ylabel("z (m)", fontsize=8)
+        ax.tick_params(labelsize=7)
+    for ax in list(axes.flat)[len(shown):]:
+        ax.axis("off")
+    fig.suptitle("mode shapes on the elevation (dashed: at rest; colour: out-of-plane y displacement, blue - / "
+                 "red +, relative)", fontsize=9)
+    fig.tight_layout()
+    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
+    fig.savefig(tmp, dpi=120)
+    plt.close(fig)
+    os.replace(tmp, path)
+    return path
+
+
+# -- the analysis -----------------------------------------------------------------------------
+
+def modal(case, out=None, modes: int = 6, identify: bool = False, direction: str = "y",
+          noise_pga_g: float = NOISE["pga_g"], noise_duration_s: float = NOISE["duration_s"], workers=None,
+          backend: str = "local", address=None, log=print) -> dict:
+    """Frequencies and mode shapes of ``case`` (module docstring); returns what modal.json holds."""
+    import numpy as np
+
+    from drystone.postprocess import identification as idf
+    from drystone.simulate import RunError
+    from drystone.model import case as casemod
+
+    case_path = Path(case).expanduser().resolve()
+    casemod.load(case_path)  # a bad case is refused before anything runs
+    if modes < 1:
+        raise casemod.CaseError(f"{case_path}: --modes must be at least 1, got {modes}")
+    if identify and not (noise_pga_g > 0 and noise_duration_s > 0):
+        raise casemod.CaseError(f"{case_path}: --noise-pga and --noise-duration must be positive")
+    d = common.output_dir(case_path, "modal", out)
+    stages, added = settle_stages(case_path)
+    runs = [("settle", [stages_override(stages)])]
+    if identify:
+        noise = {"type": "excitation", "motion": "white_noise", "duration": float(noise_duration_s), "seed": 0,
+                 "direction": direction, "pga_g": float(noise_pga_g)}
+        runs.append((f"white_noise_{direction}", [stages_override(stages + [noise]),
+                                                  f"output.interval={NOISE['interval_s']!r}"]))
+    t0 = time.time()
+    done = common.run_jobs(case_path, runs, d, "modal", workers=workers, backend=backend, address=address, log=log)
+    t_runs = time.time() - t0
+    st = done["settle"]
+    where = str(case_path)
+    if st["status"] != "done":
+        raise RunError(f"{where}: the settling run failed: {st.get('error')}")
+    if st["collapsed"]:
+        raise RunError(f"{where}: stone(s) {st['collapsed_stones']} collapsed while settling under gravity: the wall "
+                       "does not stand; no modes")
+    run_dir = Path(st["run_dir"])
+    t1 = time.time()
+    asm = idf.wall_assembly(run_dir)
+    rest = settled(run_dir, asm)
+    if not rest["settled"]:
+        raise RunError(f"{where}: stone {rest['stone']} still moves at {rest['speed_m_s']:.3g} m/s at the end of "
+                       f"gravity ({rest['time_s']:.3g} s; settled below {rest['limit_m_s']:.2g} m/s): the wall has not "
+                       "settled; lengthen its gravity stage and rerun")
+    r = analyse(asm, modes, where)
+    res = r.pop("_res")
+    rows = r.pop("_all")
+    t_modal = time.time() - t1
+    fig = figure(asm, res, r["modes"], d / "modes.png")
+    ident = None
+    if identify:
+        wn = done[runs[1][0]]
+        if wn["status"] != "done":
+            raise RunError(f"{where}: the white-noise run failed: {wn.get('error')}")
+        ident = identification(Path(wn["run_dir"]), asm, direction)
+        ident.pop("_tf")
+        ident.update(pga_g=float(noise_pga_g), duration_s=float(noise_duration_s), run_dir=wn["run_dir"],
+                     collapsed=wn["collapsed"], largest_residual_m=wn["largest_residual_m"],
+                     comparison=compare(rows, ident["peaks"], direction, NOISE["fmax_hz"]),
+                     assumed="white noise 0-20 Hz, its PGA and length (ASSUMED)")
+    data = {"case": str(case_path), "analysis": "modal", "out_dir": str(d), **r, "identification": ident,
+            "settle": {"run_dir": str(run_dir), "gravity_stage": "added (ASSUMED: " + str(DEFAULT_GRAVITY) + ")"
+                       if added else "the case's", "sample_time_s": asm.sample_time_s, "rest": rest,
+                       "wall_s": st.get("wall_s")},
+            "timing_s": {"runs": t_runs, "modal": t_modal, "total": time.time() - t0},
+            "units": {"frequency": "Hz", "period": "s", "effective_mass_ratio": "fraction of the free stones' mass",
+                      "eigenvalue": "rad^2/s^2"}}
+    for m in rows:
+        m.pop("index", None)
+    common.write_json(d / "modal.json", data)
+    common.write_report(d, f"Modes of {case_path.name}", report(data), [fig])
+    log(f"[modal] {d / 'modal.json'}, {fig.name}, report.html")
+    return data
+
+
+def report(data: dict) -> str:
+    """report.html's Markdown."""
+    m = data["model"]
+    lines = [f"# Modes of {Path(data['case']).name}", "",
+             f"Linearised joints at the settled state ({data['settle']['gravity_stage']} gravity stage, sampled at "
+             f"{data['settle']['sample_time_s']:.3g} s): {m['free_stones']} free stones "
+             f"({len(m['multi_part_stones'])} of several parts), {m['ndof']} DOFs, {m['contacts']} contacts (pairs of "
+             f"parts). Balance: the joints' shear balances every stone to {m['balance']['residual']:.1e} of its weight "
+             f"(as built, without it: {m['balance']['as_built_residual']:.2g}); the most used contact needs "
+             + (f"{m['balance']['friction_use']:.2f} of its friction." if m['balance']['friction_use'] is not None
+                else "(no friction data)."), "",
+             "| mode | f (Hz) | T (s) | eff. mass x | eff. mass y | eff. mass z | dominant | stones (share) |",
+             "|---:|---:|---:|---:|---:|---:|---|---|"]
+    for r in data["modes"]:
+        em = r["effective_mass_ratio"]
+        st = ", ".join(f"{b} ({100 * s:.0f} %)" for b, s in r["stones"].items())
+        lines.append(f"| {r['mode']} | {r['frequency_hz']:.4g} | {r['period_s']:.4g} | {em['x']:.3f} | {em['y']:.3f} | "
+                     f"{em['z']:.3f} | {r['dominant_direction'] or '-'}, {r['dominant_motion']} | {st} |")
+    c = data["cumulative_effective_mass_ratio"]
+    lines += ["", f"Cumulative effective mass of these modes: x {c['x']:.2f}, y {c['y']:.2f}, z {c['z']:.2f}.", ""]
+    if data["zero_modes"]:
+        lines += ["Motions without stiffness (not frequencies):", ""]
+        lines += [f"- {z['explanation']}" for z in data["zero_modes"]] + [""]
+    idn = data["identification"]
+    if idn:
+        pk = ", ".join(f"{p['frequency_hz']:.3g}" for p in idn["peaks"]) or "none"
+        lines += ["## White-noise check", "",
+                  f"White noise along {idn['direction']}, {idn['pga_g']:g} g, {idn['duration_s']:g} s ({idn['assumed']}); "
+                  f"H1 transfer function base acceleration -> mean relative displacement, {idn['n_segments']} segments of "
+                  f"{idn['nperseg']} samples ({idn['df_hz']:.3g} Hz bins). Coherent peaks (Hz): {pk}.", "",
+                  "| mode | linearised (Hz) | eff. mass | identified (Hz) | difference |", "|---:|---:|---:|---:|---:|"]
+        for row in idn["comparison"]:
+            ih = "-" if row["identified_hz"] is None else f"{row['identified_hz']:.4g}"
+            dp = "-" if row["difference_pct"] is None else f"{row['difference_pct']:+.1f} %"
+            lines.append(f"| {row['mode']} | {row['linearised_hz']:.4g} | {row['effective_mass_ratio']:.2f} | {ih} | "
+                         f"{dp} |")
+        lines.append("")
+    t = data["timing_s"]
+    lines += [f"Time: runs {t['runs']:.0f} s, modal analysis {t['modal']:.1f} s.", "", "![modes](modes.png)", ""]
+    return "\n".join(lines)
