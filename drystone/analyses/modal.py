@@ -198,10 +198,14 @@ def analyse(asm, modes: int = 6, where: str = "wall") -> dict:
 
 # -- the white-noise check ------------------------------------------------------------------
 
-def identification(run_dir, asm, direction: str) -> dict:
+def identification(run_dir, asm, direction: str, model=None) -> dict:
     """The H1 transfer function base acceleration -> mass-weighted mean displacement of the
     free stones relative to the base, along ``direction``, during a white-noise run, and its
-    coherent peaks (``NOISE``)."""
+    coherent peaks (``NOISE``). With ``model`` = (K, C, M) the linearised model's own
+    transfer function of the same quantity (``Assembly.frequency_response``: contact
+    dashpots as the dynamic law applies them, every contact sticking) at the same
+    frequencies, the peak of each in the coherent band, and the ratio |H identified| /
+    |H model| over that band (median, and its range)."""
     import numpy as np
 
     from drystone.postprocess import identification as idf
@@ -223,11 +227,71 @@ def identification(run_dir, asm, direction: str) -> dict:
     fmin = max(0.3, 2.0 / (nseg / fs))  # two cycles per segment at least
     peaks = idf.modal_peaks(tf, coherence_min=NOISE["coherence_min"], fmin_hz=fmin, fmax_hz=NOISE["fmax_hz"],
                             prominence=NOISE["prominence_decades"])
-    return {"direction": direction, "fs_hz": fs, "nperseg": int(nseg), "n_segments": tf["n_segments"],
-            "df_hz": tf["df_hz"], "band_hz": [fmin, NOISE["fmax_hz"]],
-            "peaks": [{"frequency_hz": p["frequency_hz"], "coherence": p["coherence"],
-                       "damping_ratio": p["damping_ratio"]} for p in peaks],
-            "_tf": tf}
+    f = np.asarray(tf["freq_hz"])
+    band = (f >= fmin) & (f <= NOISE["fmax_hz"]) & (np.asarray(tf["coherence"]) >= NOISE["coherence_min"])
+    out = {"direction": direction, "fs_hz": fs, "nperseg": int(nseg), "n_segments": tf["n_segments"],
+           "df_hz": tf["df_hz"], "band_hz": [fmin, NOISE["fmax_hz"]], "coherent_bins": int(band.sum()),
+           "peaks": [{"frequency_hz": p["frequency_hz"], "coherence": p["coherence"],
+                      "damping_ratio": p["damping_ratio"]} for p in peaks], "_tf": tf}
+    if band.any():
+        k = int(np.flatnonzero(band)[np.argmax(np.abs(tf["H"][band]))])
+        out["peak_identified_hz"] = float(f[k])
+    if model is not None and band.any():
+        K, C, M = model
+        w = np.array([float(m) if asm.moving[b] and c == comp else 0.0
+                      for (b, c), m in zip(asm.dofs, (asm.mass[b] for b, _ in asm.dofs))]) / mass.sum()
+        hm = np.array([w @ x for x in asm.frequency_response(K, C, M, f[band], np.eye(3)[comp])])
+        fine = np.linspace(fmin, NOISE["fmax_hz"], 400)
+        hf = np.abs([w @ x for x in asm.frequency_response(K, C, M, fine, np.eye(3)[comp])])
+        ratio = np.abs(tf["H"][band]) / np.abs(hm)
+        out.update(peak_model_hz=float(fine[int(np.argmax(hf))]), h_ratio_median=float(np.median(ratio)),
+                   h_ratio_range=[float(ratio.min()), float(ratio.max())],
+                   _model=(f[band], hm))
+    return out
+
+
+def damping_of(run_dir, asm) -> list:
+    """Each block's contact damping ratio (fraction of critical) from a run's spec.json."""
+    import json
+
+    spec = json.loads((Path(run_dir) / "spec.json").read_text())
+    by = {b["id"]: spec["materials"][b["material"]].get("damping", 0.0) for b in spec["blocks"]}
+    return [float(by[i]) for i in asm.ids]
+
+
+def transfer_figure(ident: dict, path) -> Path:
+    """|H| identified (with its coherence) and of the linearised model, against frequency."""
+    import os
+
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    path = Path(path)
+    tf = ident["_tf"]
+    f = np.asarray(tf["freq_hz"])
+    keep = (f > 0) & (f <= 1.5 * NOISE["fmax_hz"])
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(6.5, 4.6), sharex=True, gridspec_kw={"height_ratios": [3, 1]})
+    a1.semilogy(f[keep], np.abs(tf["H"][keep]), "k-", lw=1, label="white-noise run (H1)")
+    if "_model" in ident:
+        fm, hm = ident["_model"]
+        a1.semilogy(fm, np.abs(hm), "r--", lw=1, label="linearised model (contact dashpots)")
+    a1.set_ylabel("|H| (s^2)")
+    a1.legend(fontsize=8)
+    a1.grid(alpha=0.3, which="both")
+    a1.set_title(f"base acceleration -> mean relative displacement along {ident['direction']}", fontsize=9)
+    a2.plot(f[keep], tf["coherence"][keep], "b-", lw=1)
+    a2.axhline(NOISE["coherence_min"], color="0.5", lw=0.8, ls=":")
+    a2.set_ylabel("coherence")
+    a2.set_xlabel("frequency (Hz)")
+    a2.set_ylim(0, 1.05)
+    fig.tight_layout()
+    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
+    fig.savefig(tmp, dpi=120)
+    plt.close(fig)
+    os.replace(tmp, path)
+    return path
 
 
 def compare(table: list, peaks: list, direction: str, fmax_hz: float) -> list:
@@ -369,13 +433,21 @@ def modal(case, out=None, modes: int = 6, identify: bool = False, direction: str
     rows = r.pop("_all")
     t_modal = time.time() - t1
     fig = figure(asm, res, r["modes"], d / "modes.png")
+    figs = [fig]
     ident = None
     if identify:
         wn = done[runs[1][0]]
         if wn["status"] != "done":
             raise RunError(f"{where}: the white-noise run failed: {wn.get('error')}")
-        ident = identification(Path(wn["run_dir"]), asm, direction)
+        K, M = 0.5 * (res["K"] + res["K"].T), res["M"]
+        C = asm.damping(damping_of(run_dir, asm))
+        ident = identification(Path(wn["run_dir"]), asm, direction, (K, C, M))
+        figs.append(transfer_figure(ident, d / "transfer.png"))
         ident.pop("_tf")
+        ident.pop("_model", None)
+        fd, zd, _ = asm.damped_modes(K, C, M)
+        ident["damped_modes"] = [{"frequency_hz": float(a), "damping_ratio": float(z)} for a, z in zip(fd[:modes],
+                                                                                                       zd[:modes])]
         ident.update(pga_g=float(noise_pga_g), duration_s=float(noise_duration_s), run_dir=wn["run_dir"],
                      collapsed=wn["collapsed"], largest_residual_m=wn["largest_residual_m"],
                      comparison=compare(rows, ident["peaks"], direction, NOISE["fmax_hz"]),
@@ -390,8 +462,8 @@ def modal(case, out=None, modes: int = 6, identify: bool = False, direction: str
     for m in rows:
         m.pop("index", None)
     common.write_json(d / "modal.json", data)
-    common.write_report(d, f"Modes of {case_path.name}", report(data), [fig])
-    log(f"[modal] {d / 'modal.json'}, {fig.name}, report.html")
+    common.write_report(d, f"Modes of {case_path.name}", report(data), figs)
+    log(f"[modal] {d / 'modal.json'}, {', '.join(f.name for f in figs)}, report.html")
     return data
 
 
@@ -424,7 +496,15 @@ def report(data: dict) -> str:
         lines += ["## White-noise check", "",
                   f"White noise along {idn['direction']}, {idn['pga_g']:g} g, {idn['duration_s']:g} s ({idn['assumed']}); "
                   f"H1 transfer function base acceleration -> mean relative displacement, {idn['n_segments']} segments of "
-                  f"{idn['nperseg']} samples ({idn['df_hz']:.3g} Hz bins). Coherent peaks (Hz): {pk}.", "",
+                  f"{idn['nperseg']} samples ({idn['df_hz']:.3g} Hz bins). Coherent peaks standing out of |H| (Hz): {pk}.",
+                  "",
+                  (f"Peak of |H| in the coherent band: {idn['peak_identified_hz']:.3g} Hz identified, "
+                   f"{idn['peak_model_hz']:.3g} Hz from the linearised model with the contact dashpots; |H| identified "
+                   f"/ model: median {idn['h_ratio_median']:.3f} (range {idn['h_ratio_range'][0]:.3f}-"
+                   f"{idn['h_ratio_range'][1]:.3f}). Damped modes of the model (Hz, damping ratio): "
+                   + ", ".join(f"{m['frequency_hz']:.3g} ({m['damping_ratio']:.2f})" for m in idn["damped_modes"])
+                   + ".") if "peak_model_hz" in idn else "No coherent band: nothing to compare.", "",
+                  "![transfer](transfer.png)", "",
                   "| mode | linearised (Hz) | eff. mass | identified (Hz) | difference |", "|---:|---:|---:|---:|---:|"]
         for row in idn["comparison"]:
             ih = "-" if row["identified_hz"] is None else f"{row['identified_hz']:.4g}"
