@@ -214,6 +214,18 @@ MODAL_RESIDUAL = 1e-9
 #: asymmetry of the stiffness matrix (central differences of a conservative field):
 #: truncation 1e-6
 MODAL_ASYMMETRY = 1e-6
+#: a stone of two parts against the same stone in one piece, with the same contacts
+#: (tests/test_modal_analysis.py): the parts' mass properties are summed (parallel axes)
+#: instead of integrated at once, a relative difference of ~1e-15, and the overlap volumes
+#: are the same clip; the stiffness's finite differences divide the round-off of those
+#: volumes (1e-16 x the 1 m coordinates on a 1e-3 m depth: 1e-13 relative) by the step
+#: (1e-3 of the depth): 1e-10 on K, half that on a frequency; 10 times that (4e-15 measured:
+#: the clip sees the same world coordinates)
+MULTIPART_MODAL_REL = 1e-9
+#: the least friction use of a balance (drystone/mechanics/modal.py ``balance``): HiGHS's
+#: primal feasibility tolerance, 1e-7 on constraints scaled to the stones' weights; 10
+#: times that
+LP_REL = 1e-6
 #: equilibrium under gravity tilted by a = 2 deg: iterated to a residual below 1e-6 W; the
 #: as-built residual is W sin(a) but for the normal balance (1 - cos a = 6e-4), and the
 #: spring is linear with the normal vertical, so the slip W sin(a) / (K_t A) holds: 0.1 %

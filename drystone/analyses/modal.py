@@ -10,10 +10,10 @@
    (drystone/mechanics/modal.py), the stiffness K = -dQ/dq of the project's law there
    (central differences) and the mass matrix M. The recorded state is balanced by shear
    forces the joints stored while settling, which the linear model does not record:
-   ``modal.balance`` finds the least-friction shear that balances every stone. Refused,
-   naming the stone or the contact, when none does (a stone out of balance) or when it
-   needs more than the friction available (a contact sliding): such a wall is not in
-   equilibrium and must be settled (a longer gravity stage).
+   ``modal.balance`` finds the shear within friction that leaves the least out of balance.
+   Refused, naming the stone (and the contact short of friction, if any), when a stone
+   stays out of balance by more than ``modal.BALANCE_TOL`` of its weight: such a wall is
+   not in equilibrium and must be settled (a longer gravity stage).
 3. **Modes.** eigh(K, M), K symmetrised. Each eigenvalue is read (``modal.interpret``): a
    positive one is a mode (a frequency, its effective mass along x, y, z, its dominant
    direction and stones); one within ``modal.ZERO_EIGENVALUE_REL`` of zero is a motion the
@@ -53,7 +53,8 @@ DEFAULT_GRAVITY = {"type": "gravity", "duration": 1.0, "ramp": 0.5}
 #: contacts): speed below 0.1 sqrt(g delta), a vibration amplitude below a tenth of the
 #: static deflection
 SETTLED_SPEED_FRACTION = 0.1
-#: a friction use above 1 (``modal.balance``) beyond the linear programme's tolerance
+#: a friction use above 1 (``modal.balance``) beyond the linear programme's tolerance: a
+#: contact short of friction, named when a stone is out of balance
 FRICTION_SLACK = 1e-6
 #: the white-noise check (ASSUMED): 0-20 Hz band-limited noise (drystone.motions.generators),
 #: scaled to a PGA small enough that the joints stay closed; the run's output sampled at
@@ -152,14 +153,13 @@ def analyse(asm, modes: int = 6, where: str = "wall") -> dict:
         raise RunError(f"{where}: no stone touches another: nothing holds the wall")
     bal = mm.balance(asm)
     if not bal["balanced"]:
+        use = bal["friction_use"]
+        why = "" if use is None or use <= 1 + FRICTION_SLACK else \
+            f" (the contact of stones {bal['friction_contact'][0]} and {bal['friction_contact'][1]} would need " \
+            f"{use:.3g} times its friction)"
         raise RunError(f"{where}: stone {bal['residual_stone']} is out of balance by {100 * bal['residual']:.2g} % of "
-                       "its weight even with its joints carrying shear: the wall is not in equilibrium; settle it "
-                       "(a longer gravity stage) and rerun")
-    if bal["friction_use"] is not None and bal["friction_use"] > 1 + FRICTION_SLACK:
-        a, b = bal["friction_contact"]
-        raise RunError(f"{where}: the contact of stones {a} and {b} needs {bal['friction_use']:.3g} times its friction "
-                       "to hold the wall: it is sliding, the wall is not in equilibrium; settle it (a longer gravity "
-                       "stage) and rerun")
+                       f"its weight with its joints carrying shear within friction{why}: the wall is not in "
+                       "equilibrium; settle it (a longer gravity stage) and rerun")
     res = asm.modes(equilibrate=False)
     info = mm.interpret(asm, res)
     order = np.argsort(res["frequency_hz"])

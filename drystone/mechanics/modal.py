@@ -464,23 +464,24 @@ def balance(asm: Assembly) -> dict:
     """Is the static configuration (q = 0) an equilibrium once the joints carry shear?
 
     The recorded settled state of a run is balanced by the normal forces K_n V (which the
-    model sees) and by the tangential forces the joints stored while settling (which it does
-    not: ``Assembly`` starts its springs unloaded). This finds the shear forces s_c in the
-    tangent planes of the contacts, acting at the overlap centroids, that balance every free
-    stone (forces and moments) and use the least friction, min over s of max_c |s_c| /
-    (mu_c F_n,c), a linear programme (octagonal pyramids, ``_CONE_SIDES``) solved with
-    HiGHS. When none balances the stones (a stone with no support, or held by too few
-    contacts), the least-squares shear is taken instead and the stone left most out of
-    balance is named.
+    model sees) and by the tangential forces the joints stored while settling, capped at
+    mu F_n (which it does not see: ``Assembly`` starts its springs unloaded). With s_c the
+    shear of contact c in its tangent plane at its overlap centroid, two linear programmes
+    (HiGHS; the friction cone as an octagonal pyramid, ``_CONE_SIDES``):
 
-    Returns {"balanced": bool (no residual force above 1e-3 of a stone's weight once the
-    shear is in), "residual": largest residual force over the stones / its weight (-),
-    "residual_stone": its id, "as_built_residual": the same without shear, "as_built_stone",
-    "friction_use": the least, over the balancing shears, of max_c |s_c| / (mu_c F_n,c)
-    measured on the octagonal pyramid (the true cone's is between this and 1.082 times it;
-    None without ``mu``), "friction_contact": (id, id) of the contact that sets it}. A
-    friction use above 1 means no shear within the friction limits holds the wall: it is
-    sliding there."""
+    * the smallest out-of-balance left on any stone by shears within friction,
+      min over |s_c| <= mu_c F_n,c of max over the stones' DOFs of |Q + A s| (forces over
+      the stone's weight W, moments over W times its size): ``residual``, its stone;
+    * the least friction needed to balance every stone exactly, min over A s = -Q of
+      max_c |s_c| / (mu_c F_n,c): ``friction_use`` (on the pyramid: the true cone's lies
+      between it and 1.082 times it), and the contact that sets it.
+
+    Without ``mu`` the least-squares shear gives ``residual`` (no friction limit). Returns
+    {"balanced": residual <= BALANCE_TOL, "residual", "residual_stone", "friction_use"
+    (None when no shear balances the stones exactly, or without mu), "friction_contact"
+    ((id, id)), "as_built_residual" (no shear), "as_built_stone"}. A contact with a
+    friction use above 1 carries less than the shear the least-friction balance wants of
+    it; the wall is then balanced only where ``residual`` says so."""
     from scipy.optimize import linprog
 
     q0 = np.zeros(asm.ndof)
@@ -507,47 +508,47 @@ def balance(asm: Assembly) -> dict:
                     A[d, col] += sign * (t[c] if c < 3 else np.cross(x - asm.pos0[b], t)[c - 3])
     As, bs = A / scale[:, None], -Q0 / scale
 
-    def residual(r):
-        tr = [d for d, (b, c) in enumerate(asm.dofs) if c < 3]
-        if not tr:
+    def worst(r):
+        if not len(r):
             return 0.0, None
-        k = max(tr, key=lambda d: abs(r[d]))
+        k = int(np.argmax(np.abs(r)))
         return float(abs(r[k])), asm.ids[asm.dofs[k][0]]
 
-    built, built_stone = residual(bs)
-    cap = np.where(np.isfinite(mu), mu * fn, 0.0)
-    res = None
-    if nc and asm.mu is not None and (cap > 0).any():
-        # variables: y_c = s_c / (mu F_n) (2 per contact) and t; minimise t with
-        # d_k . y_c <= t for the pyramid's sides; contacts without a normal force carry none
-        ang = 2 * np.pi * np.arange(_CONE_SIDES) / _CONE_SIDES
-        dirs = np.stack([np.cos(ang), np.sin(ang)], axis=1)
-        nv = 2 * nc + 1
-        rows = []
-        for k in range(nc):
-            for d in dirs:
-                r = np.zeros(nv)
-                r[2 * k:2 * k + 2] = d
-                r[-1] = -1.0
-                rows.append(r)
-        w = np.repeat(cap, 2)
-        Aeq = np.hstack([As * w[None, :], np.zeros((asm.ndof, 1))])
-        cost = np.zeros(nv)
-        cost[-1] = 1.0
-        lp = linprog(cost, A_ub=np.array(rows), b_ub=np.zeros(len(rows)), A_eq=Aeq, b_eq=bs,
-                     bounds=[(None, None)] * nv, method="highs")
-        if lp.status == 0:
-            y = lp.x[:-1].reshape(nc, 2)
-            k = int(np.argmax((y @ dirs.T).max(axis=1)))
-            r, stone = residual(bs - Aeq[:, :-1] @ lp.x[:-1])
-            res = {"residual": r, "residual_stone": stone, "friction_use": float(lp.x[-1]),
-                   "friction_contact": (asm.ids[int(rc["block1"][k])], asm.ids[int(rc["block2"][k])])}
-    if res is None:  # no friction data, or no shear balances the stones: the least-squares shear
-        y = np.linalg.lstsq(As, bs, rcond=None)[0]
-        r, stone = residual(bs - As @ y)
-        res = {"residual": r, "residual_stone": stone, "friction_use": None, "friction_contact": None}
-    res.update(balanced=res["residual"] <= BALANCE_TOL, as_built_residual=built, as_built_stone=built_stone)
-    return res
+    built, built_stone = worst(bs)
+    out = {"friction_use": None, "friction_contact": None, "as_built_residual": built, "as_built_stone": built_stone}
+    if asm.mu is None or nc == 0:
+        y = np.linalg.lstsq(As, bs, rcond=None)[0] if nc else np.zeros(0)
+        out["residual"], out["residual_stone"] = worst(bs - As @ y)
+        out["balanced"] = out["residual"] <= BALANCE_TOL
+        return out
+    cap = mu * fn
+    Aw = As * np.repeat(cap, 2)[None, :]  # in the variables y_c = s_c / (mu_c F_n,c)
+    ang = 2 * np.pi * np.arange(_CONE_SIDES) / _CONE_SIDES
+    dirs = np.stack([np.cos(ang), np.sin(ang)], axis=1)
+    nv = 2 * nc + 1
+    cone = np.zeros((nc * _CONE_SIDES, nv))
+    for k in range(nc):
+        cone[k * _CONE_SIDES:(k + 1) * _CONE_SIDES, 2 * k:2 * k + 2] = dirs
+    cost = np.zeros(nv)
+    cost[-1] = 1.0
+    free = [(None, None)] * (2 * nc)
+    # 1. shears within friction (d_k . y_c <= 1), the largest out-of-balance e minimised
+    ub = np.vstack([np.hstack([Aw, -np.ones((asm.ndof, 1))]), np.hstack([-Aw, -np.ones((asm.ndof, 1))]), cone])
+    rhs = np.concatenate([bs, -bs, np.ones(len(cone))])
+    lp = linprog(cost, A_ub=ub, b_ub=rhs, bounds=free + [(0, None)], method="highs")
+    y = lp.x[:-1] if lp.status == 0 else np.linalg.lstsq(Aw, bs, rcond=None)[0]
+    out["residual"], out["residual_stone"] = worst(bs - Aw @ y)
+    # 2. exact balance, the largest friction use t minimised (d_k . y_c <= t)
+    cone[:, -1] = -1.0
+    lp = linprog(cost, A_ub=cone, b_ub=np.zeros(len(cone)), A_eq=np.hstack([Aw, np.zeros((asm.ndof, 1))]),
+                 b_eq=bs, bounds=free + [(None, None)], method="highs")
+    if lp.status == 0:
+        yc = lp.x[:-1].reshape(nc, 2)
+        k = int(np.argmax((yc @ dirs.T).max(axis=1)))
+        out["friction_use"] = float(lp.x[-1])
+        out["friction_contact"] = (asm.ids[int(rc["block1"][k])], asm.ids[int(rc["block2"][k])])
+    out["balanced"] = out["residual"] <= BALANCE_TOL
+    return out
 
 
 #: a stone is out of balance when the force left on it, shear included, exceeds 1e-3 of its
