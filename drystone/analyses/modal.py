@@ -90,9 +90,13 @@ def main(args) -> int:
     if r["zero_modes"]:
         print(f"[modal] {len(r['zero_modes'])} motion(s) without stiffness (not frequencies): "
               + "; ".join(z["explanation"] for z in r["zero_modes"][:3]))
-    if r["identification"]:
-        pk = ", ".join(f"{p['frequency_hz']:.3g}" for p in r["identification"]["peaks"]) or "none"
-        print(f"[modal] white-noise check along {r['identification']['direction']}: peaks (Hz) {pk}")
+    idn = r["identification"]
+    if idn and "peak_model_hz" in idn:
+        print(f"[modal] white-noise check along {idn['direction']}: |H| peaks at {idn['peak_identified_hz']:.3g} Hz "
+              f"(linearised model with its dashpots: {idn['peak_model_hz']:.3g} Hz), |H| identified / model "
+              f"{idn['h_ratio_median']:.3f} (median over the coherent band)")
+    elif idn:
+        print(f"[modal] white-noise check along {idn['direction']}: no coherent band, nothing to compare")
     return 0
 
 
