@@ -757,3 +757,16 @@ HAND_MARGIN_REL = 1e-12
 #: compared with block_limits at the root: the margin's slope is O(W) per rad or per m, so the
 #: margin at the root is O(1e-12 W); 1e-9 of W leaves room for the closed form's round-off
 HAND_ROOT_REL = 1e-9
+
+# ---------------------------------------------------------------------------------------
+# Analyses of any case: PGA at collapse by IDA (drystone/analyses/, tests/test_analyses_collapse.py)
+# ---------------------------------------------------------------------------------------
+
+#: the rocking block's stiff joint (K_n 2e10 N/m^3, damping 0.8) restitutes 0.905-0.909 of the
+#: angular velocity per impact (docs/damping-and-impacts.md), Housner's rigid block 0.912: the
+#: reference minimum overturning amplitude (one impact at omega_p = 2 p) is computed at
+#: Housner's r and at this lower r (0.306 and 0.310 g), which bounds the joint's from above
+ROCKING_PULSE_R_LOW = 0.8
+#: the package's sine is sampled at 64 points per period and linearly interpolated: the chords
+#: lie inside the sine, at most 1 - cos(pi / 64) = 1.2e-3 of the amplitude below it; 2e-3
+PULSE_SAMPLED_REL = 2e-3

@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 import os
 import re
 import time
@@ -219,10 +218,17 @@ def excitation_stage(case_dict: dict, stage=None, where: str = "case") -> int:
     return found[0]
 
 
+#: the keys of an excitation stage that a record replacing its motion keeps
+RECORD_STAGE_KEYS = ("type", "name", "direction", "pga_g", "site")
+
+
 def record_override(case_dict: dict, record, stage=None, where: str = "case") -> list[str]:
-    """The ``--set`` overrides replacing the record of the case's one excitation stage (or
-    of ``stage``): ``motion = record`` and ``record`` = the file (absolute path) or the
-    catalogue name. CaseError naming the case and stage when the record is neither."""
+    """The ``--set`` override replacing the motion of the case's one excitation stage (or of
+    ``stage``) by ``record``, a file (made absolute) or a catalogue name: the whole stage is
+    rewritten, keeping its direction, PGA, site and name (a sine's frequency, duration or
+    start do not apply to a record; a record's own duration is kept). CaseError naming the
+    case and stage when the record is neither a file nor a catalogue name."""
+    from drystone import tomlio
     from drystone.motions import catalogue
 
     k = excitation_stage(case_dict, stage, where)
@@ -235,11 +241,11 @@ def record_override(case_dict: dict, record, stage=None, where: str = "case") ->
             raise casemod.CaseError(f"{where}: stage {k}: record {r!r} is neither a file nor a catalogue name "
                                     f"({', '.join(catalogue.names())})")
         value = str(p.resolve())
-    over = [f"stages.{k}.motion=record", f"stages.{k}.record={json.dumps(value)}"]
     st = case_dict["stages"][k]
-    if st.get("start", "rest") != "rest":  # Eq. 9's displacement start is a sine's only
-        over.append(f"stages.{k}.start=rest")
-    return over
+    keep = RECORD_STAGE_KEYS + (("duration",) if st.get("motion") == "record" else ())
+    new = {key: st[key] for key in keep if st.get(key) is not None}
+    new.update(motion="record", record=value)
+    return [f"stages.{k}={tomlio.value(new)}"]
 
 
 def pga_override(case_dict: dict, pga_g: float, stage=None, where: str = "case") -> list[str]:
@@ -290,13 +296,11 @@ def run_jobs(case_path, runs: list, root, label: str, common=(), workers=None, b
 
 # -- THE outcome of a run ----------------------------------------------------------------
 
-def _tipping(axis_z, L: float, D: float, H: float) -> tuple[float, float]:
-    """(lean, tipping angle), rad, of a stone whose own vertical axis is now ``axis_z``."""
-    zx, zy, zz = (float(v) for v in axis_z)
-    lean = math.acos(max(-1.0, min(1.0, zz)))
-    phi = math.atan2(zy, zx)
-    w = abs(math.cos(phi)) * 0.5 * L + abs(math.sin(phi)) * 0.5 * D
-    return lean, math.atan2(w, 0.5 * H)
+def collapse_reasons(extent, u, rotvec) -> tuple[list[str], bool]:
+    """The collapse rule for one stone: drystone/mechanics/collapse.py ``stone``."""
+    from drystone.mechanics import collapse
+
+    return collapse.stone(extent, u, rotvec)
 
 
 def outcome(run_dir) -> dict:
@@ -311,7 +315,6 @@ def outcome(run_dir) -> dict:
     "onset_deg", "reaction_drop_deg", "first_stone", "max_tilt_deg"}. A folder without a
     complete run gives {"status": "failed", "error"}."""
     import numpy as np
-    from scipy.spatial.transform import Rotation
 
     from drystone.mechanics import rotations
     from drystone.model.spec import spec_dict, stage_type
@@ -348,19 +351,10 @@ def outcome(run_dir) -> dict:
         if b in left:
             why[b] = ["left_model"]
             continue
-        ext = np.ptp(verts[b], axis=0)
-        L, D, H = (float(x) for x in ext)
-        reasons = []
-        if u[j, 2] < -0.5 * H:
-            reasons.append("fell")
-        lean, tip = _tipping(Rotation.from_rotvec(rot[j]).apply([0.0, 0.0, 1.0]), L, D, H)
-        if lean > tip:
-            reasons.append("overturned")
-        if abs(u[j, 1]) > 0.5 * D:
-            reasons.append("out_of_plane")
+        reasons, slid = collapse_reasons(np.ptp(verts[b], axis=0), u[j], rot[j])
         if reasons:
             why[b] = reasons
-        elif abs(u[j, 0]) > 0.5 * L:
+        elif slid:
             sliding.append(b)
         res_norm[b] = float(np.linalg.norm(u[j]))
         out_plane[b] = float(abs(u[j, 1]))

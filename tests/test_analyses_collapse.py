@@ -1,0 +1,168 @@
+"""``python -m drystone collapse`` (drystone/analyses/collapse.py) on two stones with closed
+forms, each IDA run once per module (a few seconds per run):
+
+* a slender stone (0.2 x 0.2 x 0.8 m, stiff joint) under a one-sine pulse at omega_p = 2 p:
+  the bracket of its PGA at collapse holds Zhang & Makris (2001)'s minimum overturning
+  amplitude of the rigid block (drystone/mechanics/analytic.py min_overturning_pulse), within
+  the band the joint's restitution, its Winkler compliance and the sampled sine allow;
+* a 0.2 m cube (mu 0.4) under a half-sine pulse: the bracket holds the amplitude at which
+  Newmark's rigid-plastic slide reaches half the stone's depth (its collapse: out of plane),
+  within the penalty joint's 3 % on the slide.
+
+And: a second call reuses every run (resumable), one-line errors (exit 2) for bad input, the
+collapse rule on single stones."""
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import tolerances as tol
+from conftest import requires_yade
+from drystone import paths
+from drystone.analyses import collapse as C
+from drystone.analyses import common
+
+ROCK = paths.ROOT / "cases" / "examples" / "rocking_block_pulse.toml"
+SLIDE = paths.ROOT / "cases" / "examples" / "sliding_block_pulse.toml"
+G = 9.80665
+
+
+def _quiet(*a, **k):
+    pass
+
+
+@pytest.fixture(scope="module")
+def rocking(tmp_path_factory):
+    out = tmp_path_factory.mktemp("rocking") / "collapse"
+    return C.collapse(ROCK, None, tolerance=0.01, cap=0.5, start=0.28, factor=1.15, fill=None, out=out, workers=1,
+                      log=_quiet)
+
+
+@pytest.fixture(scope="module")
+def sliding(tmp_path_factory):
+    out = tmp_path_factory.mktemp("sliding") / "collapse"
+    return C.collapse(SLIDE, None, tolerance=0.01, cap=0.9, start=0.5, factor=1.2, fill=None, out=out, workers=1,
+                      log=_quiet)
+
+
+def _one(res):
+    (stem, r), = res["records"].items()
+    return r
+
+
+@requires_yade
+@pytest.mark.yade
+@pytest.mark.slow
+def test_rocking_block_brackets_zhang_makris(rocking):
+    from drystone.mechanics import analytic
+
+    b, d, h = 0.2, 0.2, 0.8
+    p = math.sqrt(3 * G / (2 * math.hypot(b, h)))
+    omega = 2 * math.pi * 1.3447  # the case's frequency: 2 p
+    assert omega / p == pytest.approx(2.0, rel=1e-3)
+    a_housner = analytic.min_overturning_pulse(omega, b, h, None, g=G, levels=60, tol_g=1e-3)
+    a_low_r = analytic.min_overturning_pulse(omega, b, h, tol.ROCKING_PULSE_R_LOW, g=G, levels=60, tol_g=1e-3)
+    # the Winkler joint lets the stone tip earlier than the rigid one: tan(alpha) falls by delta
+    tip = analytic.toppling_tilt_deg(b, h, d, 2300.0, 2e10)
+    delta = 1 - math.tan(math.radians(tip)) / (b / h)
+    band = (a_housner * (1 - delta - tol.PULSE_SAMPLED_REL), a_low_r * (1 + tol.PULSE_SAMPLED_REL) + 1e-3)
+    r = _one(rocking)
+    lo, hi = r["pga_at_collapse_g"]
+    assert r["status"] == "bracketed" and hi - lo <= 0.01 + 1e-9
+    assert lo < band[1] and hi > band[0], (lo, hi, band)
+    assert not r["non_monotonic"]
+    top = [x for x in r["runs"] if x["pga_g"] == hi][0]
+    assert top["collapsed"] and "overturned" in top["why"]["1"]
+
+
+@requires_yade
+@pytest.mark.yade
+@pytest.mark.slow
+def test_sliding_block_brackets_newmark(sliding):
+    from scipy.optimize import brentq
+
+    from drystone.studies.crosscheck import closed_forms as cf
+
+    d_half = 0.1  # half the stone's depth (m): sliding that far out of plane is collapse
+    T, mu = 0.5, 0.4
+
+    def amp(slide):
+        return brentq(lambda a: cf.half_sine_slide(a * G, T, mu, G)["slide_m"] - slide, mu + 1e-6, 3.0, xtol=1e-9)
+
+    # the joint slides within SLIDING_REL of the rigid-plastic block
+    band = (amp(d_half / (1 + tol.SLIDING_REL)) * (1 - tol.PULSE_SAMPLED_REL),
+            amp(d_half / (1 - tol.SLIDING_REL)) * (1 + tol.PULSE_SAMPLED_REL))
+    r = _one(sliding)
+    lo, hi = r["pga_at_collapse_g"]
+    assert r["status"] == "bracketed" and hi - lo <= 0.01 + 1e-9
+    assert lo < band[1] and hi > band[0], (lo, hi, band)
+    top = [x for x in r["runs"] if x["pga_g"] == hi][0]
+    assert top["why"]["1"] == ["out_of_plane"]  # it slid off its bed, it did not tip
+    below = [x for x in r["runs"] if x["pga_g"] == lo][0]
+    assert 0.5 * d_half < below["largest_out_of_plane_m"] < d_half  # a damage state, not collapse
+
+
+@requires_yade
+@pytest.mark.yade
+@pytest.mark.slow
+def test_outputs_and_resumption(sliding):
+    out = Path(sliding["out_dir"])
+    data = json.loads((out / "collapse.json").read_text())
+    assert data["records"] == json.loads(json.dumps(sliding["records"]))
+    assert data["provenance"]["case_sha256"] == common.file_sha256(SLIDE)
+    assert (out / "ida.png").stat().st_size > 0 and "<img" in (out / "report.html").read_text()
+    stamps = {p: p.stat().st_mtime_ns for p in (out / "runs").glob("*/spec.json")}
+    again = C.collapse(SLIDE, None, tolerance=0.01, cap=0.9, start=0.5, factor=1.2, fill=None, out=out, workers=1,
+                       log=_quiet)
+    assert _one(again)["pga_at_collapse_g"] == _one(sliding)["pga_at_collapse_g"]
+    assert {p: p.stat().st_mtime_ns for p in (out / "runs").glob("*/spec.json")} == stamps  # nothing rerun
+
+
+def test_bad_input_is_one_line_exit_2(tmp_path, capsys):
+    from drystone import cli
+
+    assert cli.main(["collapse", str(SLIDE), "--record", str(tmp_path / "missing.AT2"), "--out", str(tmp_path / "a")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "missing.AT2" in err[0]
+    assert cli.main(["collapse", str(paths.ROOT / "cases" / "tilt_wall.toml"), "--out", str(tmp_path / "b")]) == 2
+    assert "excitation" in capsys.readouterr().err
+    (tmp_path / "user").mkdir()
+    (tmp_path / "user" / "notes.txt").write_text("mine")
+    assert cli.main(["collapse", str(SLIDE), "--out", str(tmp_path / "user")]) == 2
+    assert (tmp_path / "user" / "notes.txt").read_text() == "mine"
+
+
+def test_collapse_rule_on_one_stone():
+    ext = (0.4, 0.2, 0.8)  # L along the wall, D out of plane, H
+    still = common.collapse_reasons(ext, np.zeros(3), np.zeros(3))
+    assert still == ([], False)
+    assert common.collapse_reasons(ext, [0.0, 0.0, -0.41], np.zeros(3))[0] == ["fell"]
+    assert common.collapse_reasons(ext, [0.0, 0.11, 0.0], np.zeros(3))[0] == ["out_of_plane"]
+    # along the wall by more than half its length: in-plane sliding, not collapse
+    assert common.collapse_reasons(ext, [0.25, 0.0, 0.0], np.zeros(3)) == ([], True)
+    # leaning out of plane (about x): tipping angle atan(D / H) = 14.04 deg
+    tip = math.atan(0.2 / 0.8)
+    assert common.collapse_reasons(ext, np.zeros(3), [0.98 * tip, 0, 0])[0] == []
+    assert common.collapse_reasons(ext, np.zeros(3), [1.02 * tip, 0, 0])[0] == ["overturned"]
+    # in plane (about y) the stone is twice as wide: atan(L / H) = 26.57 deg
+    tip_x = math.atan(0.4 / 0.8)
+    assert common.collapse_reasons(ext, np.zeros(3), [0, 0.98 * tip_x, 0])[0] == []
+    assert common.collapse_reasons(ext, np.zeros(3), [0, 1.02 * tip_x, 0])[0] == ["overturned"]
+
+
+def test_record_override_replaces_the_motion(tmp_path):
+    from drystone.model import case as casemod
+
+    c = casemod.load(ROCK)
+    rec = tmp_path / "my record.csv"
+    rec.write_text("0,0\n0.01,0.1\n0.02,0\n")
+    over = common.record_override(c, rec) + common.pga_override(c, 0.4)
+    st = casemod.load(ROCK, over)["stages"][1]
+    assert st["motion"] == "record" and Path(st["record"]) == rec.resolve()
+    assert st["frequency_hz"] is None and st["duration"] is None  # the sine's keys do not carry over
+    assert st["pga_g"] == 0.4 and st["direction"] == "y"
+    assert common.safe_name(str(rec)) == "my_record"
+    with pytest.raises(casemod.CaseError, match="gravity stage, not an excitation"):
+        common.excitation_stage(c, 0, "case")  # stage 0 is the gravity stage
