@@ -130,7 +130,10 @@ def test_a_sliding_contact_is_refused_naming_it():
         a = np.radians(deg)
         asm, _, _ = _block(gravity=modal.G * np.array([np.sin(a), 0.0, -np.cos(a)]), blocked="XYZ")
         if use is not None:
-            assert am.analyse(asm)["model"]["balance"]["friction_use"] == pytest.approx(use, rel=tol.LP_REL)
+            # balanced to 1e-3 BALANCE_TOL of the weight (modal.balance): the friction use is
+            # low by up to that over mu cos(a), beside the programme's own tolerance
+            slack = 1e-3 * modal.BALANCE_TOL / (MU * np.cos(a))
+            assert am.analyse(asm)["model"]["balance"]["friction_use"] == pytest.approx(use, rel=tol.LP_REL + slack)
     with pytest.raises(RunError, match=r"stone 1 is out of balance by 8.2 % .*stones 0 and 1 would need 1.17 times"):
         am.analyse(asm)
 

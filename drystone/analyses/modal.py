@@ -53,6 +53,20 @@ DEFAULT_GRAVITY = {"type": "gravity", "duration": 1.0, "ramp": 0.5}
 #: contacts): speed below 0.1 sqrt(g delta), a vibration amplitude below a tenth of the
 #: static deflection
 SETTLED_SPEED_FRACTION = 0.1
+#: the finite-difference step of the stiffness (``Assembly.stiffness``), as a fraction of the
+#: median overlap depth of the wall's contacts: the stiffness is the secant over vibrations
+#: of a tenth of the static deflection. The law's force is not differentiable everywhere:
+#: where two neighbours' front faces are coplanar (an extruded wall), an out-of-plane offset
+#: of either way thins their overlap, a force step of F_n x depth / thickness that a step h
+#: turns into a spurious negative stiffness F_n depth / (thickness h); at the mechanics'
+#: default (1e-3 of the depth) it gave negative eigenvalues on a settled wall of re-entrant
+#: stones (cases/examples/polygonal_wall.toml), at 0.1 it is a few % of the joints' shear
+#: stiffness. On a closed flat joint the forces are linear in the translations and the
+#: rotations' geometric terms err by O((h / stone size)^2): 1e-6 on the Winkler block
+#: (tests/test_modal_analysis.py). ``STEP_CHECK``: the frequencies again at these multiples
+#: of the step, their largest relative change reported (``model.step_sensitivity``)
+STEP_REL = 0.1
+STEP_CHECK = (1 / 3, 3.0)
 #: a friction use above 1 (``modal.balance``) beyond the linear programme's tolerance: a
 #: contact short of friction, named when a stone is out of balance
 FRICTION_SLACK = 1e-6
@@ -143,7 +157,7 @@ def settled(run_dir, asm) -> dict:
 
 # -- the linearised modes -------------------------------------------------------------------
 
-def analyse(asm, modes: int = 6, where: str = "wall") -> dict:
+def analyse(asm, modes: int = 6, where: str = "wall", rel_step: float = STEP_REL) -> dict:
     """The modal analysis of an ``Assembly`` at its static configuration (steps 2-3 of the
     module docstring): {"frequencies_hz", "modes", "zero_modes", "model", "_res", "_all"}
     (``_res``: ``Assembly.modes``' arrays, for the figure; ``_all``: every mode's row). RunError (one line, naming the stone or
@@ -164,7 +178,7 @@ def analyse(asm, modes: int = 6, where: str = "wall") -> dict:
         raise RunError(f"{where}: stone {bal['residual_stone']} is out of balance by {100 * bal['residual']:.2g} % of "
                        f"its weight with its joints carrying shear within friction{why}: the wall is not in "
                        "equilibrium; settle it (a longer gravity stage) and rerun")
-    res = asm.modes(equilibrate=False)
+    res = asm.modes(rel_step=rel_step, equilibrate=False)
     info = mm.interpret(asm, res)
     order = np.argsort(res["frequency_hz"])
     unstable = [info["eigen"][k] for k in order if info["eigen"][k]["kind"] == "unstable"]
@@ -187,6 +201,13 @@ def analyse(asm, modes: int = 6, where: str = "wall") -> dict:
                       "effective_mass_ratio": em, "dominant_direction": top if em[top] >= 0.01 else None,
                       "dominant_motion": mm._MOTION[motion], "stones": stones, "index": int(k)})
     n = min(int(modes), len(table))
+    sens = {}
+    for x in STEP_CHECK:
+        f = np.sort(asm.modes(rel_step=rel_step * x, equilibrate=False)["frequency_hz"])
+        f = f[f > 0][-len(table):]  # as many positive ones as there are modes, the highest
+        ref = np.array([m["frequency_hz"] for m in table[:n]])
+        # None: fewer positive eigenvalues at that step (a negative one appeared)
+        sens[f"{rel_step * x:.3g}"] = float(np.max(np.abs(f[:n] / ref - 1))) if n and len(f) == len(table) else None
     total = {a: float(sum(m["effective_mass_ratio"][a] for m in table[:n])) for a in "xyz"}
     rc = asm.reference_contacts
     model = {"free_stones": int(asm.moving.sum()), "multi_part_stones": [asm.ids[b] for b, p in enumerate(asm.parts)
@@ -194,6 +215,7 @@ def analyse(asm, modes: int = 6, where: str = "wall") -> dict:
              "ndof": asm.ndof, "contacts": int(len(rc["volume"])), "contacts_per_stone": info["contacts"],
              "median_overlap_depth_m": float(np.median(rc["volume"] / rc["area"])),
              "asymmetry": res["asymmetry"], "zero_eigenvalue_rel": mm.ZERO_EIGENVALUE_REL,
+             "step_rel": rel_step, "step_sensitivity": sens,
              "balance": {k: (list(v) if isinstance(v, tuple) else v) for k, v in bal.items()},
              "all_frequencies_hz": [m["frequency_hz"] for m in table]}
     return {"frequencies_hz": [m["frequency_hz"] for m in table[:n]], "modes": table[:n], "zero_modes": zero,
@@ -482,6 +504,10 @@ def report(data: dict) -> str:
              f"(as built, without it: {m['balance']['as_built_residual']:.2g}); the most used contact needs "
              + (f"{m['balance']['friction_use']:.2f} of its friction." if m['balance']['friction_use'] is not None
                 else "(no friction data)."), "",
+             f"Stiffness by central differences over {m['step_rel']:g} of the median overlap depth "
+             f"({m['median_overlap_depth_m']:.2g} m); at other steps these frequencies change by at most: "
+             + ", ".join(f"{100 * v:.1f} % (step {k})" if v is not None else f"- (step {k}: a negative eigenvalue)"
+                         for k, v in m["step_sensitivity"].items()) + ".", "",
              "| mode | f (Hz) | T (s) | eff. mass x | eff. mass y | eff. mass z | dominant | stones (share) |",
              "|---:|---:|---:|---:|---:|---:|---|---|"]
     for r in data["modes"]:

@@ -472,7 +472,7 @@ def balance(asm: Assembly) -> dict:
     * the smallest out-of-balance left on any stone by shears within friction,
       min over |s_c| <= mu_c F_n,c of max over the stones' DOFs of |Q + A s| (forces over
       the stone's weight W, moments over W times its size): ``residual``, its stone;
-    * the least friction needed to balance every stone exactly, min over A s = -Q of
+    * the least friction needed to balance every stone (to 1e-3 of ``BALANCE_TOL``), min of
       max_c |s_c| / (mu_c F_n,c): ``friction_use`` (on the pyramid: the true cone's lies
       between it and 1.082 times it), and the contact that sets it.
 
@@ -538,10 +538,13 @@ def balance(asm: Assembly) -> dict:
     lp = linprog(cost, A_ub=ub, b_ub=rhs, bounds=free + [(0, None)], method="highs")
     y = lp.x[:-1] if lp.status == 0 else np.linalg.lstsq(Aw, bs, rcond=None)[0]
     out["residual"], out["residual_stone"] = worst(bs - Aw @ y)
-    # 2. exact balance, the largest friction use t minimised (d_k . y_c <= t)
+    # 2. balance (to BALANCE_TOL / 1000), the largest friction use t minimised (d_k . y_c <= t)
     cone[:, -1] = -1.0
-    lp = linprog(cost, A_ub=cone, b_ub=np.zeros(len(cone)), A_eq=np.hstack([Aw, np.zeros((asm.ndof, 1))]),
-                 b_eq=bs, bounds=free + [(None, None)], method="highs")
+    eq = np.hstack([Aw, np.zeros((asm.ndof, 1))])
+    slack = 1e-3 * BALANCE_TOL
+    lp = linprog(cost, A_ub=np.vstack([eq, -eq, cone]), b_ub=np.concatenate([bs + slack, slack - bs,
+                                                                            np.zeros(len(cone))]),
+                 bounds=free + [(None, None)], method="highs")
     if lp.status == 0:
         yc = lp.x[:-1].reshape(nc, 2)
         k = int(np.argmax((yc @ dirs.T).max(axis=1)))
