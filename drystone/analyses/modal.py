@@ -322,17 +322,21 @@ def transfer_figure(ident: dict, path) -> Path:
 
 def compare(table: list, peaks: list, direction: str, fmax_hz: float) -> list:
     """Per linearised mode with effective mass >= PARTICIPATING along ``direction`` below
-    ``fmax_hz``: the nearest identified peak and the difference (%)."""
-    out = []
-    for m in table:
-        if m["effective_mass_ratio"][direction] < PARTICIPATING or m["frequency_hz"] > fmax_hz:
-            continue
-        near = min(peaks, key=lambda p: abs(p["frequency_hz"] - m["frequency_hz"])) if peaks else None
-        out.append({"mode": m["mode"], "linearised_hz": m["frequency_hz"],
-                    "effective_mass_ratio": m["effective_mass_ratio"][direction],
-                    "identified_hz": near["frequency_hz"] if near else None,
-                    "difference_pct": 100 * (near["frequency_hz"] / m["frequency_hz"] - 1) if near else None})
-    return out
+    ``fmax_hz``: the identified peak paired with it (each peak goes to its nearest such mode,
+    a mode keeps the nearest of its peaks) and the difference (%); None where no peak pairs
+    with the mode."""
+    rows = [m for m in table if m["effective_mass_ratio"][direction] >= PARTICIPATING and m["frequency_hz"] <= fmax_hz]
+    pair = {}
+    for p in peaks:
+        if rows:
+            m = min(rows, key=lambda m: abs(p["frequency_hz"] - m["frequency_hz"]))
+            gap = abs(p["frequency_hz"] - m["frequency_hz"])
+            if m["mode"] not in pair or gap < abs(pair[m["mode"]] - m["frequency_hz"]):
+                pair[m["mode"]] = p["frequency_hz"]
+    return [{"mode": m["mode"], "linearised_hz": m["frequency_hz"],
+             "effective_mass_ratio": m["effective_mass_ratio"][direction], "identified_hz": pair.get(m["mode"]),
+             "difference_pct": 100 * (pair[m["mode"]] / m["frequency_hz"] - 1) if m["mode"] in pair else None}
+            for m in rows]
 
 
 # -- figure ----------------------------------------------------------------------------------
@@ -502,8 +506,11 @@ def report(data: dict) -> str:
              f"({len(m['multi_part_stones'])} of several parts), {m['ndof']} DOFs, {m['contacts']} contacts (pairs of "
              f"parts). Balance: the joints' shear balances every stone to {m['balance']['residual']:.1e} of its weight "
              f"(as built, without it: {m['balance']['as_built_residual']:.2g}); the most used contact needs "
-             + (f"{m['balance']['friction_use']:.2f} of its friction." if m['balance']['friction_use'] is not None
-                else "(no friction data)."), "",
+             + (f"{m['balance']['friction_use']:.2f} of its friction" if m['balance']['friction_use'] is not None
+                else "(no friction data)")
+             + (" (at its limit: the linearised joints stick, so a mode that shears that contact is stiffer than "
+                "the wall in anything but the smallest motions)." if (m['balance']['friction_use'] or 0) > 0.95
+                else "."), "",
              f"Stiffness by central differences over {m['step_rel']:g} of the median overlap depth "
              f"({m['median_overlap_depth_m']:.2g} m); at other steps these frequencies change by at most: "
              + ", ".join(f"{100 * v:.1f} % (step {k})" if v is not None else f"- (step {k}: a negative eigenvalue)"
