@@ -363,7 +363,8 @@ def figure(asm, res: dict, table: list, path, panels: int = 4) -> Path:
     height = float(hi[2] - lo[2]) or 1.0
     ncol = max(1, min(2, len(shown)))
     nrow = max(1, int(np.ceil(len(shown) / ncol)))
-    fig, axes = plt.subplots(nrow, ncol, figsize=(6.0 * ncol, 3.2 * nrow + 0.4), squeeze=False)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(6.0 * ncol, 3.2 * nrow + 0.4), squeeze=False,
+                             constrained_layout=True)
     cmap = plt.get_cmap("coolwarm")
 
     def outline(v):
@@ -397,7 +398,8 @@ def figure(asm, res: dict, table: list, path, panels: int = 4) -> Path:
         ax.set_ylim(lo[2] - pad, hi[2] + pad)
         ax.set_aspect("equal")
         d = m["dominant_direction"]
-        em = f", {100 * m['effective_mass_ratio'][d]:.0f} % of the mass along {d}" if d else ""
+        em = f", {100 * m['effective_mass_ratio'][d]:.0f} % of the mass along {d}" if d else \
+            f", {m['dominant_motion']} (stones {', '.join(list(m['stones'])[:2])})"
         ax.set_title(f"mode {m['mode']}: {m['frequency_hz']:.3g} Hz{em}", fontsize=9)
         ax.set_xlabel("x (m)", fontsize=8)
         ax.set_ylabel("z (m)", fontsize=8)
@@ -406,7 +408,6 @@ def figure(asm, res: dict, table: list, path, panels: int = 4) -> Path:
         ax.axis("off")
     fig.suptitle("mode shapes on the elevation (dashed: at rest; colour: out-of-plane y displacement, blue - / "
                  "red +, relative)", fontsize=9)
-    fig.tight_layout()
     tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
     fig.savefig(tmp, dpi=120)
     plt.close(fig)
