@@ -23,6 +23,7 @@ import json
 
 import numpy as np
 import pytest
+from scipy import linalg
 
 import tolerances as tol
 from drystone.analyses import modal as am
@@ -168,3 +169,39 @@ def test_modal_of_a_settled_wall(tmp_path):
     saved = json.loads((tmp_path / "modal" / "modal.json").read_text())
     assert saved["frequencies_hz"] == r["frequencies_hz"] and len(saved["frequencies_hz"]) == 4
     assert (tmp_path / "modal" / "modes.png").is_file() and (tmp_path / "modal" / "report.html").is_file()
+
+
+@pytest.mark.yade
+def test_modal_of_one_block_settled_by_the_analysis(tmp_path):
+    """The full command on a case without a gravity stage (one block on the platform, a rest
+    stage only): the analysis settles it under the gravity stage it adds (said so), and the
+    frequencies of the settled block are the Winkler closed forms: bouncing and the two
+    sliding-rocking pairs, the twist about z listed apart. The settled sink is the closed
+    form's delta0 up to the residual motion of the run, and the frequencies depend on it
+    only through h_c = H/2 - delta0/2 (delta0 / H = 1e-4 here)."""
+    from conftest import have_yade
+    from drystone.runner import to_toml
+
+    if not have_yade():
+        pytest.skip("YADE is not installed")
+    kn, kt = 2e8, 1e8
+    case = {"case": {"name": "one_block_modal", "geometry": {
+        "generator": "boxes_on_platform", "mu": 0.7, "damping": 0.3, "density": RHO, "kn": kn, "kt": kt,
+        "boxes": [{"id": 1, "center_xy": [0.0, 0.0], "size": [B, D, H]}]}},
+        "stages": [{"type": "rest", "duration": 0.1}], "output": {"interval": 0.01}}
+    path = tmp_path / "one_block.toml"
+    path.write_text(to_toml(case))
+    r = am.modal(path, out=tmp_path / "modal", modes=5, workers=1)
+    assert r["settle"]["gravity_stage"].startswith("added")
+    m = RHO * B * D * H
+    delta0 = m * modal.G / (kn * B * D)
+    a = B * D
+    hc = H / 2 - delta0 / 2
+
+    def pair(b, d):
+        K = np.array([[kt * a, -kt * a * hc], [-kt * a * hc, kn * d * b ** 3 / 12 + kt * a * hc ** 2 - m * modal.G * hc]])
+        return np.sqrt(linalg.eigh(K, np.diag([m, m * (b * b + H * H) / 12]), eigvals_only=True)) / (2 * np.pi)
+
+    expected = np.sort(np.r_[np.sqrt(kn * a / m) / (2 * np.pi), pair(B, D), pair(D, B)])
+    np.testing.assert_allclose(r["frequencies_hz"], expected, rtol=tol.SETTLED_MODAL_REL)
+    assert len(r["zero_modes"]) == 1 and "single contact" in r["zero_modes"][0]["explanation"]

@@ -139,7 +139,9 @@ def stages_override(stages: list) -> str:
 
 def settled(run_dir, asm) -> dict:
     """The free stones' speeds at the sample the modes are taken at: {"speed_m_s": largest,
-    "stone", "limit_m_s": SETTLED_SPEED_FRACTION sqrt(g delta), "settled": bool}."""
+    "stone", "limit_m_s": SETTLED_SPEED_FRACTION sqrt(g delta), "settled": bool}; and the
+    stones that fell while settling (their centroid dropped by more than half their height
+    since t = 0, the collapse rule of drystone/analyses/common.py): "fell": [ids]."""
     import numpy as np
 
     from drystone.postprocess import summary as summ
@@ -151,7 +153,11 @@ def settled(run_dir, asm) -> dict:
     delta = float(np.median(rc["volume"] / rc["area"])) if len(rc["volume"]) else 0.0
     limit = SETTLED_SPEED_FRACTION * float(np.sqrt(np.linalg.norm(asm.gravity) * delta))
     j = int(np.argmax(v)) if len(v) else 0
-    return {"speed_m_s": float(v[j]) if len(v) else 0.0, "stone": int(h["block_ids"][j]) if len(v) else None,
+    ids = [int(b) for b in h["block_ids"]]
+    drop = np.asarray(h["pos"])[0, :, 2] - np.asarray(h["pos"])[i, :, 2]
+    height = [float(np.ptp(np.vstack(asm.parts[asm.ids.index(b)])[:, 2])) for b in ids]
+    fell = [b for b, dz, hh in zip(ids, drop, height) if dz > 0.5 * hh]
+    return {"fell": fell, "speed_m_s": float(v[j]) if len(v) else 0.0, "stone": int(h["block_ids"][j]) if len(v) else None,
             "limit_m_s": limit, "settled": bool(len(v) == 0 or v[j] <= limit), "time_s": float(h["t"][i])}
 
 
@@ -455,6 +461,9 @@ def modal(case, out=None, modes: int = 6, identify: bool = False, direction: str
     t1 = time.time()
     asm = idf.wall_assembly(run_dir)
     rest = settled(run_dir, asm)
+    if rest["fell"]:
+        raise RunError(f"{where}: stone(s) {rest['fell']} fell while settling under gravity: the wall does not stand; "
+                       "no modes")
     if not rest["settled"]:
         raise RunError(f"{where}: stone {rest['stone']} still moves at {rest['speed_m_s']:.3g} m/s at the end of "
                        f"gravity ({rest['time_s']:.3g} s; settled below {rest['limit_m_s']:.2g} m/s): the wall has not "
