@@ -205,3 +205,23 @@ def test_modal_of_one_block_settled_by_the_analysis(tmp_path):
     expected = np.sort(np.r_[np.sqrt(kn * a / m) / (2 * np.pi), pair(B, D), pair(D, B)])
     np.testing.assert_allclose(r["frequencies_hz"], expected, rtol=tol.SETTLED_MODAL_REL)
     assert len(r["zero_modes"]) == 1 and "single contact" in r["zero_modes"][0]["explanation"]
+
+
+@pytest.mark.yade
+def test_a_wall_still_moving_is_refused(tmp_path):
+    """A block dropped from 5 cm with gravity switched on at once for 0.1 s is still falling
+    at the end of the gravity stage: refused, naming it, before any mode is computed."""
+    from conftest import have_yade
+    from drystone.runner import to_toml
+
+    if not have_yade():
+        pytest.skip("YADE is not installed")
+    case = {"case": {"name": "falling_block", "geometry": {
+        "generator": "boxes_on_platform", "mu": 0.7, "density": RHO, "kn": 2e8, "kt": 1e8,
+        "boxes": [{"id": 1, "center_xy": [0.0, 0.0], "size": [B, D, H], "z0": 0.05}]}},
+        "stages": [{"type": "gravity", "duration": 0.1, "ramp": 0.0}], "output": {"interval": 0.01}}
+    path = tmp_path / "falling.toml"
+    path.write_text(to_toml(case))
+    with pytest.raises(RunError, match=r"stone 1 still moves at .* the wall has not settled"):
+        am.modal(path, out=tmp_path / "modal", workers=1)
+    assert not (tmp_path / "modal" / "modal.json").exists()
