@@ -1,11 +1,11 @@
 """Frequencies and mode shapes of any wall: ``python -m drystone modal CASE``.
 
-1. **Settle.** One run of the case's stages up to and including its last gravity stage
-   (a case without one gets ``DEFAULT_GRAVITY``, ASSUMED and said so), through the sweeps
+1. **Settle.** One run of the case's stages up to and including its last gravity stage and
+   the rest stages right after it (a case without one gets ``DEFAULT_GRAVITY``, ASSUMED and
+   said so), sampled at its end, through the sweeps
    (resumable: a finished run with the same fingerprint is reused). Refused when a stone
-   collapsed or left the model while settling (``common.outcome``), or still moves at the
-   end of gravity (``settled``).
-2. **Linearise.** The blocks at the end of that gravity stage, a stone of several parts as
+   left the model or fell while settling, or still moves at the end (``settled``).
+2. **Linearise.** The blocks at the end of that run, a stone of several parts as
    one rigid body of the union's mass properties with one contact per pair of parts
    (drystone/mechanics/modal.py), the stiffness K = -dQ/dq of the project's law there
    (central differences) and the mass matrix M. The recorded state is balanced by shear
@@ -117,8 +117,9 @@ def main(args) -> int:
 # -- the settling run ----------------------------------------------------------------------
 
 def settle_stages(case_path) -> tuple[list, bool]:
-    """The case's stages up to and including its last gravity stage, as written in the file
-    (its raw tables), or [``DEFAULT_GRAVITY``] when it has none; and whether it was added."""
+    """The case's stages up to and including its last gravity stage and the rest stages right
+    after it (a settling rest), as written in the file (its raw tables), or
+    [``DEFAULT_GRAVITY``] when it has none; and whether it was added."""
     from drystone import inputfiles
     from drystone.model import case as casemod
 
@@ -127,7 +128,10 @@ def settle_stages(case_path) -> tuple[list, bool]:
     last = [k for k, st in enumerate(stages) if isinstance(st, dict) and st.get("type") == "gravity"]
     if not last:
         return [dict(DEFAULT_GRAVITY)], True
-    return [dict(st) for st in stages[:last[-1] + 1]], False
+    end = last[-1] + 1
+    while end < len(stages) and isinstance(stages[end], dict) and stages[end].get("type") == "rest":
+        end += 1
+    return [dict(st) for st in stages[:end]], False
 
 
 def stages_override(stages: list) -> str:
@@ -459,15 +463,17 @@ def modal(case, out=None, modes: int = 6, identify: bool = False, direction: str
                        "does not stand; no modes")
     run_dir = Path(st["run_dir"])
     t1 = time.time()
-    asm = idf.wall_assembly(run_dir)
+    from drystone.postprocess import summary as summ
+
+    asm = idf.wall_assembly(run_dir, time_s=float(np.asarray(summ.load_histories(run_dir)["t"])[-1]))
     rest = settled(run_dir, asm)
     if rest["fell"]:
         raise RunError(f"{where}: stone(s) {rest['fell']} fell while settling under gravity: the wall does not stand; "
                        "no modes")
     if not rest["settled"]:
         raise RunError(f"{where}: stone {rest['stone']} still moves at {rest['speed_m_s']:.3g} m/s at the end of "
-                       f"gravity ({rest['time_s']:.3g} s; settled below {rest['limit_m_s']:.2g} m/s): the wall has not "
-                       "settled; lengthen its gravity stage and rerun")
+                       f"settling ({rest['time_s']:.3g} s; settled below {rest['limit_m_s']:.2g} m/s): the wall has not "
+                       "settled; lengthen its gravity stage (or add a rest stage after it) and rerun")
     r = analyse(asm, modes, where)
     res = r.pop("_res")
     rows = r.pop("_all")
