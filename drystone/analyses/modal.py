@@ -11,9 +11,13 @@
    (central differences) and the mass matrix M. The recorded state is balanced by shear
    forces the joints stored while settling, which the linear model does not record:
    ``modal.balance`` finds the shear within friction that leaves the least out of balance.
-   Refused, naming the stone (and the contact short of friction, if any), when a stone
-   stays out of balance by more than ``modal.BALANCE_TOL`` of its weight: such a wall is
-   not in equilibrium and must be settled (a longer gravity stage).
+   When a stone stays out of balance by more than ``modal.BALANCE_TOL`` of its weight (the
+   run's contact detection and this model's differ where a joint is deep, as YADE's native
+   detection on the Sacsayhuaman wall), the modes are those of the nearest equilibrium of
+   the joints (``Assembly.equilibrium``: Newton, the tangential springs carrying the shear),
+   provided it opens or closes no contact and needs no contact beyond its friction; else
+   refused, naming the stone (and the contact): such a wall is not in equilibrium and must
+   be settled (a longer gravity stage).
 3. **Modes.** eigh(K, M), K symmetrised. Each eigenvalue is read (``modal.interpret``): a
    positive one is a mode (a frequency, its effective mass along x, y, z, its dominant
    direction and stones); one within ``modal.ZERO_EIGENVALUE_REL`` of zero is a motion the
@@ -161,8 +165,8 @@ def settled(run_dir, asm) -> dict:
     drop = np.asarray(h["pos"])[0, :, 2] - np.asarray(h["pos"])[i, :, 2]
     height = [float(np.ptp(np.vstack(asm.parts[asm.ids.index(b)])[:, 2])) for b in ids]
     fell = [b for b, dz, hh in zip(ids, drop, height) if dz > 0.5 * hh]
-    return {"fell": fell, "speed_m_s": float(v[j]) if len(v) else 0.0, "stone": int(h["block_ids"][j]) if len(v) else None,
-            "limit_m_s": limit, "settled": bool(len(v) == 0 or v[j] <= limit), "time_s": float(h["t"][i])}
+    return {"fell": fell, "speed_m_s": float(v[j]) if len(v) else 0.0,
+            "stone": int(h["block_ids"][j]) if len(v) else None, "limit_m_s": limit, "settled": bool(len(v) == 0 or v[j] <= limit), "time_s": float(h["t"][i])}
 
 
 # -- the linearised modes -------------------------------------------------------------------
@@ -170,8 +174,9 @@ def settled(run_dir, asm) -> dict:
 def analyse(asm, modes: int = 6, where: str = "wall", rel_step: float = STEP_REL) -> dict:
     """The modal analysis of an ``Assembly`` at its static configuration (steps 2-3 of the
     module docstring): {"frequencies_hz", "modes", "zero_modes", "model", "_res", "_all"}
-    (``_res``: ``Assembly.modes``' arrays, for the figure; ``_all``: every mode's row). RunError (one line, naming the stone or
-    contact) for a wall out of balance, sliding, or in unstable equilibrium."""
+    (``_res``: ``Assembly.modes``' arrays, for the figure; ``_all``: every mode's row).
+    RunError (one line, naming the stone or contact) for a wall out of balance or in
+    unstable equilibrium."""
     import numpy as np
 
     from drystone.mechanics import modal as mm
@@ -180,15 +185,32 @@ def analyse(asm, modes: int = 6, where: str = "wall", rel_step: float = STEP_REL
     if len(asm.reference_contacts["volume"]) == 0:
         raise RunError(f"{where}: no stone touches another: nothing holds the wall")
     bal = mm.balance(asm)
+    at = np.zeros(asm.ndof)
+    nearby = None
     if not bal["balanced"]:
         use = bal["friction_use"]
         why = "" if use is None or use <= 1 + FRICTION_SLACK else \
             f" (the contact of stones {bal['friction_contact'][0]} and {bal['friction_contact'][1]} would need " \
             f"{use:.3g} times its friction)"
-        raise RunError(f"{where}: stone {bal['residual_stone']} is out of balance by {100 * bal['residual']:.2g} % of "
-                       f"its weight with its joints carrying shear within friction{why}: the wall is not in "
-                       "equilibrium; settle it (a longer gravity stage) and rerun")
-    res = asm.modes(rel_step=rel_step, equilibrate=False)
+        unbalanced = (f"stone {bal['residual_stone']} is out of balance by {100 * bal['residual']:.2g} % of its weight "
+                      f"with its joints carrying shear within friction{why}")
+        q, hist = asm.equilibrium(rel_step=rel_step)
+        same = _pairs(asm, q) == _pairs(asm, at)
+        if hist[-1] > mm.BALANCE_TOL or not same:
+            raise RunError(f"{where}: {unbalanced}, and no equilibrium of the joints is near"
+                           + ("" if same else " without opening or closing a contact")
+                           + ": the wall is not in equilibrium; settle it (a longer gravity stage) and rerun")
+        use, pair = asm.friction_use(q) if asm.mu is not None else (0.0, None)
+        if use > 1 + FRICTION_SLACK:
+            raise RunError(f"{where}: {unbalanced}; the nearest equilibrium of the joints needs {use:.3g} times the "
+                           f"friction of the contact of stones {pair[0]} and {pair[1]}: the wall is not in "
+                           "equilibrium; settle it (a longer gravity stage) and rerun")
+        at = q
+        tr = [abs(v) for (b, c), v in zip(asm.dofs, q) if c < 3]
+        nearby = {"reason": unbalanced, "residual": float(hist[-1]), "iterations": len(hist) - 1,
+                  "max_translation_m": float(max(tr, default=0.0)), "friction_use": use,
+                  "friction_contact": list(pair) if pair else None}
+    res = asm.modes(rel_step=rel_step, at=at)
     info = mm.interpret(asm, res)
     order = np.argsort(res["frequency_hz"])
     unstable = [info["eigen"][k] for k in order if info["eigen"][k]["kind"] == "unstable"]
@@ -209,11 +231,11 @@ def analyse(asm, modes: int = 6, where: str = "wall", rel_step: float = STEP_REL
         stones = {str(b): round(s, 4) for b, s in list(e["stone_share"].items())[:3]}
         table.append({"mode": len(table) + 1, "frequency_hz": f, "period_s": 1.0 / f,
                       "effective_mass_ratio": em, "dominant_direction": top if em[top] >= 0.01 else None,
-                      "dominant_motion": mm._MOTION[motion], "stones": stones, "index": int(k)})
+                      "dominant_motion": mm.MOTION[motion], "stones": stones, "index": int(k)})
     n = min(int(modes), len(table))
     sens = {}
     for x in STEP_CHECK:
-        f = np.sort(asm.modes(rel_step=rel_step * x, equilibrate=False)["frequency_hz"])
+        f = np.sort(asm.modes(rel_step=rel_step * x, at=at)["frequency_hz"])
         f = f[f > 0][-len(table):]  # as many positive ones as there are modes, the highest
         ref = np.array([m["frequency_hz"] for m in table[:n]])
         # None: fewer positive eigenvalues at that step (a negative one appeared)
@@ -227,9 +249,16 @@ def analyse(asm, modes: int = 6, where: str = "wall", rel_step: float = STEP_REL
              "asymmetry": res["asymmetry"], "zero_eigenvalue_rel": mm.ZERO_EIGENVALUE_REL,
              "step_rel": rel_step, "step_sensitivity": sens,
              "balance": {k: (list(v) if isinstance(v, tuple) else v) for k, v in bal.items()},
+             "nearby_equilibrium": nearby,
              "all_frequencies_hz": [m["frequency_hz"] for m in table]}
     return {"frequencies_hz": [m["frequency_hz"] for m in table[:n]], "modes": table[:n], "zero_modes": zero,
             "cumulative_effective_mass_ratio": total, "model": model, "_res": res, "_all": table}
+
+
+def _pairs(asm, q) -> set:
+    """The pairs of parts in contact at the configuration q."""
+    c = asm.contacts(q)
+    return set(zip(c["id1"].tolist(), c["id2"].tolist()))
 
 
 # -- the white-noise check ------------------------------------------------------------------
@@ -472,8 +501,8 @@ def modal(case, out=None, modes: int = 6, identify: bool = False, direction: str
                        "no modes")
     if not rest["settled"]:
         raise RunError(f"{where}: stone {rest['stone']} still moves at {rest['speed_m_s']:.3g} m/s at the end of "
-                       f"settling ({rest['time_s']:.3g} s; settled below {rest['limit_m_s']:.2g} m/s): the wall has not "
-                       "settled; lengthen its gravity stage (or add a rest stage after it) and rerun")
+                       f"settling ({rest['time_s']:.3g} s; settled below {rest['limit_m_s']:.2g} m/s): the wall has "
+                       "not settled; lengthen its gravity stage (or add a rest stage after it) and rerun")
     r = analyse(asm, modes, where)
     res = r.pop("_res")
     rows = r.pop("_all")
@@ -527,6 +556,13 @@ def report(data: dict) -> str:
              + (" (at its limit: the linearised joints stick, so a mode that shears that contact is stiffer than "
                 "the wall in anything but the smallest motions)." if (m['balance']['friction_use'] or 0) > 0.95
                 else "."), "",
+             *([f"The recorded state is not balanced this way ({m['nearby_equilibrium']['reason']}): the modes are "
+                f"those of the nearest equilibrium of the joints (their tangential springs unlimited; "
+                f"{m['nearby_equilibrium']['iterations']} Newton steps, residual "
+                f"{m['nearby_equilibrium']['residual']:.1e} of a stone's weight, stones moved by at most "
+                f"{1e6 * m['nearby_equilibrium']['max_translation_m']:.3g} um, no contact opened or closed, the most "
+                f"used contact at {m['nearby_equilibrium']['friction_use']:.2f} of its friction).", ""]
+               if m.get("nearby_equilibrium") else []),
              f"Stiffness by central differences over {m['step_rel']:g} of the median overlap depth "
              f"({m['median_overlap_depth_m']:.2g} m); at other steps these frequencies change by at most: "
              + ", ".join(f"{100 * v:.1f} % (step {k})" if v is not None else f"- (step {k}: a negative eigenvalue)"
@@ -547,9 +583,10 @@ def report(data: dict) -> str:
     if idn:
         pk = ", ".join(f"{p['frequency_hz']:.3g}" for p in idn["peaks"]) or "none"
         lines += ["## White-noise check", "",
-                  f"White noise along {idn['direction']}, {idn['pga_g']:g} g, {idn['duration_s']:g} s ({idn['assumed']}); "
-                  f"H1 transfer function base acceleration -> mean relative displacement, {idn['n_segments']} segments of "
-                  f"{idn['nperseg']} samples ({idn['df_hz']:.3g} Hz bins). Coherent peaks standing out of |H| (Hz): {pk}.",
+                  f"White noise along {idn['direction']}, {idn['pga_g']:g} g, {idn['duration_s']:g} s "
+                  f"({idn['assumed']}); H1 transfer function base acceleration -> mean relative displacement, "
+                  f"{idn['n_segments']} segments of {idn['nperseg']} samples ({idn['df_hz']:.3g} Hz bins). Coherent "
+                  f"peaks standing out of |H| (Hz): {pk}.",
                   "",
                   (f"Peak of |H| in the coherent band: {idn['peak_identified_hz']:.3g} Hz identified, "
                    f"{idn['peak_model_hz']:.3g} Hz from the linearised model with the contact dashpots; |H| identified "

@@ -191,17 +191,16 @@ class Assembly:
         c["block1"], c["block2"] = self.owner[c["id1"]], self.owner[c["id2"]]
         return c
 
-    def generalised_forces(self, q) -> np.ndarray:
-        """Q(q): per DOF, force (N) or T(theta)^T moment (N m) on the block (module docstring)."""
-        pos, rot, u = self._configuration(q)
+    def contact_forces(self, q) -> list:
+        """Per contact of the configuration q: (stone index i, stone index j, point x (m),
+        normal force F_n (N, >= 0), force on stone j (3,) N: normal plus tangential spring)."""
+        pos, rot, _ = self._configuration(q)
         c = self.contacts(q)
-        nb = len(self.vertices)
-        force = np.zeros((nb, 3))
-        moment = np.zeros((nb, 3))
-        force[self.moving] += self.mass[self.moving, None] * self.gravity
+        out = []
         for si, sj, i, j, v, x, n in zip(c["id1"], c["id2"], c["block1"], c["block2"], c["volume"], c["centroid"],
                                          c["normal"]):
-            fb = combine(self.kn[i], self.kn[j]) * v * n
+            fn = combine(self.kn[i], self.kn[j]) * v
+            fb = fn * n
             ref = self.reference.get((int(si), int(sj)))
             if ref is not None:
                 x0, a0 = ref
@@ -209,6 +208,17 @@ class Assembly:
                 ua = pos[i] - self.pos0[i] + (rot[i] - np.eye(3)) @ (x0 - self.pos0[i])
                 s = ub - ua
                 fb = fb - combine(self.kt[i], self.kt[j]) * a0 * (s - (s @ n) * n)
+            out.append((int(i), int(j), x, float(fn), fb))
+        return out
+
+    def generalised_forces(self, q) -> np.ndarray:
+        """Q(q): per DOF, force (N) or T(theta)^T moment (N m) on the block (module docstring)."""
+        pos, rot, u = self._configuration(q)
+        nb = len(self.vertices)
+        force = np.zeros((nb, 3))
+        moment = np.zeros((nb, 3))
+        force[self.moving] += self.mass[self.moving, None] * self.gravity
+        for i, j, x, _, fb in self.contact_forces(q):
             for b, f in ((j, fb), (i, -fb)):
                 if self.moving[b]:
                     force[b] += f
@@ -217,6 +227,19 @@ class Assembly:
         for k, (b, comp) in enumerate(self.dofs):
             out[k] = force[b, comp] if comp < 3 else (_tangent(u[b, 3:]).T @ moment[b])[comp - 3]
         return out
+
+    def friction_use(self, q) -> tuple[float, tuple | None]:
+        """The largest |F_t| / (mu F_n) over the contacts of the configuration q (the
+        tangential springs' forces; needs ``mu``) and that contact's stone ids."""
+        c = self.contacts(q)
+        worst, where = 0.0, None
+        for (i, j, _, fn, fb), n in zip(self.contact_forces(q), c["normal"]):
+            ft = float(np.linalg.norm(fb - (fb @ n) * n))
+            cap = min(self.mu[i], self.mu[j]) * fn
+            r = ft / cap if cap > 0 else (np.inf if ft > 0 else 0.0)
+            if r > worst:
+                worst, where = r, (self.ids[i], self.ids[j])
+        return worst, where
 
     def steps(self, rel_step: float = 1e-3) -> np.ndarray:
         """Finite-difference step per DOF (m or rad): ``rel_step`` x the median overlap depth
@@ -354,15 +377,19 @@ class Assembly:
         return np.array([np.linalg.solve(K - (2 * np.pi * f) ** 2 * M + 2j * np.pi * f * C, -r)
                          for f in frequencies_hz])
 
-    def modes(self, rel_step: float = 1e-3, direction=(0.0, 1.0, 0.0), equilibrate: bool = True) -> dict:
+    def modes(self, rel_step: float = 1e-3, direction=(0.0, 1.0, 0.0), equilibrate: bool = True, at=None) -> dict:
         """Natural frequencies (Hz, ascending), mass-normalised mode shapes (ndof x nmodes),
         participation factors Gamma = phi^T M r and effective-mass ratios Gamma^2 / total
         mass for a base motion along ``direction``; the stiffness's relative asymmetry
         |K - K^T| / |K| (Frobenius) and the static residual (largest |Q(0)| over the
         translation DOFs divided by the block's weight) before and after ``equilibrium``
-        (with ``equilibrate``, the modes are those at q*). Negative eigenvalues (an
-        unstable or unrestrained configuration) give negative 'frequencies' (-sqrt|lambda|)."""
-        q_star, hist = self.equilibrium(rel_step=rel_step) if equilibrate else (np.zeros(self.ndof), [])
+        (with ``equilibrate``, the modes are those at q*; ``at``: those at that configuration,
+        found elsewhere). Negative eigenvalues (an unstable or unrestrained configuration)
+        give negative 'frequencies' (-sqrt|lambda|)."""
+        if at is not None:
+            q_star, hist = np.asarray(at, float), []
+        else:
+            q_star, hist = self.equilibrium(rel_step=rel_step) if equilibrate else (np.zeros(self.ndof), [])
         K = self.stiffness(rel_step, at=q_star)
         M = self.mass_matrix()
         ks = 0.5 * (K + K.T)
@@ -389,7 +416,8 @@ class Assembly:
 #: be told from it (a frequency below 0.3 % of the highest)
 ZERO_EIGENVALUE_REL = 1e-5
 
-_MOTION = {"x": "translation along x", "y": "translation along y", "z": "translation along z",
+#: the words for each DOF letter
+MOTION = {"x": "translation along x", "y": "translation along y", "z": "translation along z",
            "X": "rotation about x", "Y": "rotation about y", "Z": "rotation about z"}
 
 
@@ -437,7 +465,7 @@ def interpret(asm: Assembly, res: dict, zero_rel: float = ZERO_EIGENVALUE_REL) -
         if kind != "mode":
             b = asm.ids.index(top)
             own = {_LETTERS[c]: e[d] for d, (bb, c) in enumerate(asm.dofs) if bb == b}
-            motion = _MOTION[max(own, key=own.get)]
+            motion = MOTION[max(own, key=own.get)]
             share = f"{100 * stones[top]:.0f} % of the mode"
             if kind == "unstable":
                 item["explanation"] = (f"negative stiffness ({lam[k]:.3g} rad^2/s^2): stone {top} ({share}, mostly "
