@@ -122,22 +122,31 @@ def test_a_stone_out_of_balance_is_refused_naming_it():
         am.analyse(asm)
 
 
-def test_a_sliding_contact_is_refused_naming_it():
+def test_a_contact_past_friction_is_named():
     """Gravity tilted by 35 deg along x, the block held against rotation (its moment would
     need an uneven sink, not shear) and sunk by the normal part of its weight: the joint
-    would need tan 35 / mu = 0.70 / 0.6 = 1.17 times its friction, and within friction it
-    is left out of balance by (sin 35 - mu cos 35) W = 8.2 % of W. At 30 deg (0.58 < 0.6)
-    it holds, using 0.962 of its friction."""
-    for deg, use in ((30.0, np.tan(np.radians(30.0)) / MU), (35.0, None)):
+    would need tan 35 / mu = 0.70 / 0.6 = 1.17 times its friction: within friction it is
+    left out of balance by (sin 35 - mu cos 35) W = 8.2 % of W. The modes are then those of
+    the nearest equilibrium of the joints, whose spring carries the whole W sin 35: the
+    contact is named with its friction use, 1.17. At 30 deg (0.58 < 0.6) the shear within
+    friction balances it, using 0.962 of it, and the recorded state is kept."""
+    for deg in (30.0, 35.0):
         a = np.radians(deg)
         asm, _, _ = _block(gravity=modal.G * np.array([np.sin(a), 0.0, -np.cos(a)]), blocked="XYZ")
-        if use is not None:
+        r = am.analyse(asm)["model"]
+        use = np.tan(a) / MU
+        if deg == 30.0:
             # balanced to 1e-3 BALANCE_TOL of the weight (modal.balance): the friction use is
             # low by up to that over mu cos(a), beside the programme's own tolerance
             slack = 1e-3 * modal.BALANCE_TOL / (MU * np.cos(a))
-            assert am.analyse(asm)["model"]["balance"]["friction_use"] == pytest.approx(use, rel=tol.LP_REL + slack)
-    with pytest.raises(RunError, match=r"stone 1 is out of balance by 8.2 % .*stones 0 and 1 would need 1.17 times"):
-        am.analyse(asm)
+            assert r["balance"]["friction_use"] == pytest.approx(use, rel=tol.LP_REL + slack)
+            assert r["nearby_equilibrium"] is None
+        else:
+            assert r["balance"]["residual"] == pytest.approx(np.sin(a) - MU * np.cos(a), rel=tol.LP_REL)
+            near = r["nearby_equilibrium"]
+            assert "stone 1 is out of balance by 8.2 %" in near["reason"]
+            assert near["friction_contact"] == [0, 1]
+            assert near["friction_use"] == pytest.approx(use, rel=tol.EQUILIBRIUM_REL)
 
 
 def test_a_stone_touching_nothing_is_explained():
