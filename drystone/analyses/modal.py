@@ -542,6 +542,24 @@ def modal(case, out=None, modes: int = 6, identify: bool = False, direction: str
     return data
 
 
+def _balance_text(b: dict) -> str:
+    """The balance of the recorded state in words (``modal.balance``'s dict)."""
+    if b["balanced"]:
+        text = (f"Balance: the joints' shear within friction balances every stone to {b['residual']:.1e} of its "
+                f"weight (as built, without it: {b['as_built_residual']:.2g})")
+    else:
+        text = (f"Balance: with the joints' shear within friction, stone {b['residual_stone']} stays out of balance "
+                f"by {b['residual']:.2g} of its weight (as built, without shear: {b['as_built_residual']:.2g})")
+    use = b["friction_use"]
+    if use is None:
+        return text + "."
+    text += f"; balancing every stone takes at least {use:.2f} of the friction of one contact"
+    if use > 0.95:
+        text += (" (at its limit: the linearised joints stick, so a mode that shears that contact is stiffer than "
+                 "the wall in anything but the smallest motions)")
+    return text + "."
+
+
 def report(data: dict) -> str:
     """report.html's Markdown."""
     m = data["model"]
@@ -549,13 +567,7 @@ def report(data: dict) -> str:
              f"Linearised joints at the settled state ({data['settle']['gravity_stage']} gravity stage, sampled at "
              f"{data['settle']['sample_time_s']:.3g} s): {m['free_stones']} free stones "
              f"({len(m['multi_part_stones'])} of several parts), {m['ndof']} DOFs, {m['contacts']} contacts (pairs of "
-             f"parts). Balance: the joints' shear balances every stone to {m['balance']['residual']:.1e} of its weight "
-             f"(as built, without it: {m['balance']['as_built_residual']:.2g}); the most used contact needs "
-             + (f"{m['balance']['friction_use']:.2f} of its friction" if m['balance']['friction_use'] is not None
-                else "(no friction data)")
-             + (" (at its limit: the linearised joints stick, so a mode that shears that contact is stiffer than "
-                "the wall in anything but the smallest motions)." if (m['balance']['friction_use'] or 0) > 0.95
-                else "."), "",
+             f"parts). " + _balance_text(m["balance"]), "",
              *([f"The recorded state is not balanced this way ({m['nearby_equilibrium']['reason']}): the modes are "
                 f"those of the nearest equilibrium of the joints (their tangential springs unlimited; "
                 f"{m['nearby_equilibrium']['iterations']} Newton steps, residual "
