@@ -123,7 +123,8 @@ def test_outputs_and_resumption(sliding):
 def test_bad_input_is_one_line_exit_2(tmp_path, capsys):
     from drystone import cli
 
-    assert cli.main(["collapse", str(SLIDE), "--record", str(tmp_path / "missing.AT2"), "--out", str(tmp_path / "a")]) == 2
+    missing = str(tmp_path / "missing.AT2")
+    assert cli.main(["collapse", str(SLIDE), "--record", missing, "--out", str(tmp_path / "a")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "missing.AT2" in err[0]
     assert cli.main(["collapse", str(paths.ROOT / "cases" / "tilt_wall.toml"), "--out", str(tmp_path / "b")]) == 2
@@ -166,3 +167,104 @@ def test_record_override_replaces_the_motion(tmp_path):
     assert common.safe_name(str(rec)) == "my_record"
     with pytest.raises(casemod.CaseError, match="gravity stage, not an excitation"):
         common.excitation_stage(c, 0, "case")  # stage 0 is the gravity stage
+
+
+def _fake_runs(collapses, fail_at=None):
+    """A stand-in for common.run_jobs: each run's outcome from its PGA override."""
+    def run_jobs(case_path, runs, root, label, common_=(), workers=None, backend="local", address=None, log=print):
+        out = {}
+        for name, over in runs:
+            g = float([o for o in over if ".pga_g=" in o][-1].split("=")[1])
+            if fail_at is not None and abs(g - fail_at) < 1e-9:
+                out[name] = {"status": "failed", "error": "RunError: the step blew up"}
+                continue
+            c = collapses(g)
+            out[name] = {"status": "done", "collapsed": c, "collapsed_stones": [1] if c else [],
+                         "why": {"1": ["overturned"]} if c else {}, "left_model": [],
+                         "largest_residual_m": 0.5 if c else 0.01 * g, "largest_out_of_plane_m": 0.01 * g,
+                         "in_plane_sliding": [], "wall_s": 1.0}
+        return out
+    return run_jobs
+
+
+def test_collapse_rounds_with_a_fake_runner(tmp_path, monkeypatch):
+    """The analysis around the pure search (no YADE): a non-monotonic response is reported
+    and its lowest collapse kept, a record that never collapses is censored at the cap, a
+    failed run ends its record's search and is reported; JSON, figure and report written."""
+    rec_a, rec_b = tmp_path / "a.csv", tmp_path / "b.csv"
+    for r in (rec_a, rec_b):
+        r.write_text("0,0\n0.01,1\n")
+    responses = {"a": lambda g: 1.0 <= g < 1.25 or g >= 2.0, "b": lambda g: False}
+
+    def by_record(case_path, runs, root, label, *a, **k):
+        out = {}
+        for name, over in runs:
+            out.update(_fake_runs(responses[name.split("-")[0]])(case_path, [(name, over)], root, label))
+        return out
+
+    monkeypatch.setattr(common, "run_jobs", by_record)
+    res = C.collapse(SLIDE, [rec_a, rec_b], tolerance=0.05, cap=3.0, out=tmp_path / "out", log=_quiet)
+    a, b = res["records"]["a"], res["records"]["b"]
+    lo, hi = a["pga_at_collapse_g"]
+    assert lo < 1.0 <= hi and a["non_monotonic"] and 1.6 in a["standing_above_collapse_g"]
+    assert b["pga_at_collapse_g"] is None and b["censored_at_g"] == 3.0 and b["status"] == "censored"
+    assert [r["pga_g"] for r in a["runs"]] == sorted(r["pga_g"] for r in a["runs"])
+    data = json.loads((tmp_path / "out" / "collapse.json").read_text())
+    assert data["records"]["a"]["pga_at_collapse_g"] == [lo, hi]
+    assert (tmp_path / "out" / "ida.png").is_file() and "non-monotonic" in (tmp_path / "out" / "report.md").read_text()
+    assert "non-monotonic" in C.describe(a) and "censored" in C.describe(b)
+
+    monkeypatch.setattr(common, "run_jobs", _fake_runs(lambda g: g >= 1.0, fail_at=0.4))
+    res = C.collapse(SLIDE, [rec_a], tolerance=0.05, cap=3.0, out=tmp_path / "out2", log=_quiet)
+    a = res["records"]["a"]
+    assert a["status"] == "failed" and "blew up" in a["error"] and a["pga_at_collapse_g"] is None
+    assert [r["pga_g"] for r in a["runs"]] == [0.1, 0.2, 0.4]  # nothing run after the failure
+
+
+def test_a_case_without_excitation_is_shaken_after_its_own_stages(tmp_path):
+    from drystone.model import case as casemod
+
+    wall = paths.ROOT / "cases" / "tilt_wall.toml"  # gravity, then two tilt stages: no excitation
+    rec = tmp_path / "pulse.txt"
+    rec.write_text("# units = g\n0 0\n0.01 0.1\n0.02 0\n")
+    over, k = common.shaking_override(wall, rec, "y")
+    c = casemod.load(wall, over + common.pga_override(casemod.load(wall, over), 0.7))
+    assert [s["type"] for s in c["stages"]] == ["gravity", "excitation", "rest"] and k == 1
+    assert c["stages"][1]["record"] == str(rec.resolve()) and c["stages"][1]["pga_g"] == 0.7
+    assert c["stages"][2]["until_kinetic_below_per_weight"] == common.REST["until_kinetic_below_per_weight"]
+    recs, kk = C._records(wall, casemod.load(wall), [str(rec)], None, "y", ())
+    assert kk == 1 and recs["pulse"][1] == over
+
+
+def test_probes_run_several_pgas_per_round(tmp_path, monkeypatch):
+    rounds = []
+
+    def fake(case_path, runs, root, label, *a, **k):
+        rounds.append(len(runs))
+        return _fake_runs(lambda g: g >= 0.77)(case_path, runs, root, label)
+
+    monkeypatch.setattr(common, "run_jobs", fake)
+    one = C.collapse(SLIDE, None, tolerance=0.05, cap=3.0, out=tmp_path / "p1", log=_quiet)
+    n1 = len(rounds)
+    rounds.clear()
+    two = C.collapse(SLIDE, None, tolerance=0.05, cap=3.0, out=tmp_path / "p2", probes=2, log=_quiet)
+    for res in (one, two):
+        lo, hi = _one(res)["pga_at_collapse_g"]
+        assert lo < 0.77 <= hi and hi - lo <= 0.05 + 1e-9
+    assert max(rounds) == 2 and len(rounds) < n1
+
+
+def test_output_dir_default_and_refusals(tmp_path, monkeypatch):
+    monkeypatch.setattr(paths, "RESULTS", tmp_path / "results")
+    d = common.output_dir(SLIDE, "collapse")
+    assert d == tmp_path / "results" / "sliding_block_pulse" / "collapse" and (d / common.MARKER).is_file()
+    assert common.output_dir(SLIDE, "collapse") == d  # its own folder: reused
+    # results/<case name>/ holding a run of the case (which a rerun replaces whole): beside it
+    run = tmp_path / "results" / "rocking_block_pulse"
+    run.mkdir(parents=True)
+    from drystone.model.spec import SPEC_FORMAT
+    from drystone.simulate import is_run_folder
+    (run / "spec.json").write_text(json.dumps({"format": SPEC_FORMAT}))
+    assert is_run_folder(run)
+    assert common.output_dir(ROCK, "tilt") == tmp_path / "results" / "rocking_block_pulse.analyses" / "tilt"
+    assert sorted(p.name for p in run.iterdir()) == ["spec.json"]  # the run's folder untouched

@@ -77,3 +77,25 @@ def test_replay_gives_the_same_next_intensity():
 def test_bad_parameters_are_refused(bad):
     with pytest.raises(ValueError):
         ida.step({}, ida.Params(**bad))
+
+
+@pytest.mark.parametrize("probes", [1, 2, 3])
+@pytest.mark.parametrize("x0", [0.03, 0.77, 1.37])
+def test_several_probes_per_round_end_at_the_same_rule(probes, x0):
+    """Rounds of several runs (ida.plan) bracket the threshold as tightly, in fewer rounds."""
+    p = ida.Params(start=0.1, factor=2.0, cap=3.0, tolerance=0.05, fill=0.25)
+    observed, rounds = {}, 0
+    while True:
+        todo = ida.plan(observed, p, probes)
+        if not todo:
+            break
+        assert len(todo) <= probes and not set(todo) & set(observed)
+        observed.update({g: g >= x0 for g in todo})
+        rounds += 1
+    s = ida.step(observed, p)
+    lo, hi = s.bracket
+    assert lo < x0 <= hi and hi - lo <= p.tolerance + 1e-9 and s.status == "bracketed"
+    _, order = ida.search(threshold(x0), p)
+    assert rounds <= len(order)
+    if probes == 1:
+        assert sorted(observed) == sorted(order)

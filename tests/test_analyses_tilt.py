@@ -61,7 +61,7 @@ def test_directions_and_protocol():
     assert T._directions(["-x", "+y", "-x"]) == ["-x", "+y"]
     with pytest.raises(T.common.casemod.CaseError, match="'up'"):
         T._directions(["up"])
-    pre = T._prefix(paths.ROOT / "cases" / "tilt_wall.toml", [])
+    pre = T.common.stages_before(paths.ROOT / "cases" / "tilt_wall.toml", [])
     assert [s["type"] for s in pre] == ["gravity"]  # the case's own tilt stages are replaced
     over = T.stages_override(pre, "-y", 0.2, 30.0, fast_to=10.0, fast_rate=1.0)
     from drystone.model import case as casemod

@@ -3,14 +3,16 @@ analysis (IDA): ``python -m drystone collapse CASE --record FILE|NAME ... [--tol
 0.05] [--cap 3.0] [--stage NAME]``.
 
 Each record replaces the record of the case's one excitation stage (or ``--stage``;
-without ``--record``, the case's own motion of that stage, a record, sine or white noise) and
-is scaled to a sequence of PGAs (g) chosen by hunt-and-fill (drystone/analyses/ida.py:
+without ``--record``, the case's own motion of that stage, a record, sine or white noise;
+a case without an excitation stage is shaken by each record along ``--direction`` after
+its own stages, then rests until the motion has died out, common.py ``REST``) and is scaled
+to a sequence of PGAs (g) chosen by hunt-and-fill (drystone/analyses/ida.py:
 geometric hunt up from ``--start``, bracketing of the lowest collapse to ``--tolerance``,
 fill-in below it; a collapse below a level that stood, a non-monotonic response, is
 detected, reported and the lowest collapse kept; a wall standing at ``--cap`` is censored
 there). Collapse is the package's one criterion (drystone/analyses/common.py ``outcome``).
 The searches of all records advance together, one round of runs at a time (one run per
-open record: a sweep, so finished runs are reused when the analysis is run again and the
+open record, or ``--probes`` runs: a sweep, so finished runs are reused when the analysis is run again and the
 rounds can go to a Dask cluster).
 
 Writes into results/<case name>/collapse/ (or ``--out``): ``collapse.json``
@@ -46,8 +48,14 @@ def add_arguments(p) -> None:
     p.add_argument("--fill", type=float, default=0.25,
                    help="fill in below the collapse until no gap exceeds this fraction of it (0.25; 0: no fill-in)")
     p.add_argument("--max-runs", type=int, default=30, help="most runs per record (30)")
+    p.add_argument("--probes", type=int, default=1,
+                   help="PGAs of one record run at once, each round (1; e.g. the cores per record: fewer rounds, "
+                        "a few more runs; drystone/analyses/ida.py plan)")
     p.add_argument("--stage", default=None, help="the excitation stage whose record is replaced (name or index), "
                    "when the case has several")
+    p.add_argument("--direction", choices=("x", "y"), default="y",
+                   help="for a case without an excitation stage: the records shake it along this axis, after its own "
+                        "stages, then it rests until the motion dies out (y: out of plane, the default)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="override a case key in every run (as drystone run --set)")
 
@@ -56,7 +64,8 @@ def main(args) -> int:
     backend, address = common.backend_of(args)
     res = collapse(args.case, args.record, tolerance=args.tolerance, cap=args.cap, stage=args.stage, out=args.out,
                    workers=args.workers, backend=backend, address=address, start=args.start, factor=args.factor,
-                   fill=args.fill or None, max_runs=args.max_runs, overrides=args.set)
+                   fill=args.fill or None, max_runs=args.max_runs, overrides=args.set,
+                   direction=args.direction, probes=args.probes)
     for stem, r in res["records"].items():
         print(f"{stem}: {describe(r)}")
     print(f"report: {Path(res['out_dir']) / 'report.html'}")
@@ -75,34 +84,47 @@ def describe(r: dict) -> str:
     else:
         txt = "no bracket"
     if r["status"] == "budget":
-        txt += f" (stopped at the run budget; bracket not final)"
+        txt += " (stopped at the run budget; bracket not final)"
     if r["non_monotonic"]:
         txt += f"; non-monotonic: standing at {', '.join(f'{g:g}' for g in r['standing_above_collapse_g'])} g"
     return f"{txt}; {len(r['runs'])} run(s)"
 
 
-def _records(case_path, case_dict, records, stage) -> dict:
-    """record stem -> (record as given, its overrides); one-line errors before any run."""
+def _records(case_path, case_dict, records, stage, direction, overrides) -> tuple[dict, int]:
+    """(record stem -> (record as given, its overrides), index of the excitation stage);
+    one-line errors before any run. A case without an excitation stage is shaken by each
+    record along ``direction`` after its own stages (common.py ``shaking_override``)."""
     where = str(case_path)
+    has = any(st.get("type") == "excitation" for st in case_dict["stages"])
     if not records:  # the case's own motion, scaled
-        st = case_dict["stages"][common.excitation_stage(case_dict, stage, where)]
+        if not has and stage is None:
+            raise common.casemod.CaseError(f"{where}: the case has no excitation stage: give --record FILE|NAME "
+                                           "(it is then added, after the case's own stages)")
+        k = common.excitation_stage(case_dict, stage, where)
+        st = case_dict["stages"][k]
         m = st["motion"]
         stem = (common.safe_name(st["record"]) if m == "record" else
                 f"sine_{common.number_tag(st['frequency_hz'])}hz" if m == "sine" else m)
-        return {stem: (f"the case's own {m}", [])}
+        return {stem: (f"the case's own {m}", [])}, k
+    k = None if not has and stage is None else common.excitation_stage(case_dict, stage, where)
     out = {}
     for r in records:
         stem = common.safe_name(r)
         if stem in out:
             raise common.casemod.CaseError(f"{where}: two records named {stem!r} ({out[stem][0]!r} and {r!r}): "
                                            "rename one file")
-        out[stem] = (str(r), common.record_override(case_dict, r, stage, where))
-    return out
+        if k is None:
+            over, kk = common.shaking_override(case_path, r, direction, overrides)
+        else:
+            over, kk = common.record_override(case_dict, r, stage, where), k
+        out[stem] = (str(r), over)
+    return out, kk
 
 
 def collapse(case, records, tolerance: float = 0.05, cap: float = 3.0, stage=None, out=None, workers=None,
              backend: str = "local", address=None, start: float = 0.1, factor: float = 2.0,
-             fill: float | None = 0.25, max_runs: int = 30, overrides=(), log=print) -> dict:
+             fill: float | None = 0.25, max_runs: int = 30, overrides=(), direction: str = "y",
+             probes: int = 1, log=print) -> dict:
     """The PGA at collapse of ``case`` under each of ``records`` (module docstring);
     returns what it writes to collapse.json, with ``out_dir``."""
     from drystone.model import case as casemod
@@ -115,9 +137,10 @@ def collapse(case, records, tolerance: float = 0.05, cap: float = 3.0, stage=Non
                             max_runs=max_runs).check()
     except ValueError as exc:
         raise casemod.CaseError(f"{case}: {exc}") from None
-    recs = _records(case_path, case_dict, records, stage)
-    k = common.excitation_stage(case_dict, stage, str(case))
+    recs, k = _records(case_path, case_dict, records, stage, direction, overrides)
     out_dir = common.output_dir(case_path, "collapse", out)
+    if probes < 1:
+        raise casemod.CaseError(f"{case}: --probes must be >= 1, got {probes!r}")
     observed = {stem: {} for stem in recs}
     results = {stem: [] for stem in recs}
     failed = {}
@@ -127,10 +150,9 @@ def collapse(case, records, tolerance: float = 0.05, cap: float = 3.0, stage=Non
         for stem, (_, over) in recs.items():
             if stem in failed:
                 continue
-            s = ida.step(observed[stem], params)
-            if not s.done:
-                name = f"{stem}-pga_{common.number_tag(s.next_g)}"
-                todo.append((stem, s.next_g, name, over + [f"stages.{k}.pga_g={s.next_g!r}"]))
+            for g in ida.plan(observed[stem], params, probes):
+                name = f"{stem}-pga_{common.number_tag(g)}"
+                todo.append((stem, g, name, over + [f"stages.{k}.pga_g={g!r}"]))
         if not todo:
             break
         log(f"[collapse] round {rnd}: {len(todo)} run(s) ({', '.join(n for _, _, n, _ in todo)}); "
@@ -158,10 +180,12 @@ def collapse(case, records, tolerance: float = 0.05, cap: float = 3.0, stage=Non
         summary[stem] = r
     wall = [r.get("wall_s") or 0.0 for rs in results.values() for r in rs]
     data = {"analysis": "collapse", "case": str(case_path), "overrides": list(overrides),
-            "stage": k, "intensity": "pga_g (g) of the excitation stage's motion, as scaled by the stage's pga_g",
+            "stage": k, "direction_if_added": direction,
+            "intensity": "pga_g (g) of the excitation stage's motion, as scaled by the stage's pga_g",
             "criterion": common.CRITERION,
             "search": {"method": "hunt-and-fill (drystone/analyses/ida.py)", "start_g": start, "factor": factor,
-                       "cap_g": cap, "tolerance_g": tolerance, "fill": fill, "max_runs": max_runs},
+                       "cap_g": cap, "tolerance_g": tolerance, "fill": fill, "max_runs": max_runs,
+                       "probes": probes},
             "records": summary,
             "cost": {"runs": n_runs, "run_wall_s": sum(wall), "elapsed_s": time.time() - t0}}
     common.write_json(out_dir / "collapse.json", data, case=case_path, overrides=overrides)

@@ -3,7 +3,7 @@ report, running rounds of runs as sweeps, the record override, and THE one reduc
 finished run folder to its outcome (``outcome``: collapsed? which stones? largest
 residual?), used by every analysis and study.
 
-The collapse criterion (``outcome``; docs/physics.md, "Collapse"): a free stone has
+The collapse criterion (``outcome``; docs/physics.md, "Collapse of a stone"): a free stone has
 collapsed when, at the end of the run, relative to where it stood at the end of the last
 gravity stage (the settlement under its own weight is no collapse; t = 0 without one), in
 the platform frame (x along the wall, y out of plane, z up):
@@ -47,7 +47,7 @@ CRITERION = ("a stone has collapsed when, at the end of the run, it left the mod
              "than half its height, or it leans past its tipping angle (overturned), or its centroid moved out of "
              "plane by more than half its depth; residual displacements short of that are damage, and a stone "
              "sliding along the wall by more than half its length is reported as in-plane sliding, not collapse "
-             "(drystone/analyses/common.py outcome)")
+             "(drystone/mechanics/collapse.py stone, drystone/analyses/common.py outcome; docs/physics.md)")
 
 
 # -- folders and arguments --------------------------------------------------------------
@@ -109,7 +109,8 @@ def safe_name(text: str) -> str:
     s = str(text)
     if "/" in s or "\\" in s or Path(s).suffix:
         s = Path(s).stem
-    return re.sub(r"[^A-Za-z0-9_.+-]", "_", s).strip("._") or "x"
+    s = re.sub(r"[^A-Za-z0-9_.+-]", "_", s).strip("._")[:80]  # run names: at most 100 characters
+    return s if s and s[0] not in "+-" else f"r{s}"
 
 
 def number_tag(x: float) -> str:
@@ -196,7 +197,61 @@ def write_report(out_dir, title: str, markdown: str, figures=()) -> Path:
     return write_text(out_dir / "report.html", md.html_page(text, out_dir, title))
 
 
-# -- the case's excitation and its record -------------------------------------------------
+# -- the case's stages, its excitation and its record ---------------------------------------
+
+#: the gravity stage added to a case that has none (s)
+GRAVITY = {"type": "gravity", "duration": 1.0, "ramp": 0.5}
+#: the stages added after them to shake a case that has no excitation stage: the record out of
+#: plane, then a rest until the motion has died out (as cases/sacsayhuaman/record.toml: the
+#: kinetic energy of the free stones below W x 1e-8 m for 1.5 s), at most REST_S
+REST_S = 10.0
+REST = {"type": "rest", "duration": REST_S, "until_kinetic_below_per_weight": 1e-8, "settle_window": 1.5}
+
+
+def stages_before(case_path, overrides=()) -> list[dict]:
+    """The case's stages before its first tilt or excitation stage, as written (with the
+    ``overrides``), with a gravity stage (``GRAVITY``) first if they have none: what a tilt
+    or a shaking added by an analysis starts from."""
+    from drystone import inputfiles
+
+    raw = inputfiles.load_toml(Path(case_path), casemod.CaseError, "case file")
+    raw = casemod.apply_overrides(raw, list(overrides), str(case_path))
+    pre = []
+    for st in raw.get("stages", []):
+        if st.get("type") in ("tilt", "excitation"):
+            break
+        pre.append(dict(st))
+    if not any(st.get("type") == "gravity" for st in pre):
+        pre.insert(0, dict(GRAVITY))
+    return pre
+
+
+def record_value(record, where: str = "case") -> str:
+    """A record as a case's ``record`` key takes it: a catalogue name, or a file made absolute;
+    CaseError when it is neither."""
+    from drystone.motions import catalogue
+
+    r = str(record)
+    if r in catalogue.names():
+        return r
+    p = Path(r).expanduser()
+    if not p.is_file():
+        raise casemod.CaseError(f"{where}: record {r!r} is neither a file nor a catalogue name "
+                                f"({', '.join(catalogue.names())})")
+    return str(p.resolve())
+
+
+def shaking_override(case_path, record, direction: str = "y", overrides=()) -> tuple[list[str], int]:
+    """For a case without an excitation stage: the ``stages=[...]`` override of its stages
+    before any tilt (``stages_before``), then ``record`` along ``direction`` and a rest
+    (``REST``); returns (overrides, index of the excitation stage)."""
+    from drystone import tomlio
+
+    pre = stages_before(case_path, overrides)
+    exc = {"type": "excitation", "motion": "record", "record": record_value(record, str(case_path)),
+           "direction": direction}
+    return ["stages=" + tomlio.value(pre + [exc, dict(REST)])], len(pre)
+
 
 def excitation_stage(case_dict: dict, stage=None, where: str = "case") -> int:
     """Index (from 0) of the case's one excitation stage, or of the stage named ``stage``
@@ -229,18 +284,9 @@ def record_override(case_dict: dict, record, stage=None, where: str = "case") ->
     start do not apply to a record; a record's own duration is kept). CaseError naming the
     case and stage when the record is neither a file nor a catalogue name."""
     from drystone import tomlio
-    from drystone.motions import catalogue
 
     k = excitation_stage(case_dict, stage, where)
-    r = str(record)
-    if r in catalogue.names():
-        value = r
-    else:
-        p = Path(r).expanduser()
-        if not p.is_file():
-            raise casemod.CaseError(f"{where}: stage {k}: record {r!r} is neither a file nor a catalogue name "
-                                    f"({', '.join(catalogue.names())})")
-        value = str(p.resolve())
+    value = record_value(record, f"{where}: stage {k}")
     st = case_dict["stages"][k]
     keep = RECORD_STAGE_KEYS + (("duration",) if st.get("motion") == "record" else ())
     new = {key: st[key] for key in keep if st.get(key) is not None}

@@ -138,3 +138,40 @@ def search(collapses, p: Params = Params()) -> tuple[State, list[float]]:
             return s, order
         observed[s.next_g] = bool(collapses(s.next_g))
         order.append(s.next_g)
+
+
+def plan(observed: dict, p: Params = Params(), probes: int = 1) -> list[float]:
+    """Up to ``probes`` intensities to run at once (one round on several cores), in the
+    phase ``step`` is in: hunting, the next ``probes`` levels up (as if the wall stood at
+    each); bracketing, the points dividing (lo, hi) into ``probes`` + 1 equal parts; filling,
+    the middles of the ``probes`` widest gaps. ``probes`` = 1 is ``step``'s next intensity;
+    the search's end (``step`` with every observation) is the same rule whatever ``probes``,
+    only the intensities visited differ."""
+    s = step(observed, p)
+    if s.done:
+        return []
+    if probes <= 1:
+        return [s.next_g]
+    obs = {level(x): bool(c) for x, c in observed.items()}
+    room = max(0, p.max_runs - len(obs))
+    if s.phase == "hunt":
+        out, spec = [], dict(obs)
+        for _ in range(probes):
+            t = step(spec, p)
+            if t.done or t.phase != "hunt":
+                break
+            out.append(t.next_g)
+            spec[t.next_g] = False
+    elif s.phase == "bracket":
+        lo, hi = s.low_g, s.high_g
+        out = [level(lo + (hi - lo) * i / (probes + 1)) for i in range(1, probes + 1)]
+        out = [x for x in out if lo < x < hi and x not in obs]
+    else:  # fill
+        hi = s.high_g
+        levels = [0.0] + sorted(x for x, c in obs.items() if not c and x < hi) + [hi]
+        gaps = sorted(((b - a, a, b) for a, b in zip(levels, levels[1:]) if b - a > p.fill * hi + 1e-12),
+                      reverse=True)
+        out = [level(0.5 * (a + b)) for _, a, b in gaps[:probes]]
+        out = [x for x in out if x not in obs]
+    out = sorted(set(out))[:room] or [s.next_g]
+    return out

@@ -3,8 +3,8 @@
 
 Each direction is one run of the case with its stages replaced (an override of
 ``stages``): the case's stages before its first tilt or excitation stage (its gravity,
-settling, loads; a gravity stage of ``GRAVITY`` is added if it has none), then the platform
-tilted towards the direction at ``--rate`` deg/s until collapse (at most ``--max-deg``;
+settling, loads; a gravity stage, common.py ``GRAVITY``, is added if it has none), then the
+platform tilted towards the direction at ``--rate`` deg/s until collapse (at most ``--max-deg``;
 the run stops ``after_collapse`` s after the detection). Every run is an ordinary run
 folder (``runs/towards_<dir>/``) that ``drystone run CASE --set stages=...`` would make.
 
@@ -40,8 +40,6 @@ from drystone.analyses import common
 HELP = "collapse angle on a tilting platform, per direction, with a rate check -> tilt.json, report.html"
 
 DIRECTIONS = ("+y", "-y", "+x", "-x")
-#: the gravity stage added to a case that has none (s)
-GRAVITY = {"type": "gravity", "duration": 1.0, "ramp": 0.5}
 #: the rate check agrees when the two headlines differ by at most this (deg): the tilt study's
 #: band for its rate check (drystone/studies/tilt/study.py RATE_TOLERANCE_DEG is 0.2 deg for
 #: the paper's wall; a generic wall, rattling, gets a wider one by default)
@@ -106,24 +104,6 @@ def _directions(towards) -> list[str]:
     return ds
 
 
-def _prefix(case_path: Path, overrides) -> list[dict]:
-    """The case's stages before its first tilt or excitation stage (as written, with the
-    overrides), with a gravity stage first if it has none."""
-    from drystone import inputfiles
-    from drystone.model import case as casemod
-
-    raw = inputfiles.load_toml(case_path, casemod.CaseError, "case file")
-    raw = casemod.apply_overrides(raw, list(overrides), str(case_path))
-    pre = []
-    for st in raw.get("stages", []):
-        if st.get("type") in ("tilt", "excitation"):
-            break
-        pre.append(dict(st))
-    if not any(st.get("type") == "gravity" for st in pre):
-        pre.insert(0, dict(GRAVITY))
-    return pre
-
-
 def stages_override(prefix: list[dict], towards: str, rate: float, max_deg: float, fast_to: float | None = None,
                     fast_rate: float | None = None) -> str:
     """The ``stages=[...]`` override of one tilt run."""
@@ -157,7 +137,7 @@ def tilt(case, towards=("+y",), out=None, workers=None, backend: str = "local", 
     check_rate = rate / 5.0 if check_rate is None else check_rate
     if rate_check and not check_rate > 0:
         raise casemod.CaseError(f"{case}: --check-rate must be > 0")
-    prefix = _prefix(case_path, overrides)
+    prefix = common.stages_before(case_path, overrides)
     out_dir = common.output_dir(case_path, "tilt", out)
     runs = [(_run_name(d), [stages_override(prefix, d, rate, max_deg)]) for d in dirs]
     log(f"[tilt] {len(runs)} direction(s) at {rate:g} deg/s: {', '.join(dirs)}")
