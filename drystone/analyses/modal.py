@@ -1,9 +1,9 @@
 """Frequencies and mode shapes of any wall: ``python -m drystone modal CASE``.
 
-1. **Settle.** One run of the case's stages up to and including its last gravity stage and
-   the rest stages right after it (a case without one gets ``DEFAULT_GRAVITY``, ASSUMED and
-   said so), sampled at its end, through the sweeps
-   (resumable: a finished run with the same fingerprint is reused). Refused when a stone
+1. **Settle.** One run of the case's stages before its first tilt or excitation stage (a
+   case without a gravity stage among them gets ``common.GRAVITY`` first, ASSUMED and said
+   so), sampled at its end, through the sweeps (resumable: a finished run with the same
+   fingerprint is reused). Refused when a stone
    left the model or fell while settling, or still moves at the end (``settled``).
 2. **Linearise.** The blocks at the end of that run, a stone of several parts as
    one rigid body of the union's mass properties with one contact per pair of parts
@@ -50,10 +50,6 @@ from drystone.analyses import common
 
 HELP = "frequencies and mode shapes of the settled wall (linearised joints; --identify: a white-noise check)"
 
-#: the gravity stage a case without one is settled with (ASSUMED): gravity ramped over 0.5 s,
-#: held to 1 s (the examples settle in 0.4 s, the Sacsayhuaman wall in 2 s; ``settled``
-#: refuses a wall still moving at its end)
-DEFAULT_GRAVITY = {"type": "gravity", "duration": 1.0, "ramp": 0.5}
 #: a stone has settled when its kinetic energy is below 1 % of the elastic energy its weight
 #: stores in the joints, (1/2) m g delta (delta the median overlap depth of the wall's
 #: contacts): speed below 0.1 sqrt(g delta), a vibration amplitude below a tenth of the
@@ -123,21 +119,20 @@ def main(args) -> int:
 # -- the settling run ----------------------------------------------------------------------
 
 def settle_stages(case_path) -> tuple[list, bool]:
-    """The case's stages up to and including its last gravity stage and the rest stages right
-    after it (a settling rest), as written in the file (its raw tables), or
-    [``DEFAULT_GRAVITY``] when it has none; and whether it was added."""
+    """The stages that settle the wall: the case's stages before its first tilt or
+    excitation stage, with ``common.GRAVITY`` first if they have no gravity stage
+    (``common.stages_before``); and whether that gravity stage was added."""
+    pre = common.stages_before(case_path)
     from drystone import inputfiles
     from drystone.model import case as casemod
 
     raw = inputfiles.load_toml(Path(case_path), casemod.CaseError, "case file")
-    stages = raw.get("stages") or []
-    last = [k for k, st in enumerate(stages) if isinstance(st, dict) and st.get("type") == "gravity"]
-    if not last:
-        return [dict(DEFAULT_GRAVITY)], True
-    end = last[-1] + 1
-    while end < len(stages) and isinstance(stages[end], dict) and stages[end].get("type") == "rest":
-        end += 1
-    return [dict(st) for st in stages[:end]], False
+    own = []
+    for st in raw.get("stages", []):
+        if st.get("type") in ("tilt", "excitation"):
+            break
+        own.append(st)
+    return pre, not any(st.get("type") == "gravity" for st in own)
 
 
 def stages_override(stages: list) -> str:
@@ -168,7 +163,8 @@ def settled(run_dir, asm) -> dict:
     height = [float(np.ptp(np.vstack(asm.parts[asm.ids.index(b)])[:, 2])) for b in ids]
     fell = [b for b, dz, hh in zip(ids, drop, height) if dz > 0.5 * hh]
     return {"fell": fell, "speed_m_s": float(v[j]) if len(v) else 0.0,
-            "stone": int(h["block_ids"][j]) if len(v) else None, "limit_m_s": limit, "settled": bool(len(v) == 0 or v[j] <= limit), "time_s": float(h["t"][i])}
+            "stone": int(h["block_ids"][j]) if len(v) else None, "limit_m_s": limit,
+            "settled": bool(len(v) == 0 or v[j] <= limit), "time_s": float(h["t"][i])}
 
 
 # -- the linearised modes -------------------------------------------------------------------
@@ -528,7 +524,7 @@ def modal(case, out=None, modes: int = 6, identify: bool = False, direction: str
                      comparison=compare(rows, ident["peaks"], direction, NOISE["fmax_hz"]),
                      assumed="white noise 0-20 Hz, its PGA and length (ASSUMED)")
     data = {"case": str(case_path), "analysis": "modal", "out_dir": str(d), **r, "identification": ident,
-            "settle": {"run_dir": str(run_dir), "gravity_stage": "added (ASSUMED: " + str(DEFAULT_GRAVITY) + ")"
+            "settle": {"run_dir": str(run_dir), "gravity_stage": "added (ASSUMED: " + str(common.GRAVITY) + ")"
                        if added else "the case's", "sample_time_s": asm.sample_time_s, "rest": rest,
                        "wall_s": st.get("wall_s")},
             "timing_s": {"runs": t_runs, "modal": t_modal, "total": time.time() - t0},
