@@ -215,7 +215,7 @@ MODAL_RESIDUAL = 1e-9
 #: truncation 1e-6
 MODAL_ASYMMETRY = 1e-6
 #: a stone of two parts against the same stone in one piece, with the same contacts
-#: (tests/test_modal_analysis.py): the parts' mass properties are summed (parallel axes)
+#: (tests/test_analyses_modal.py): the parts' mass properties are summed (parallel axes)
 #: instead of integrated at once, a relative difference of ~1e-15, and the overlap volumes
 #: are the same clip; the stiffness's finite differences divide the round-off of those
 #: volumes (1e-16 x the 1 m coordinates on a 1e-3 m depth: 1e-13 relative) by the step

@@ -65,7 +65,7 @@ SETTLED_SPEED_FRACTION = 0.1
 #: stones (cases/examples/polygonal_wall.toml), at 0.1 it is a few % of the joints' shear
 #: stiffness. On a closed flat joint the forces are linear in the translations and the
 #: rotations' geometric terms err by O((h / stone size)^2): 1e-6 on the Winkler block
-#: (tests/test_modal_analysis.py). ``STEP_CHECK``: the frequencies again at these multiples
+#: (tests/test_analyses_modal.py). ``STEP_CHECK``: the frequencies again at these multiples
 #: of the step, their largest relative change reported (``model.step_sensitivity``)
 STEP_REL = 0.1
 STEP_CHECK = (1 / 3, 3.0)
