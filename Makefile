@@ -34,6 +34,7 @@ help:
 	@echo "make records      papers' records (user files or FEMA P695 analogues) -> results/records/catalogue.json"
 	@echo "make spectrum FILE=path [ARGS=...]   PGA, PGV, Arias, Sa(T), duration, predominant frequencies (JSON) + PNG"
 	@echo "make sweep SWEEP=cases/sweeps/x.toml [DASK=tcp://host:8786|local]   a sweep, parallel and resumable"
+	@echo "make modal CASE=cases/x.toml [ARGS='--identify --modes 8']   frequencies and mode shapes of any wall, settled (results/<case name>/modal/)"
 	@echo "make tilt         tilt-table validation: 5 generated walls + the same 5 with a constant section (~20 min) + report"
 	@echo "make tilt-rate    the paper's 0.2 deg/s protocol on wall seed 0 (~10 min) + report"
 	@echo "make tilt-sensitivity   mu, K_n and Table 1's DEM calibration on wall seed 0 (7 runs) + report"
@@ -135,6 +136,11 @@ analyse: setup
 sweep: setup
 	@test -n "$(SWEEP)" || { echo "usage: make sweep SWEEP=cases/sweeps/x.toml [DASK=tcp://host:8786|local]"; exit 2; }
 	$(RUN) sweep "$(SWEEP)" --workers $(JOBS) $(if $(DASK),--dask "$(DASK)")
+
+.PHONY: modal
+modal: setup
+	@test -n "$(CASE)" || { echo "usage: make modal CASE=cases/x.toml [ARGS='--identify --modes 8']"; exit 2; }
+	$(RUN) modal "$(CASE)" --workers $(JOBS) $(ARGS)
 
 tilt: setup
 	$(RUN) sweep cases/sweeps/tilt_seeds.toml --workers $(JOBS)

@@ -203,7 +203,10 @@ FREE_DECAY_FREQUENCY_REL = 0.02
 
 #: frequencies against the closed forms: finite-difference truncation O((step /
 #: delta0)^2) = 1e-6 with the default step 1e-3 delta0, round-off of the overlap volumes
-#: ~1e-15 m on a 1e-3 m depth: 10 x the truncation
+#: ~1e-15 m on a 1e-3 m depth: 10 x the truncation. The modal analysis's step (0.1 of the
+#: depth, drystone/analyses/modal.py STEP_REL) keeps it on a closed flat joint: the forces are
+#: linear in the translations and the rotations' geometric terms err by O((step / size)^2),
+#: 1e-6 measured (tests/test_analyses_modal.py)
 MODAL_FREQUENCY_REL = 1e-5
 #: a single flat joint has no torsional stiffness: the zero mode's frequency is
 #: round-off, against 1.3-21 Hz for the others
@@ -214,6 +217,24 @@ MODAL_RESIDUAL = 1e-9
 #: asymmetry of the stiffness matrix (central differences of a conservative field):
 #: truncation 1e-6
 MODAL_ASYMMETRY = 1e-6
+#: a stone of two parts against the same stone in one piece, with the same contacts
+#: (tests/test_analyses_modal.py): the parts' mass properties are summed (parallel axes)
+#: instead of integrated at once, a relative difference of ~1e-15, and the overlap volumes
+#: are the same clip; the stiffness's finite differences divide the round-off of those
+#: volumes (1e-16 x the 1 m coordinates on a 1e-3 m depth: 1e-13 relative) by the step
+#: (1e-3 of the depth): 1e-10 on K, half that on a frequency; 10 times that (4e-15 measured:
+#: the clip sees the same world coordinates)
+MULTIPART_MODAL_REL = 1e-9
+#: the modal analysis of one block settled in a run against the Winkler closed forms: the
+#: analysis's stiffness step (0.1 of the static depth) errs by O((step / block size)^2) <=
+#: 1e-6 (1e-6 measured on the softer joint of the closed-form tests), and the run's settled
+#: sink is delta0 up to the residual motion (speed below 1e-8 m/s after a 0.5 s hold),
+#: which enters only through h_c; 7e-8 measured: 1e-6
+SETTLED_MODAL_REL = 1e-6
+#: the least friction use of a balance (drystone/mechanics/modal.py ``balance``): HiGHS's
+#: primal feasibility tolerance, 1e-7 on constraints scaled to the stones' weights; 10
+#: times that
+LP_REL = 1e-6
 #: equilibrium under gravity tilted by a = 2 deg: iterated to a residual below 1e-6 W; the
 #: as-built residual is W sin(a) but for the normal balance (1 - cos a = 6e-4), and the
 #: spring is linear with the normal vertical, so the slip W sin(a) / (K_t A) holds: 0.1 %

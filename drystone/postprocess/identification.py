@@ -238,7 +238,8 @@ def run_histories(out, component: int = 1) -> dict:
 
 def wall_assembly(out, time_s: float | None = None):
     """``drystone.mechanics.modal.Assembly`` of a run's blocks at ``time_s`` (default: the end of the
-    last gravity stage, the settled state), in the platform frame, with the materials,
+    last gravity stage, the settled state), in the platform frame (a stone of several parts
+    as its parts, moved with the stone), with the materials,
     roles and blocked DOFs of its spec.json; gravity along -z with the run's magnitude."""
     import json
     from pathlib import Path
@@ -254,17 +255,18 @@ def wall_assembly(out, time_s: float | None = None):
             raise ValueError(f"{out}: no gravity stage: give the time of the static configuration")
         time_s = grav[-1]["end"]
     blocks = spec["blocks"]
-    multi = [b for b in blocks if "parts" in b]
-    if multi:  # the modal model's blocks are convex (its contact patches are per pair of blocks)
-        raise ValueError(f"{out}: block {multi[0]['id']} has {len(multi[0]['parts'])} parts: the modal model "
-                         "(drystone/mechanics/modal.py) takes convex blocks only")
-    (t, verts, _), = snapshots.positions_at(out, [time_s], world=False)
+    geo = {b["id"]: b for b in json.loads((out / "geometry.json").read_text())["blocks"]}
+    fr, = snapshots.frames_at(out, [time_s], world=False)
+    t = fr.t
+    # a stone of several parts (a clump) enters as the list of its parts, each moved rigidly
+    verts = {bid: [fr.place(bid, np.asarray(p, float)) for p in g.get("parts", [g.get("vertices")])]
+             for bid, g in geo.items()}
     mats = [spec["materials"][b["material"]] for b in blocks]
     g = spec["gravity"]
     gvec = np.array([0.0, 0.0, -float(g)]) if np.isscalar(g) else np.asarray(g, float)
     asm = modal.Assembly([verts[b["id"]] for b in blocks], moving=[b["role"] == "free" for b in blocks],
                          density=[m["density"] for m in mats], kn=[m["kn"] for m in mats],
                          kt=[m["kt"] for m in mats], blocked=[b.get("blocked_dofs") or "" for b in blocks],
-                         ids=[b["id"] for b in blocks], gravity=gvec)
+                         ids=[b["id"] for b in blocks], gravity=gvec, mu=[m["mu"] for m in mats])
     asm.sample_time_s = float(t)
     return asm
