@@ -1,0 +1,86 @@
+"""Fragility of any case (drystone/analyses/fragility_fit.py, drystone/analyses/fragility.py):
+the censored IDA likelihood's maximum against an independent maximisation of the same
+likelihood written here, the record bootstrap's coverage on synthetic lognormal data, the
+brackets of a damage state from one record's runs (no YADE)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import optimize, stats
+
+import tolerances as tol
+from drystone.analyses import fragility_fit as F
+
+
+def synthetic(rng, n, theta, beta, step=0.05, cap=None):
+    """n records whose intensity at collapse is lognormal, bracketed on a grid of ``step``
+    as hunt-and-fill leaves it, censored at ``cap``."""
+    x = np.exp(math.log(theta) + beta * rng.standard_normal(n))
+    br, ce = [], []
+    for v in x:
+        if cap is not None and v > cap:
+            ce.append(cap)
+        else:
+            k = math.floor(v / step)
+            br.append((k * step, (k + 1) * step))
+    return br, ce
+
+
+def my_loglik(p, br, ce):
+    """The interval- and right-censored lognormal log-likelihood, written from its definition."""
+    theta, beta = math.exp(p[0]), math.exp(p[1])
+    ll = 0.0
+    for lo, hi in br:
+        plo = 0.0 if lo == 0 else stats.norm.cdf(math.log(lo / theta) / beta)
+        ll += math.log(stats.norm.cdf(math.log(hi / theta) / beta) - plo)
+    for c in ce:
+        ll += stats.norm.logsf(math.log(c / theta) / beta)
+    return ll
+
+
+@pytest.mark.parametrize("cap", [None, 1.0])
+def test_ida_mle_is_the_maximum_of_the_censored_likelihood(cap):
+    br, ce = synthetic(np.random.default_rng(3), 25, 0.8, 0.4, cap=cap)
+    assert (len(ce) > 0) == (cap is not None)
+    br[0] = (0.0, br[0][1])  # a record collapsing at the first level run: lo = 0 g
+    f = F.fit_ida(br, ce)
+    ref = optimize.minimize(lambda p: -my_loglik(p, br, ce), [0.0, math.log(0.5)], method="Nelder-Mead",
+                            options={"xatol": 1e-10, "fatol": 1e-13, "maxiter": 5000})
+    assert f.theta == pytest.approx(math.exp(ref.x[0]), rel=tol.MLE_AGREE_REL)
+    assert f.beta == pytest.approx(math.exp(ref.x[1]), rel=tol.MLE_AGREE_REL)
+    assert f.loglik == pytest.approx(-ref.fun, abs=tol.MLE_LOGLIK_ABS)
+    assert F.ida_loglik(f.theta, f.beta, br, ce) == pytest.approx(my_loglik(ref.x, br, ce), abs=tol.MLE_LOGLIK_ABS)
+    assert (f.n_collapsed, f.n_censored) == (len(br), len(ce))
+
+
+def test_ida_fit_refused_when_the_brackets_share_a_point():
+    with pytest.raises(F.FitError, match="without bound"):
+        F.fit_ida([(0.5, 0.55), (0.5, 0.6)], [2.0])
+    with pytest.raises(F.FitError, match="no record collapsed"):
+        F.fit_ida(np.zeros((0, 2)), [2.0, 2.0])
+    with pytest.raises(ValueError, match="lo < hi"):
+        F.fit_ida([(0.5, 0.4), (0.6, 0.7)])
+
+
+def test_ida_bootstrap_covers_the_true_median():
+    """90 % percentile intervals of theta from records resampled hold the true median in a
+    fraction of M data sets within a binomial band of 90 % (tolerances.coverage_band)."""
+    theta, beta, level, m = 0.8, 0.4, 0.90, 100
+    rng = np.random.default_rng(11)
+    hits = 0
+    for k in range(m):
+        br, ce = synthetic(rng, 40, theta, beta, step=0.02, cap=2.0)
+        b = F.bootstrap_ida(br, ce, n_boot=40, seed=k, level=level)
+        assert b["failed"] == 0
+        hits += b["theta_ci"][0] <= theta <= b["theta_ci"][1]
+    assert abs(hits / m - level) <= tol.coverage_band(level, m)
+
+
+def test_brackets_of_one_records_runs():
+    assert F.brackets_of_runs([0.1, 0.2, 0.4, 0.3], [False, False, True, True]) == ([0.2, 0.3], None)
+    assert F.brackets_of_runs([0.1, 0.2], [False, False]) == (None, 0.2)
+    assert F.brackets_of_runs([0.1, 0.2], [True, True]) == ([0.0, 0.1], None)
+    # non-monotonic: the lowest intensity reaching the state is kept
+    assert F.brackets_of_runs([0.1, 0.2, 0.3, 0.4], [False, True, False, True]) == ([0.1, 0.2], None)
