@@ -4,14 +4,19 @@ likelihood written here, the record bootstrap's coverage on synthetic lognormal 
 brackets of a damage state from one record's runs (no YADE)."""
 from __future__ import annotations
 
+import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy import optimize, stats
 
 import tolerances as tol
+from conftest import assert_figure, requires_yade
 from drystone.analyses import fragility_fit as F
+
+CASES = Path(__file__).resolve().parents[1] / "cases" / "examples"
 
 
 def synthetic(rng, n, theta, beta, step=0.05, cap=None):
@@ -56,7 +61,7 @@ def test_ida_mle_is_the_maximum_of_the_censored_likelihood(cap):
 
 
 def test_ida_fit_refused_when_the_brackets_share_a_point():
-    with pytest.raises(F.FitError, match="without bound"):
+    with pytest.raises(F.FitError, match="beta -> 0"):
         F.fit_ida([(0.5, 0.55), (0.5, 0.6)], [2.0])
     with pytest.raises(F.FitError, match="no record collapsed"):
         F.fit_ida(np.zeros((0, 2)), [2.0, 2.0])
@@ -84,3 +89,45 @@ def test_brackets_of_one_records_runs():
     assert F.brackets_of_runs([0.1, 0.2], [True, True]) == ([0.0, 0.1], None)
     # non-monotonic: the lowest intensity reaching the state is kept
     assert F.brackets_of_runs([0.1, 0.2, 0.3, 0.4], [False, True, False, True]) == ([0.1, 0.2], None)
+
+
+def pulse_file(path, freq_hz, dt=0.005, length_s=1.2):
+    """A one-sided half-sine acceleration pulse of 1 g peak and ``freq_hz`` (record file, g)."""
+    n = int(round(length_s / dt))
+    acc = [math.sin(2 * math.pi * freq_hz * i * dt) if i * dt <= 0.5 / freq_hz else 0.0 for i in range(n + 1)]
+    path.write_text(f"# dt = {dt}\n# units = g\n" + "\n".join(repr(a) for a in acc) + "\n")
+    return path
+
+
+@requires_yade
+def test_fragility_ida_end_to_end(tmp_path):
+    """The sliding block of cases/examples/sliding_block_pulse.toml under two half-sine pulses
+    (1 Hz and 3.5 Hz), IDA with a coarse bracket: each record's bracket holds Newmark's
+    closed-form PGA at which the block slides out of its half depth, the fit is the censored
+    MLE of those brackets, and the JSON, runs.csv, figure and report are written."""
+    from drystone.analyses import fragility as FR
+    from drystone.motions.record import G
+    from drystone.studies.crosscheck import closed_forms
+
+    recs = [pulse_file(tmp_path / "pulse_a.txt", 1.0), pulse_file(tmp_path / "pulse_b.txt", 3.5)]
+    res = FR.fragility(CASES / "sliding_block_pulse.toml", recs, start=0.4, factor=2.0, cap=2.0, tolerance=0.45,
+                       fill=None, n_boot=20, out=tmp_path / "out", workers=2, log=lambda *a: None)
+    out = Path(res["out_dir"])
+    data = json.loads((out / "fragility.json").read_text())
+    assert data["method"] == "ida" and data["im"] == "pga"
+    assert data["wall_thickness_m"] == pytest.approx(0.2, rel=tol.EXACT_REL)
+    for stem, f in (("pulse_a", 1.0), ("pulse_b", 3.5)):
+        lo, hi = data["records"][stem]["pga_at_collapse_g"]
+        # Newmark: the slip reaches the half depth 0.1 m at the PGA a with half_sine_slide(a) = 0.1 m
+        a = optimize.brentq(lambda g: closed_forms.half_sine_slide(g * G, 0.5 / f, 0.4)["slide_m"] - 0.1, 0.41, 5.0)
+        assert lo < a <= hi, (stem, lo, a, hi)
+    br = [data["records"][s]["pga_at_collapse_g"] for s in ("pulse_a", "pulse_b")]
+    st = data["states"]["collapse"]
+    ref = F.fit_ida(br, [])
+    assert st["theta_g"] == pytest.approx(ref.theta, rel=tol.NUMERICAL_REL)
+    assert st["beta"] == pytest.approx(ref.beta, rel=tol.NUMERICAL_REL)
+    assert set(data["states"]) == {"collapse", "DS1", "DS2"}
+    rows = (out / "runs.csv").read_text().splitlines()
+    assert len(rows) - 1 == data["cost"]["runs"] == sum(len(r["runs"]) for r in data["records"].values())
+    assert_figure(out / "fragility.png", (6.5, 4.2), 120)
+    assert "Fragility" in (out / "report.html").read_text()

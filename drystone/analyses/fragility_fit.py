@@ -43,8 +43,8 @@ when the wall never collapsed (right-censored at c). ``fit_ida`` maximises
 
 (lo = 0 allowed: Phi(-inf) = 0), and ``bootstrap_ida`` resamples the records (with
 replacement, seeded) and refits. The maximum is finite only if the brackets do not all
-share a point below every censoring intensity (otherwise L -> 1 as beta -> 0:
-``why_no_ida_fit``).
+share (or touch at) a point below every censoring intensity (otherwise L is largest as
+beta -> 0: ``why_no_ida_fit``).
 """
 from __future__ import annotations
 
@@ -362,10 +362,10 @@ def why_no_ida_fit(brackets, censored=()) -> str | None:
         return (f"no record collapsed the wall ({len(c)} censored, the highest intensity run "
                 f"{c.max() if len(c) else 0:g}): the median is only known to lie above {c.min() if len(c) else 0:g}")
     top = lo.max()
-    if top < hi.min() and (len(c) == 0 or top < c.min()):
-        return (f"the {len(lo)} collapse bracket(s) share the intensities ({top:g}, {hi.min():g}], below every "
-                "censoring intensity: the likelihood grows without bound as beta -> 0 (the records do not resolve "
-                "a dispersion; add records)")
+    if top <= hi.min() and (len(c) == 0 or top < c.min()):
+        return (f"the {len(lo)} bracket(s) all hold or touch the intensity {top:g}, below every censoring intensity: "
+                "the likelihood is largest as beta -> 0 (the records do not resolve a dispersion; add records or "
+                "narrow the brackets)")
     return None
 
 
