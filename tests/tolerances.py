@@ -786,3 +786,15 @@ BOOT_COVERAGE_SHORTFALL = 0.013 + 0.02
 def coverage_band(level: float, m: int) -> float:
     """The tolerance on an observed coverage fraction over m data sets (above)."""
     return 3 * (level * (1 - level) / m) ** 0.5 + BOOT_COVERAGE_SHORTFALL
+
+# ---------------------------------------------------------------------------------------
+# assess --quick (tests/test_analyses_assess.py): one stone tilted at 5 deg/s
+# ---------------------------------------------------------------------------------------
+
+#: the onset (5 mm per degree of tilt = 25 mm/s at 5 deg/s) of a rigid-plastic block sliding
+#: from atan(mu): past it by delta (rad) its acceleration is g cos(a) (1 + mu^2) delta, delta
+#: growing at 0.0873 rad/s, so v = 0.46 t^2 m/s reaches 25 mm/s 0.23 s (1.2 deg) after atan(mu);
+#: plus the onset's window and sampling (ONSET_DEG) and the elastic joint's pre-slip
+#: (TILT_ANGLE_DEG): the onset lies in [atan(mu) - 0.3, atan(mu) + 2] deg
+QUICK_SLIDE_LAG_DEG = 2.0
+QUICK_SLIDE_EARLY_DEG = 0.3

