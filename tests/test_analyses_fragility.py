@@ -99,6 +99,7 @@ def pulse_file(path, freq_hz, dt=0.005, length_s=1.2):
     return path
 
 
+@pytest.mark.slow
 @requires_yade
 def test_fragility_ida_end_to_end(tmp_path):
     """The sliding block of cases/examples/sliding_block_pulse.toml under two half-sine pulses
@@ -162,3 +163,47 @@ def test_bad_input_is_one_line_exit_2(tmp_path, args, word):
                         "--records", str(rec), "--out", str(tmp_path / "o"), *args], capture_output=True, text=True)
     assert r.returncode == 2 and word in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
     assert not (tmp_path / "o" / "fragility.json").exists()
+
+
+def test_draws_are_seeded_and_spread_as_stated():
+    """mu lognormal around the case's value with the stated log-SD, K_n log-uniform on
+    [kn_low kn, kn] with K_t/K_n kept; the same seed gives the same draws."""
+    from drystone.analyses import fragility as FR
+
+    base = {"mu": 0.6, "kn": 2e8, "kt": 1e8}
+    d = FR.draws(("mu", "kn"), base, 4000, 7, 0.15, 0.25)
+    assert d[:5] == FR.draws(("mu", "kn"), base, 5, 7, 0.15, 0.25) and d[:5] != FR.draws(("mu", "kn"), base, 5, 8,
+                                                                                        0.15, 0.25)
+    lmu = np.log([x["mu"] for x in d])
+    se = 0.15 / math.sqrt(len(d))  # SE of the mean of ln mu; the SD's SE is about SD / sqrt(2 n)
+    assert abs(lmu.mean() - math.log(0.6)) < tol.SAMPLE_MEAN_SIGMAS * se
+    assert abs(lmu.std(ddof=1) - 0.15) < tol.SAMPLE_MEAN_SIGMAS * 0.15 / math.sqrt(2 * len(d))
+    kn = np.array([x["kn"] for x in d])
+    assert kn.min() >= 0.25 * 2e8 * (1 - 1e-3) and kn.max() <= 2e8 * (1 + 1e-3)  # 4 significant digits
+    u = np.log(kn / 5e7) / math.log(4)  # uniform on [0, 1]
+    assert abs(u.mean() - 0.5) < tol.SAMPLE_MEAN_SIGMAS * math.sqrt(1 / 12 / len(d))
+    assert all(x["kt"] == pytest.approx(x["kn"] / 2, rel=1e-3) for x in d)
+    assert FR.draws(("mu",), base, 1, 0, 0.15, 0.25)[0].keys() == {"mu"}
+
+
+@pytest.mark.slow
+@requires_yade
+def test_fragility_stripes_uncertain_mu(tmp_path):
+    """Stripes with mu drawn: the second set of runs carries each run's draw (its spec's
+    friction), the first the case's own; runs.csv and the JSON hold both sets."""
+    from drystone.analyses import fragility as FR
+
+    recs = [pulse_file(tmp_path / "pulse_a.txt", 1.0), pulse_file(tmp_path / "pulse_b.txt", 3.5)]
+    res = FR.fragility(CASES / "sliding_block_pulse.toml", recs, method="stripes", levels=[0.4, 0.8], n_boot=10,
+                       uncertain=("mu",), out=tmp_path / "out", workers=2, log=lambda *a: None)
+    out = Path(res["out_dir"])
+    data = json.loads((out / "fragility.json").read_text())
+    assert data["uncertain"]["base"]["mu"] == pytest.approx(0.4, rel=tol.FEW_ULP_REL)
+    runs = [x for r in data["uncertain"]["records"].values() for x in r["runs"]]
+    assert len(runs) == 4 and data["cost"]["runs"] == 8
+    for x in runs:
+        spec = json.loads((out / "uncertain" / "runs" / x["name"] / "spec.json").read_text())
+        assert spec["materials"]["stone"]["mu"] == pytest.approx(x["draw"]["mu"], rel=tol.FEW_ULP_REL)
+    # the 1 Hz pulse at 0.8 g slides the block 0.27 m at mu = 0.4 (Newmark): collapsed in the base set
+    base_a = {x["pga_g"]: x for x in data["records"]["pulse_a"]["runs"]}
+    assert base_a[0.8]["collapsed"] and not base_a[0.4]["collapsed"]

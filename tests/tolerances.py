@@ -798,3 +798,6 @@ def coverage_band(level: float, m: int) -> float:
 #: (TILT_ANGLE_DEG): the onset lies in [atan(mu) - 0.3, atan(mu) + 2] deg
 QUICK_SLIDE_LAG_DEG = 2.0
 QUICK_SLIDE_EARLY_DEG = 0.3
+#: a sample mean (or SD) of seeded draws against the distribution's: within 4 standard errors
+#: (a false failure once in 16 000 seeds; the seed is fixed, so a pass is reproducible)
+SAMPLE_MEAN_SIGMAS = 4.0

