@@ -207,3 +207,17 @@ def test_fragility_stripes_uncertain_mu(tmp_path):
     # the 1 Hz pulse at 0.8 g slides the block 0.27 m at mu = 0.4 (Newmark): collapsed in the base set
     base_a = {x["pga_g"]: x for x in data["records"]["pulse_a"]["runs"]}
     assert base_a[0.8]["collapsed"] and not base_a[0.4]["collapsed"]
+
+
+def test_pgv_per_g_of_a_half_sine_pulse(tmp_path):
+    """A half-sine pulse of 1 g and duration T = 1/(2 f): PGV = 2 g T / pi (the integral of the
+    pulse); the trapezoid rule at 100 samples per pulse is within (pi/100)^2/12 relative."""
+    from drystone.analyses import fragility as FR
+    from drystone.motions.record import G
+
+    f, dt = 1.0, 0.005
+    rec = pulse_file(tmp_path / "p.txt", f, dt=dt)
+    T = 0.5 / f
+    assert FR.im_per_g(str(rec), "pga", None) == 1.0
+    assert FR.im_per_g(str(rec), "pgv", None) == pytest.approx(2 * G * T / math.pi,
+                                                                rel=(math.pi * dt / T) ** 2 / 12 * 1.01)

@@ -198,6 +198,15 @@ def resolve_records(records, folder: Path, component: str = "a", duration_s: flo
     written into ``folder`` (rewritten only when different)."""
     from drystone.motions import fema
 
+    try:
+        return _resolve(records, folder, component, duration_s)
+    except fema.FemaDataMissing as exc:
+        raise common.casemod.CaseError(f"--records: {exc}") from None
+
+
+def _resolve(records, folder: Path, component: str, duration_s: float | None) -> tuple:
+    from drystone.motions import fema
+
     out, notes = [], {}
     for r in records:
         entries = None
