@@ -777,8 +777,8 @@ MLE_LOGLIK_ABS = 1e-8
 #: intervals holding the true theta is Binomial(M, level) when the interval is exact: 3
 #: standard deviations, 3 sqrt(level (1 - level) / M); plus the percentile bootstrap's
 #: known shortfall for n records: its interval is that of a mean with the biased SD and z in
-#: place of t, coverage P(|T_{n-1}| < z sqrt((n-1)/n)): 0.887 for n = 40 at 90 %, 0.013 below
-#: nominal; plus the percentile taken from B replicates (endpoint noise ~ 1/sqrt(B) of the
+#: place of t, coverage P(|T_{n-1}| < z sqrt((n-1)/n)): 0.787 for n = 40 at 80 % (0.887 at
+#: 90 %), 0.013 below nominal; plus the percentile taken from B replicates (endpoint noise ~ 1/sqrt(B) of the
 #: tail width): 0.02 for B = 40. Coverage tolerance = 3 sigma + 0.013 + 0.02 (function of M)
 BOOT_COVERAGE_SHORTFALL = 0.013 + 0.02
 
