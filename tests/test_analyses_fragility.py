@@ -192,7 +192,7 @@ def test_draws_are_seeded_and_spread_as_stated():
 @requires_yade
 def test_fragility_stripes_uncertain_mu(tmp_path):
     """Stripes with mu drawn: the second set of runs carries each run's draw (its spec's
-    friction), the first the case's own; runs.csv and the JSON hold both sets."""
+    friction), the first the case's own; the JSON and the two runs.csv hold both sets."""
     from drystone.analyses import fragility as FR
 
     recs = [pulse_file(tmp_path / "pulse_a.txt", 1.0), pulse_file(tmp_path / "pulse_b.txt", 3.5)]
@@ -203,6 +203,8 @@ def test_fragility_stripes_uncertain_mu(tmp_path):
     assert data["uncertain"]["base"]["mu"] == pytest.approx(0.4, rel=tol.FEW_ULP_REL)
     runs = [x for r in data["uncertain"]["records"].values() for x in r["runs"]]
     assert len(runs) == 4 and data["cost"]["runs"] == 8
+    for csv_file in (out / "runs.csv", out / "uncertain" / "runs.csv"):
+        assert len(csv_file.read_text().splitlines()) == 1 + 4
     for x in runs:
         spec = json.loads((out / "uncertain" / "runs" / x["name"] / "spec.json").read_text())
         assert spec["materials"]["stone"]["mu"] == pytest.approx(x["draw"]["mu"], rel=tol.FEW_ULP_REL)

@@ -39,7 +39,9 @@ They stand in for a paper's records: ASSUMED wherever reported. Files and catalo
 Writes into results/<case name>/fragility/ (or ``--out``): ``fragility.json`` {"method", "im",
 "states": {"collapse"|"DS1"|"DS2": {"theta", "theta_g" (PGA), "beta", "beta_ci", "theta_ci",
 "definition", "n_records"/"n_runs", "reason" when no fit}}, "records": {stem: {...}}, "cost"},
-``runs.csv`` (record, pga_g, im, collapsed, largest residual and out-of-plane residual),
+``runs.csv`` (record, pga_g, the IM when not PGA, status, collapsed, largest residual and
+out-of-plane residual, collapsed stones, DS1, DS2, run folder; ``uncertain/runs.csv`` the same
+for the runs with draws),
 ``fragility.png`` and ``report.html``; the runs under ``collapse/`` (ida) or ``runs/`` (stripes).
 """
 from __future__ import annotations
@@ -372,6 +374,8 @@ def fragility(case, records, method: str = "ida", im: str = "pga", levels=None, 
             "cost": {"runs": n_runs, "run_wall_s": wall, "elapsed_s": time.time() - t0}}
     common.write_json(out_dir / "fragility.json", data, case=case_path, overrides=overrides)
     common.write_text(out_dir / "runs.csv", runs_csv(recs, im, damage, thresholds))
+    if unc:
+        common.write_text(out_dir / "uncertain" / "runs.csv", runs_csv(unc["records"], im, damage, thresholds))
     fig = figure(data, out_dir / "fragility.png")
     common.write_report(out_dir, f"Fragility: {case_path.name}", report_markdown(data), [fig])
     return dict(data, out_dir=str(out_dir))
@@ -496,14 +500,16 @@ def _fit_state(method, recs, name, exceeded, im, n_boot, seed) -> dict:
 def runs_csv(recs: dict, im: str, damage: dict, thresholds: dict) -> str:
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow(["record", "pga_g", IMS[im][0], "status", "collapsed", "largest_residual_m",
+    extra = im != "pga"  # a second IM column: the run's IM as fitted
+    w.writerow(["record", "pga_g", *([IMS[im][0]] if extra else []), "status", "collapsed", "largest_residual_m",
                 "largest_out_of_plane_m", "collapsed_stones", *damage, "run"])
     for stem, r in recs.items():
         for x in sorted(r["runs"], key=lambda x: x["pga_g"]):
             oop = x.get("largest_out_of_plane_m")
             ds = ["" if oop is None or thresholds[k] is None else int(bool(x.get("collapsed")) or oop > thresholds[k])
                   for k in damage]
-            w.writerow([stem, f"{x['pga_g']:g}", f"{x['pga_g'] * r['im_per_g']:.6g}", x.get("status"),
+            w.writerow([stem, f"{x['pga_g']:g}", *([f"{x['pga_g'] * r['im_per_g']:.6g}"] if extra else []),
+                        x.get("status"),
                         "" if x.get("collapsed") is None else int(bool(x["collapsed"])),
                         "" if x.get("largest_residual_m") is None else f"{x['largest_residual_m']:.6g}",
                         "" if oop is None else f"{oop:.6g}",
