@@ -18,7 +18,7 @@ import tolerances as tol
 from conftest import assert_figure, requires_yade
 from drystone import sweep
 from drystone.motions import fema, readers
-from drystone.studies.fragility import fit as F
+from drystone.analyses import fragility_fit as F
 from drystone.studies.fragility import plan as P
 from drystone.studies.fragility import study as S
 

@@ -14,7 +14,7 @@ import tolerances as tol
 from conftest import assert_figure
 from drystone.motions import excitation, intensity, spectra
 from drystone.motions.record import G
-from drystone.studies.fragility import fit as F
+from drystone.analyses import fragility_fit as F
 from drystone.studies.fragility import measures as M
 from drystone.studies.fragility import plan as P
 from drystone.studies.fragility import study as S

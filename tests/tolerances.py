@@ -783,3 +783,42 @@ PULSE_SAMPLED_REL = 2e-3
 #: linearised closed form of a rectangular pulse (Housner): sin and cos linearised, an error
 #: O(alpha^2) relative, 2.5e-3 at b/h = 0.05 (measured 9e-4); alpha^2
 ROCKING_LINEARISED_REL_PER_ALPHA2 = 1.0
+
+# ---------------------------------------------------------------------------------------
+# Fragility of any case (drystone/analyses/fragility_fit.py, tests/test_analyses_fragility.py)
+# ---------------------------------------------------------------------------------------
+
+#: two optimisers (BFGS with the exact gradient in the package, Nelder-Mead on the test's own
+#: log-likelihood) reaching one maximum of a smooth 2-parameter likelihood: Nelder-Mead to
+#: xatol 1e-8 in (ln theta, ln beta) leaves ~1e-6 relative on theta and beta; 1e-5
+MLE_AGREE_REL = 1e-5
+#: ... and on the maximum of the log-likelihood (flat at the maximum: error ~ gradient tol^2)
+MLE_LOGLIK_ABS = 1e-8
+#: bootstrap coverage of the median: over M synthetic data sets the count of percentile
+#: intervals holding the true theta is Binomial(M, level) when the interval is exact: 3
+#: standard deviations, 3 sqrt(level (1 - level) / M); plus the percentile bootstrap's
+#: known shortfall for n records: its interval is that of a mean with the biased SD and z in
+#: place of t, coverage P(|T_{n-1}| < z sqrt((n-1)/n)): 0.787 for n = 40 at 80 % (0.887 at
+#: 90 %), 0.013 below nominal; plus the percentile taken from B replicates (endpoint noise ~ 1/sqrt(B) of the
+#: tail width): 0.02 for B = 40. Coverage tolerance = 3 sigma + 0.013 + 0.02 (function of M)
+BOOT_COVERAGE_SHORTFALL = 0.013 + 0.02
+
+
+def coverage_band(level: float, m: int) -> float:
+    """The tolerance on an observed coverage fraction over m data sets (above)."""
+    return 3 * (level * (1 - level) / m) ** 0.5 + BOOT_COVERAGE_SHORTFALL
+
+# ---------------------------------------------------------------------------------------
+# assess --quick (tests/test_analyses_assess.py): one stone tilted at 5 deg/s
+# ---------------------------------------------------------------------------------------
+
+#: the onset (5 mm per degree of tilt = 25 mm/s at 5 deg/s) of a rigid-plastic block sliding
+#: from atan(mu): past it by delta (rad) its acceleration is g cos(a) (1 + mu^2) delta, delta
+#: growing at 0.0873 rad/s, so v = 0.46 t^2 m/s reaches 25 mm/s 0.23 s (1.2 deg) after atan(mu);
+#: plus the onset's window and sampling (ONSET_DEG) and the elastic joint's pre-slip
+#: (TILT_ANGLE_DEG): the onset lies in [atan(mu) - 0.3, atan(mu) + 2] deg
+QUICK_SLIDE_LAG_DEG = 2.0
+QUICK_SLIDE_EARLY_DEG = 0.3
+#: a sample mean (or SD) of seeded draws against the distribution's: within 4 standard errors
+#: (a false failure once in 16 000 seeds; the seed is fixed, so a pass is reproducible)
+SAMPLE_MEAN_SIGMAS = 4.0

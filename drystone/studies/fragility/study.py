@@ -9,7 +9,7 @@ Steps (``python -m drystone.studies.fragility``):
 3. ``fit``: per finished run the damage states (``damage_states``: from
    studies.sacsayhuaman.analysis.residuals, the per-stone out-of-plane residual relative to
    the base after the motion has died out, and the paper's collapse), the three
-   fragility curves (fit.py) -> ``fragility.json``, ``runs.csv``; the curves in PGA (the
+   fragility curves (drystone/analyses/fragility_fit.py) -> ``fragility.json``, ``runs.csv``; the curves in PGA (the
    default IM, the stripes) and, per run, against PGV and Sa(T1) of the record as applied
    (measures.py), with the IM of smallest beta named (the efficiency criterion);
 4. ``report``: the fit, ``fragility.png``, ``fragility_im.png`` and ``report.md`` (set,
@@ -29,7 +29,7 @@ import numpy as np
 from drystone import atomic
 from drystone import paths, sweep
 from drystone.postprocess import markdown
-from drystone.studies.fragility import fit as fitmod
+from drystone.analyses import fragility_fit as fitmod
 from drystone.studies.fragility import measures as ims
 from drystone.studies.fragility import plan as planmod
 

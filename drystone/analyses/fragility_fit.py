@@ -32,6 +32,19 @@ of them, seeded), refits, and gives percentile intervals of theta and beta and p
 bands of the curve; replicates whose resample has no finite maximum are counted
 (``failed``) and left out. ``standard_errors`` gives the asymptotic (Fisher information)
 standard errors of ln(theta) and beta.
+
+From an incremental dynamic analysis (IDA: each record scaled up until the wall collapses,
+drystone/analyses/collapse.py) each record gives its own intensity at collapse, known only
+to lie in a bracket (lo, hi] (interval-censored), or to exceed the highest intensity run
+when the wall never collapsed (right-censored at c). ``fit_ida`` maximises
+
+    L(theta, beta) = prod_i [Phi(ln(hi_i/theta)/beta) - Phi(ln(lo_i/theta)/beta)]
+                     x prod_k [1 - Phi(ln(c_k/theta)/beta)]
+
+(lo = 0 allowed: Phi(-inf) = 0), and ``bootstrap_ida`` resamples the records (with
+replacement, seeded) and refits. The maximum is finite only if the brackets do not all
+share (or touch at) a point below every censoring intensity (otherwise L is largest as
+beta -> 0: ``why_no_ida_fit``).
 """
 from __future__ import annotations
 
@@ -309,3 +322,145 @@ def bootstrap_runs(im, exceeded, n_boot: int = 1000, seed: int = 0, level: float
         return dict(out, theta_ci=None, beta_ci=None)
     return dict(out, theta_ci=[float(np.percentile(thetas, lo)), float(np.percentile(thetas, hi))],
                 beta_ci=[float(np.percentile(betas, lo)), float(np.percentile(betas, hi))])
+
+
+# --- incremental dynamic analysis: one interval- or right-censored intensity per record -----------------------
+@dataclass
+class IdaFit:
+    """Maximum-likelihood lognormal fragility from IDA brackets: median ``theta``, dispersion ``beta``."""
+
+    theta: float
+    beta: float
+    loglik: float
+    n_records: int
+    n_collapsed: int
+    n_censored: int
+    iterations: int = 0
+
+    def probability(self, x) -> np.ndarray:
+        return probability(x, self.theta, self.beta)
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def _ida_check(brackets, censored) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    b = np.asarray(brackets, float).reshape(-1, 2)
+    c = np.asarray(censored, float).ravel()
+    lo, hi = b[:, 0], b[:, 1]
+    if not (np.all(np.isfinite(b)) and np.all(lo >= 0) and np.all(hi > lo)):
+        raise ValueError(f"every bracket must be (lo, hi] with 0 <= lo < hi, got {b.tolist()}")
+    if not (np.all(np.isfinite(c)) and np.all(c > 0)):
+        raise ValueError(f"every censoring intensity must be a positive number, got {c.tolist()}")
+    return lo, hi, c
+
+
+def why_no_ida_fit(brackets, censored=()) -> str | None:
+    """The reason no finite maximum-likelihood IDA fit exists, or None when it exists."""
+    lo, hi, c = _ida_check(brackets, censored)
+    if len(lo) == 0:
+        return (f"no record collapsed the wall ({len(c)} censored, the highest intensity run "
+                f"{c.max() if len(c) else 0:g}): the median is only known to lie above {c.min() if len(c) else 0:g}")
+    top = lo.max()
+    if top <= hi.min() and (len(c) == 0 or top < c.min()):
+        return (f"the {len(lo)} bracket(s) all hold or touch the intensity {top:g}, below every censoring intensity: "
+                "the likelihood is largest as beta -> 0 (the records do not resolve a dispersion; add records or "
+                "narrow the brackets)")
+    return None
+
+
+def _log_diff_ndtr(a, b):
+    """log(Phi(b) - Phi(a)) for a < b, stable in both tails (a may be -inf)."""
+    flip = a > 0  # upper tail: Phi(b) - Phi(a) = Phi(-a) - Phi(-b)
+    hi = np.where(flip, -a, b)
+    lo = np.where(flip, -b, a)
+    lh, ll = log_ndtr(hi), log_ndtr(lo)
+    with np.errstate(divide="ignore"):
+        return lh + np.log1p(-np.exp(ll - lh))
+
+
+def ida_loglik(theta: float, beta: float, brackets, censored=()) -> float:
+    """The log-likelihood above."""
+    lo, hi, c = _ida_check(brackets, censored)
+    return -_ida_negll(np.array([math.log(theta), math.log(beta)]), lo, hi, c)[0]
+
+
+def _ida_negll(params, lo, hi, c):
+    """-log L and its gradient in (m, s) = (ln theta, ln beta)."""
+    m, s = params
+    beta = math.exp(s)
+    with np.errstate(divide="ignore"):
+        a = (np.log(lo) - m) / beta
+    b = (np.log(hi) - m) / beta
+    ld = _log_diff_ndtr(a, b)
+    lpa = np.where(np.isfinite(a), -0.5 * a * a - _LOG_SQRT_2PI, -np.inf)
+    lpb = -0.5 * b * b - _LOG_SQRT_2PI
+    ra, rb = np.exp(lpa - ld), np.exp(lpb - ld)            # phi(a)/D, phi(b)/D
+    a0 = np.where(np.isfinite(a), a, 0.0)
+    u = (np.log(c) - m) / beta
+    lq = log_ndtr(-u)
+    rc = np.exp(-0.5 * u * u - _LOG_SQRT_2PI - lq)          # phi(u)/Q
+    ll = float(ld.sum() + lq.sum())
+    # d ln D / dm = -(phi(b) - phi(a))/(beta D); d ln D / ds = -(b phi(b) - a phi(a))/D
+    gm = float(np.sum(-(rb - ra)) / beta + np.sum(rc) / beta)
+    gs = float(np.sum(-(b * rb - a0 * ra)) + np.sum(u * rc))
+    return -ll, -np.array([gm, gs])
+
+
+def fit_ida(brackets, censored=()) -> IdaFit:
+    """Maximum-likelihood lognormal fragility from IDA: ``brackets`` [(lo, hi)] of the
+    records that collapsed the wall (its intensity at collapse in (lo, hi]), ``censored``
+    [c] of those that did not up to c. FitError when no finite maximum exists."""
+    lo, hi, c = _ida_check(brackets, censored)
+    reason = why_no_ida_fit(np.column_stack([lo, hi]), c)
+    if reason:
+        raise FitError(reason)
+    mid = np.where(lo > 0, np.sqrt(np.maximum(lo, 1e-300) * hi), hi / 2)
+    pts = np.log(np.concatenate([mid, c]))
+    x0 = np.array([pts.mean(), math.log(max(float(np.std(pts)), 0.1))])
+    res = optimize.minimize(_ida_negll, x0, args=(lo, hi, c), jac=True, method="BFGS", options={"gtol": 1e-9})
+    if not np.all(np.isfinite(res.x)) or np.abs(res.jac).max() > 1e-5 * max(1.0, len(lo) + len(c)):
+        raise FitError(f"the optimiser did not converge ({res.message}; gradient {np.abs(res.jac).max():.2g})")
+    return IdaFit(theta=math.exp(res.x[0]), beta=math.exp(res.x[1]), loglik=-float(res.fun), n_records=len(lo) + len(c),
+                  n_collapsed=len(lo), n_censored=len(c), iterations=int(res.nit))
+
+
+def bootstrap_ida(brackets, censored=(), n_boot: int = 1000, seed: int = 0, level: float = 0.95) -> dict:
+    """Record-resampling bootstrap of ``fit_ida``: each replicate draws as many records as
+    there are, with replacement, from the brackets and censored records together, refits,
+    and the ``level`` percentile intervals of theta and beta are returned; replicates with no
+    finite maximum are counted (``failed``) and left out."""
+    lo, hi, c = _ida_check(brackets, censored)
+    k_br, n = len(lo), len(lo) + len(c)
+    rng = np.random.default_rng(seed)
+    thetas, betas, failed = [], [], 0
+    for _ in range(n_boot):
+        k = rng.integers(0, n, n)
+        kb, kc = k[k < k_br], k[k >= k_br] - k_br
+        try:
+            f = fit_ida(np.column_stack([lo[kb], hi[kb]]), c[kc])
+        except FitError:
+            failed += 1
+            continue
+        thetas.append(f.theta)
+        betas.append(f.beta)
+    lo_q, hi_q = 50 * (1 - level), 50 * (1 + level)
+    out = {"n_boot": n_boot, "seed": seed, "level": level, "failed": failed, "method": "records resampled"}
+    if not thetas:
+        return dict(out, theta_ci=None, beta_ci=None)
+    return dict(out, theta_ci=[float(np.percentile(thetas, lo_q)), float(np.percentile(thetas, hi_q))],
+                beta_ci=[float(np.percentile(betas, lo_q)), float(np.percentile(betas, hi_q))])
+
+
+def brackets_of_runs(runs, exceeded) -> tuple[list, float | None]:
+    """For one record's runs [(im, exceeded)]: the bracket (lo, hi] of the intensity at which a
+    damage state is first reached (hi = the lowest intensity that reached it, lo = the highest
+    below it that did not, 0 if none), or None and the highest intensity run (right-censored)
+    when no run reached it. Returns (bracket or None, censored_at or None)."""
+    pts = sorted((float(x), bool(e)) for x, e in zip(runs, exceeded))
+    hit = [x for x, e in pts if e]
+    if not hit:
+        return None, (pts[-1][0] if pts else None)
+    hi = min(hit)
+    below = [x for x, e in pts if not e and x < hi]
+    return [max(below) if below else 0.0, hi], None

@@ -1,0 +1,42 @@
+"""``assess --quick`` end to end on the smallest case that is shaken and tilted: one stone
+(cases/examples/sliding_block_pulse.toml) under two short pulses; the joined report, its
+links, and a cost that adds up the parts' runs."""
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+
+import tolerances as tol
+from conftest import requires_yade
+
+CASES = Path(__file__).resolve().parents[1] / "cases" / "examples"
+
+
+@pytest.mark.slow
+@requires_yade
+def test_assess_quick_one_stone(tmp_path):
+    from drystone.analyses import assess
+    from test_analyses_fragility import pulse_file
+
+    recs = [pulse_file(tmp_path / "pulse_a.txt", 1.0), pulse_file(tmp_path / "pulse_b.txt", 3.5)]
+    res = assess.assess(CASES / "sliding_block_pulse.toml", quick=True, records=recs, out=tmp_path / "out",
+                        workers=2, log=lambda *a: None)
+    out = Path(res["out_dir"])
+    data = json.loads((out / "assess.json").read_text())
+    p = data["parts"]
+    for part in ("tilt", "collapse", "fragility"):
+        assert (out / p[part]["report"]).is_file(), part
+    # the stone (mu = 0.4) slides off its bed tilted towards +y at 5 deg/s: the onset lags
+    # atan(mu), the rigid-plastic sliding angle, by the time the slide takes to reach 5 mm/deg
+    slide = math.degrees(math.atan(0.4))
+    assert slide - tol.QUICK_SLIDE_EARLY_DEG <= p["tilt"]["headline_deg"] <= slide + tol.QUICK_SLIDE_LAG_DEG
+    fr = json.loads((out / "fragility" / "fragility.json").read_text())
+    assert data["cost"]["runs"] == 1 + fr["cost"]["runs"]
+    assert data["cost"]["core_minutes"] > 0
+    html = (out / "report.html").read_text()
+    for link in ("tilt/report.html", "fragility/report.html", "fragility/collapse/report.html"):
+        assert link in html
+    assert "modal" in html.lower()
