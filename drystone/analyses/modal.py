@@ -118,11 +118,11 @@ def main(args) -> int:
 
 # -- the settling run ----------------------------------------------------------------------
 
-def settle_stages(case_path) -> tuple[list, bool]:
+def settle_stages(case_path, overrides=()) -> tuple[list, bool]:
     """The stages that settle the wall: the case's stages before its first tilt or
     excitation stage, with ``common.GRAVITY`` first if they have no gravity stage
     (``common.stages_before``); and whether that gravity stage was added."""
-    pre = common.stages_before(case_path)
+    pre = common.stages_before(case_path, overrides)
     from drystone import inputfiles
     from drystone.model import case as casemod
 
@@ -454,8 +454,9 @@ def figure(asm, res: dict, table: list, path, panels: int = 4) -> Path:
 
 def modal(case, out=None, modes: int = 6, identify: bool = False, direction: str = "y",
           noise_pga_g: float = NOISE["pga_g"], noise_duration_s: float = NOISE["duration_s"], workers=None,
-          backend: str = "local", address=None, log=print) -> dict:
-    """Frequencies and mode shapes of ``case`` (module docstring); returns what modal.json holds."""
+          backend: str = "local", address=None, overrides=(), log=print) -> dict:
+    """Frequencies and mode shapes of ``case`` (module docstring), with the case-key
+    ``overrides`` (``--set`` strings); returns what modal.json holds."""
     import numpy as np
 
     from drystone.postprocess import identification as idf
@@ -463,13 +464,13 @@ def modal(case, out=None, modes: int = 6, identify: bool = False, direction: str
     from drystone.model import case as casemod
 
     case_path = Path(case).expanduser().resolve()
-    casemod.load(case_path)  # a bad case is refused before anything runs
+    casemod.load(case_path, list(overrides))  # a bad case or override is refused before anything runs
     if modes < 1:
         raise casemod.CaseError(f"{case_path}: --modes must be at least 1, got {modes}")
     if identify and not (noise_pga_g > 0 and noise_duration_s > 0):
         raise casemod.CaseError(f"{case_path}: --noise-pga and --noise-duration must be positive")
     d = common.output_dir(case_path, "modal", out)
-    stages, added = settle_stages(case_path)
+    stages, added = settle_stages(case_path, overrides)
     runs = [("settle", [stages_override(stages)])]
     if identify:
         noise = {"type": "excitation", "motion": "white_noise", "duration": float(noise_duration_s), "seed": 0,
@@ -477,7 +478,8 @@ def modal(case, out=None, modes: int = 6, identify: bool = False, direction: str
         runs.append((f"white_noise_{direction}", [stages_override(stages + [noise]),
                                                   f"output.interval={NOISE['interval_s']!r}"]))
     t0 = time.time()
-    done = common.run_jobs(case_path, runs, d, "modal", workers=workers, backend=backend, address=address, log=log)
+    done = common.run_jobs(case_path, runs, d, "modal", list(overrides), workers=workers, backend=backend,
+                           address=address, log=log)
     t_runs = time.time() - t0
     st = done["settle"]
     where = str(case_path)
