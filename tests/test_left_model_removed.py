@@ -60,6 +60,7 @@ def test_a_stone_pushed_off_the_edge_is_taken_out_where_it_left(pushed_off):
     assert gone["block"] == 2 and gone["where"].startswith("below")
     (listed,) = s["run"]["left_model"]["blocks"]
     assert listed["block"] == 2 and listed["time_s"] == pytest.approx(gone["time_s"], rel=tol.EXACT_REL)
+    assert s["run"]["left_model"]["count"] == 1 and "taken out" in s["run"]["left_model"]["taken_out"]
     assert not info["stopped_early"]  # box 1 is still in the model: the run goes on
     k = int(np.flatnonzero(np.isclose(h["t"], gone["time_s"], rtol=tol.EXACT_REL, atol=0.0))[0])
     assert k < len(h["t"]) - 20  # many samples after it left
@@ -82,6 +83,7 @@ def test_a_stone_pushed_off_the_edge_is_taken_out_where_it_left(pushed_off):
     assert err.max() <= bound(h, spec["dt"], SIZE)
     assert h["removed_kinetic"][-1] > 2 * bound(h, spec["dt"], SIZE)
     assert s["energy"]["balance_error_J"] == pytest.approx(err.max(), rel=tol.EXACT_REL)
+    assert s["run"]["left_model"]["removed_kinetic_J"] == pytest.approx(h["removed_kinetic"][-1], rel=tol.EXACT_REL)
     assert s["energy"]["final"]["removed_kinetic_J"] == pytest.approx(h["removed_kinetic"][-1], rel=tol.EXACT_REL)
 
 

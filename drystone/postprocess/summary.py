@@ -335,11 +335,16 @@ def left_model_report(spec: dict, h: dict, left: dict, info: dict) -> dict:
     and when (``left_model``), the region and its rule (drystone/mechanics/stability.py), and when the
     run stopped because every free block had left (run_info's ``all_left_model_s``)."""
     region = stability.ModelRegion.from_blocks(spec["blocks"]) if "blocks" in spec else None
-    return {"count": len(left), "free_blocks": len(h["block_ids"]),
-            "blocks": [{"block": b, "time_s": r["time_s"], "where": r["where"]}
-                       for b, r in sorted(left.items(), key=lambda x: (x[1]["time_s"], x[0]))],
-            "stopped_all_left_s": info.get("all_left_model_s"),
-            "region": region.as_dict() if region is not None else None, "rule": stability.REGION_RULE}
+    out = {"count": len(left), "free_blocks": len(h["block_ids"]),
+           "blocks": [{"block": b, "time_s": r["time_s"], "where": r["where"]}
+                      for b, r in sorted(left.items(), key=lambda x: (x[1]["time_s"], x[0]))],
+           "stopped_all_left_s": info.get("all_left_model_s"),
+           "region": region.as_dict() if region is not None else None, "rule": stability.REGION_RULE}
+    if "removed_kinetic" in h:  # runs of this version: the driver took them out of the scene
+        out["taken_out"] = ("each was taken out of the scene at the sample it left (no contact search, integration "
+                            "nor energy from then on); its later samples repeat the position where it left")
+        out["removed_kinetic_J"] = float(np.asarray(h["removed_kinetic"], float)[-1]) if len(h["t"]) else 0.0
+    return out
 
 
 def contact_stability(spec: dict, info: dict, blocks_left_model: int = 0) -> dict | None:
