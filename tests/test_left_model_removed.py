@@ -68,6 +68,7 @@ def test_a_stone_pushed_off_the_edge_is_taken_out_where_it_left(pushed_off):
     # not integrated from then on: it stays where it left (velocities zeroed, DOFs blocked: exact)
     assert np.array_equal(h["pos"][k:, j], np.repeat(h["pos"][k:k + 1, j], len(h["t"]) - k, axis=0))
     assert np.array_equal(h["pos"][k, j], np.asarray(gone["position_m"]))
+    assert np.array_equal(h["quat"][k:, j], np.repeat(h["quat"][k:k + 1, j], len(h["t"]) - k, axis=0))
     assert not np.any(h["vel"][k + 1:, j]) and not np.any(h["angvel"][k + 1:, j])
     # it carries no energy from then on: the kinetic energy is box 1's (at rest), and the
     # kinetic energy it carried out is recorded once, at its value at the sample it left
