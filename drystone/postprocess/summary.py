@@ -278,7 +278,8 @@ ENERGY_CONVENTION = (
     "velocity jumps, settling blocks through their contacts) put energy into the free blocks; dissipated_* >= 0: "
     "energy taken out by the contacts' damping and by Coulomb slip. Balance B = kinetic + elastic + "
     "dissipated_damping + dissipated_friction + removed_kinetic - work_loads is constant (removed_kinetic: the "
-    "kinetic energy carried out by the blocks taken out of the scene when they left the model); balance_error_J = max |B(t) - B(t0)| over "
+    "kinetic energy carried out by the blocks taken out of the scene when they left the model); "
+    "balance_error_J = max |B(t) - B(t0)| over "
     "the samples (t0 the first), balance_error_rel = that / the largest magnitude any term reached "
     "(docs/energy.md)")
 
