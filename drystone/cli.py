@@ -135,7 +135,7 @@ def main(argv=None) -> int:
                 print(f"error: {exc}", file=sys.stderr)
                 return 2
         elif a.cmd == "free-decay":
-            from drystone import free_decay
+            from drystone.analyses import free_decay
             print(free_decay.report().read_text())
         elif a.cmd == "bench":
             from drystone import bench

@@ -23,7 +23,11 @@ whose folder holds a ``summary.json`` made with the same overrides and the same 
 interrupted sweep continues where it stopped (a skipped run's summary is rebuilt with
 the current post-processing); a failed run leaves
 ``FAILED.txt`` (the error and its log's tail) and does not stop the others. The status of
-every run is in ``results/<name>/sweep.json``.
+every run is in ``results/<name>/sweep.json``; at the end a results table, one row per run
+(its overrides, whether it collapsed and which stones, the largest residual in mm, a tilt's
+onset angle: drystone.analyses.common.outcome, the one collapse criterion), is printed and
+written to ``results/<name>/runs.csv``. A [grid] value that names a file (a record) names
+its runs by the file's stem; runs whose names would repeat get ``-2``, ``-3``.
 
 Backends: ``local`` (default: a process pool on this machine's cores) or ``dask`` (a Dask
 distributed scheduler: ``--dask ADDRESS`` for an existing cluster, e.g. started by
@@ -66,9 +70,38 @@ class Job:
     params: dict = field(default_factory=dict)  # the swept values, for tables
 
 
+def _is_path(value) -> bool:
+    """A swept value that names a file (a record, a geometry): a string with a folder
+    separator or ending in a file extension (``.txt``; not a number such as ``0.976``)."""
+    return isinstance(value, str) and bool("/" in value or "\\" in value
+                                           or re.search(r"\.[A-Za-z][A-Za-z0-9]*$", value))
+
+
 def _run_name(params: dict) -> str:
-    parts = [f"{k.split('.')[-1]}_{v}" for k, v in params.items()]
+    """A [grid] run's name: ``<last key part>_<value>`` joined by ``-``; a value that names
+    a file gives its stem (``common.safe_name``), e.g. ``record_farfield_01a-pga_g_0.8``."""
+    from drystone.analyses.common import safe_name
+
+    parts = [f"{k.split('.')[-1]}_{safe_name(v) if _is_path(v) else v}" for k, v in params.items()]
     return re.sub(r"[^A-Za-z0-9_.+-]", "", "-".join(parts)) or "run"
+
+
+def _unique(names: list[str]) -> list[str]:
+    """``names`` with the second, third ... of equal ones suffixed ``-2``, ``-3`` (two files
+    of one stem in different folders), in order, each name unique among them all."""
+    out, seen = [], set(names)
+    count: dict[str, int] = {}
+    for n in names:
+        count[n] = count.get(n, 0) + 1
+        if count[n] == 1:
+            out.append(n)
+            continue
+        k = count[n]
+        while f"{n}-{k}" in seen:
+            k += 1
+        seen.add(f"{n}-{k}")
+        out.append(f"{n}-{k}")
+    return out
 
 
 def _overrides(value, where: str) -> list[str]:
@@ -134,9 +167,9 @@ def load(path, results: Path | None = None, threads: int = 1) -> tuple[str, list
             raise casemod.CaseError(f"{where}: [grid] '{key}' must be a non-empty list of values")
     if grid:
         keys = list(grid)
-        for combo in itertools.product(*(grid[k] for k in keys)):
-            params = dict(zip(keys, combo))
-            runs.append((_run_name(params), [f"{k}={tomlio.value(v)}" for k, v in params.items()], params, None))
+        combos = [dict(zip(keys, combo)) for combo in itertools.product(*(grid[k] for k in keys))]
+        for n, params in zip(_unique([_run_name(c) for c in combos]), combos):
+            runs.append((n, [f"{k}={tomlio.value(v)}" for k, v in params.items()], params, None))
     for k, r in enumerate(given):
         bad = sorted(set(r) - RUN_KEYS) if isinstance(r, dict) else None
         if bad is None or bad or "name" not in r:
@@ -372,10 +405,63 @@ def run(path, workers: int | None = None, backend: str = "local", dask_address: 
     if failed:
         print(f"[{name}] {len(failed)} run(s) failed: {failed}; see FAILED.txt and log.txt in their folders",
               flush=True)
+    results_table(root, name, jobs, status)
     if interrupted:
         n_done = sum(s["status"] == "done" for s in status.values())
         print(f"[{name}] {n_done} run(s) finished before the interrupt; status in {root / 'sweep.json'}", flush=True)
     return {"name": name, "root": str(root), "runs": status, "failed": failed, "interrupted": interrupted}
+
+
+#: the columns of a sweep's results table (results/<sweep>/runs.csv)
+TABLE_COLUMNS = ("run", "overrides", "status", "collapsed", "collapsed_stones", "largest_residual_mm",
+                 "onset_deg")
+
+
+def table_rows(jobs: list[Job], status: dict) -> list[dict]:
+    """One row per run (``TABLE_COLUMNS``), read from its folder through the one collapse
+    criterion and reduction (drystone.analyses.common.outcome): whether it collapsed and
+    which stones (ids joined by spaces), the largest residual displacement of the stones
+    still in the model (mm) and, for a run with a tilt stage, the onset angle (deg); a run
+    not finished has its status and empty values."""
+    from drystone.analyses.common import outcome
+
+    rows = []
+    for j in jobs:
+        st = (status.get(j.name) or {}).get("status", "pending")
+        row = {"run": j.name, "overrides": "; ".join(f"{k}={v}" for k, v in j.params.items()), "status": st,
+               "collapsed": "", "collapsed_stones": "", "largest_residual_mm": "", "onset_deg": ""}
+        if st == "done" or st.startswith("skipped"):
+            o = outcome(j.out_dir)
+            if o["status"] != "done":
+                row["status"] = f"failed: {o.get('error', '')}"[:120]
+            else:
+                res, onset = o.get("largest_residual_m"), o.get("onset_deg")
+                row.update(collapsed="yes" if o["collapsed"] else "no",
+                           collapsed_stones=" ".join(str(b) for b in o["collapsed_stones"]),
+                           largest_residual_mm="" if res is None else f"{1e3 * res:.4g}",
+                           onset_deg="" if onset is None else f"{onset:.4g}")
+        rows.append(row)
+    return rows
+
+
+def results_table(root: Path, name: str, jobs: list[Job], status: dict) -> Path:
+    """Write ``root``/runs.csv (``table_rows``) and print it as a table; returns its path."""
+    import csv
+    import io
+
+    rows = table_rows(jobs, status)
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=TABLE_COLUMNS, lineterminator="\n")
+    w.writeheader()
+    w.writerows(rows)
+    path = atomic.write_text(Path(root) / "runs.csv", buf.getvalue())
+    head = {"run": "run", "overrides": "overrides", "status": "status", "collapsed": "collapsed",
+            "collapsed_stones": "stones", "largest_residual_mm": "residual mm", "onset_deg": "onset deg"}
+    width = {c: max(len(head[c]), *(len(r[c]) for r in rows)) for c in TABLE_COLUMNS}
+    print(f"[{name}] results ({path}):", flush=True)
+    for r in [head] + rows:
+        print("  " + "  ".join(r[c].ljust(width[c]) for c in TABLE_COLUMNS).rstrip(), flush=True)
+    return path
 
 
 def _write_status(root: Path, name: str, path, status: dict) -> None:

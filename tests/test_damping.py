@@ -19,7 +19,7 @@ import pytest
 import tolerances as tol
 from conftest import requires_yade, run_case
 from drystone.mechanics import contact as law
-from drystone import free_decay as fd
+from drystone.analyses import free_decay as fd
 from drystone.mechanics import overlap as ov
 
 
@@ -118,7 +118,7 @@ def test_damping_caps():
     assert md[0, 1] == pytest.approx(5.0 * 0.2, rel=tol.NUMERICAL_REL)  # resultant on the edge, b / 2 = 0.2 m
 
 
-# -- free decay in YADE (drystone/free_decay.py) ------------------------------------
+# -- free decay in YADE (drystone/analyses/free_decay.py) ------------------------------------
 @requires_yade
 @pytest.mark.yade
 @pytest.mark.parametrize("detection", ["native", "yade"])

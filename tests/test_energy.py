@@ -192,7 +192,7 @@ TALL, SLAB = (0.2, 0.2, 0.4), (0.4, 0.4, 0.1)
 
 
 def rocking_case(xi):
-    """The free-decay push (drystone/free_decay.py): 0.06 W sideways at the centroid for
+    """The free-decay push (drystone/analyses/free_decay.py): 0.06 W sideways at the centroid for
     0.3 s, released; the joint stays closed (no uplift), the block rings on its springs."""
     return {"case": {"geometry": boxes([{"id": 1, "center_xy": [0.0, 0.0], "size": list(TALL)}], xi=xi)},
             "stages": [{"type": "gravity", "duration": 0.3, "ramp": 0.05}, {"type": "rest", "duration": 0.25}],

@@ -1,5 +1,5 @@
 """The package's layers depend one way (docs/maintainers-guide.md, Layout): geometry and motions -> core ->
-yade_scripts -> postprocess -> studies, with runner, sweep, cli, bench and free_decay on top.
+yade_scripts -> postprocess -> studies, with runner, sweep, cli, bench and the analyses (free_decay among them) on top.
 Checked on the import statements of every module (ast), wherever they are in the module."""
 from __future__ import annotations
 

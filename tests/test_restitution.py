@@ -1,4 +1,4 @@
-"""Rocking restitution (drystone/restitution.py): what the contact damping does to the
+"""Rocking restitution (drystone/analyses/restitution.py): what the contact damping does to the
 impacts of a slender block rocking on its corners, against Housner's rigid block.
 
 Without YADE: Housner's r = 1 - 1.5 sin^2(alpha) against conservation of angular momentum
@@ -21,7 +21,7 @@ import pytest
 
 import tolerances as tol
 from conftest import requires_yade
-from drystone import restitution as rs
+from drystone.analyses import restitution as rs
 
 
 def test_housner_restitution_is_angular_momentum_about_the_new_corner():

@@ -37,6 +37,31 @@ def test_grid_and_runs_make_named_jobs(tmp_path):
     sweep.validate(jobs)  # all three are valid cases
 
 
+def test_a_file_path_names_its_runs_by_its_stem_and_names_stay_unique(tmp_path):
+    """A swept record given as a file path names the run by the file's stem (not the whole
+    path with its separators squeezed out); two files of one stem in different folders give
+    two names; numbers (0.976) keep their digits."""
+    p = write_sweep(tmp_path, '[grid]\n"stages.0.record" = ["../records/far/farfield_01a.txt", '
+                              '"/data/near/farfield_01a.txt", "paruro2014"]\n"stages.0.pga_g" = [0.976]\n')
+    name, jobs = sweep.load(p, results=tmp_path / "res")
+    assert [j.name for j in jobs] == ["record_farfield_01a-pga_g_0.976", "record_farfield_01a-pga_g_0.976-2",
+                                      "record_paruro2014-pga_g_0.976"]
+    assert jobs[1].params["stages.0.record"] == "/data/near/farfield_01a.txt"  # the override is the path
+    assert len({j.out_dir for j in jobs}) == 3
+
+
+def test_results_table_rows_of_runs_not_finished(tmp_path):
+    """A run that failed or is pending has its status and empty values; a folder without a
+    complete run reads as failed (the one reduction, analyses.common.outcome)."""
+    p = write_sweep(tmp_path, '[[runs]]\nname = "a"\n[[runs]]\nname = "b"\nset = ["contact.mu=0.4"]\n')
+    _, jobs = sweep.load(p, results=tmp_path / "res")
+    Path(jobs[0].out_dir).mkdir(parents=True)
+    rows = sweep.table_rows(jobs, {"a": {"status": "done"}, "b": {"status": "failed"}})
+    assert rows[0]["status"].startswith("failed") and rows[0]["collapsed"] == ""
+    assert rows[1] == {"run": "b", "overrides": "contact.mu=0.4", "status": "failed", "collapsed": "",
+                       "collapsed_stones": "", "largest_residual_mm": "", "onset_deg": ""}
+
+
 def test_fingerprint_follows_the_inputs_not_the_folder(tmp_path):
     """The same case resolved into two folders has one fingerprint; a changed geometry
     or friction coefficient changes it (sweeps use it to decide what is finished)."""
@@ -76,7 +101,7 @@ def test_every_run_is_checked_before_any_starts(tmp_path):
 
 @requires_yade
 @pytest.mark.yade
-def test_local_sweep_resumes_and_survives_a_failure(tmp_path, monkeypatch):
+def test_local_sweep_resumes_and_survives_a_failure(tmp_path, monkeypatch, capsys):
     p = write_sweep(tmp_path, '[grid]\n"contact.mu" = [0.3, 0.6]\n')
     res = sweep.run(p, workers=2, results=tmp_path / "res", heartbeat_s=1.0)
     assert res["failed"] == []
@@ -86,6 +111,19 @@ def test_local_sweep_resumes_and_survives_a_failure(tmp_path, monkeypatch):
         assert s["inputs"]["materials"]["stone"]["mu"] == float(n.split("_")[1])
     status = json.loads((root / "sweep.json").read_text())
     assert {r["status"] for r in status["runs"]} == {"done"}
+    # the results table: one row per run, read through analyses.common.outcome
+    import csv
+    from drystone.analyses.common import outcome
+    rows = list(csv.DictReader((root / "runs.csv").open()))
+    assert [r["run"] for r in rows] == ["mu_0.3", "mu_0.6"]
+    assert [r["overrides"] for r in rows] == ["contact.mu=0.3", "contact.mu=0.6"]
+    for r in rows:
+        o = outcome(root / r["run"])
+        assert r["status"] == "done" and r["collapsed"] == "no" and r["collapsed_stones"] == ""
+        assert float(r["largest_residual_mm"]) == pytest.approx(1e3 * o["largest_residual_m"], rel=1e-3)
+        assert r["onset_deg"] == ""  # no tilt stage
+    printed = capsys.readouterr().out
+    assert "runs.csv" in printed and "residual mm" in printed and "mu_0.6" in printed.split("results (")[-1]
     # second call: nothing to run; the summaries are rebuilt with the current post-processing
     stale = json.loads((root / "mu_0.3" / "summary.json").read_text())
     stale["blocks"] = "stale"

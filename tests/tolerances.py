@@ -655,7 +655,7 @@ PGV_TABLE_ABS_M_S = 0.0055
 PGV_TABLE_REL = 0.04
 
 # ---------------------------------------------------------------------------------------
-# Rocking restitution (tests/test_restitution.py, drystone/restitution.py)
+# Rocking restitution (tests/test_restitution.py, drystone/analyses/restitution.py)
 # ---------------------------------------------------------------------------------------
 
 #: restitution read from a synthetic rigid rocking history (DOP853 at relative tolerance
@@ -667,7 +667,7 @@ PGV_TABLE_REL = 0.04
 ROCKING_AMPLITUDE_REL = 1e-9
 #: the rigid-energy measure against the block's own energy on its penalty contact: the
 #: loaded corner sinks delta = sqrt(2 theta W / (K_n d)) and E loses 2 W delta / 3
-#: (drystone.restitution.sunk_rocking_energy). At K_n 2e8 N/m^3 for the 0.2 x 0.2 x 0.8 m
+#: (drystone.analyses.restitution.sunk_rocking_energy). At K_n 2e8 N/m^3 for the 0.2 x 0.2 x 0.8 m
 #: block this is 15 % of E at theta = 0.6 alpha, 18.5 % at 0.25 alpha and 27 % at 0.1 alpha,
 #: so r across an impact from 0.6 to 0.25 alpha changes by sqrt(0.815 / 0.85) - 1 = -2.1 %,
 #: from 0.25 to 0.1 alpha by sqrt(0.73 / 0.815) - 1 = -5.4 % (make free-decay, damping 0.8:

@@ -145,8 +145,10 @@ def tunnelling(run, st, size) -> str | None:
 class LeftModel(Monitor):
     """Record each free block when it first leaves the model (stability.ModelRegion: fallen
     below the supports' underside, or thrown beyond the supports' size plus the fall
-    height); once every free block has, stop the run at this sample: what follows is the
-    motion of nothing the model holds (run_info.json ``left_model``)."""
+    height) and take it out of the scene there (the driver's ``retire``: no contact search,
+    no integration, no energy from then on; it stays where it left); once every free block
+    has, stop the run at this sample: what follows is the motion of nothing the model holds
+    (run_info.json ``left_model``)."""
 
     order = 2
 
@@ -168,8 +170,11 @@ class LeftModel(Monitor):
             self.left[i] = {"block": int(run.bid[i]), "time_s": float(t), "where": self.region.where(p),
                             "position_m": p.tolist(), "speed_m_s": float(np.linalg.norm(run.vel[i]))}
             print(f"[{run.spec_name}] block {run.bid[i]} left the model at t = {t:.3f} s "
-                  f"({self.left[i]['where']}): its motion from there has no meaning (summary: unbounded, "
+                  f"({self.left[i]['where']}): taken out of the scene there (summary: unbounded, "
                   "no residual)", flush=True)
+            retire = getattr(run, "retire", None)
+            if retire is not None:  # no contact search, integration nor energy from here on
+                retire(i, float(s.ke_b[int(np.flatnonzero(run.dyn == i)[0])]))
         if self.all_left_s is None and len(self.left) == len(run.dyn):
             self.all_left_s = float(t)
             print(f"[{run.spec_name}] every free block has left the model: stopping at t = {t:.3f} s",

@@ -35,8 +35,10 @@ YADE driver at every recorded sample; SI units).
   below the underside it fell off the supports, beyond the margin it was thrown away (a
   block toppling or jumping off an edge is below the underside long before it is L + H
   away), so its motion, in a frame that follows the platform's own motion, has no
-  meaning: the summary marks it unbounded and gives no residual for it, and the YADE driver
-  stops the run once every free block has left.
+  meaning: the YADE driver takes it out of the scene there (monitors.LeftModel: no contact
+  search, integration nor energy from then on; it stays where it left), the summary marks
+  it unbounded and gives no residual for it, and the driver stops the run once every free
+  block has left.
 """
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """The studies' Markdown reports as self-contained HTML (a small converter, no dependency).
 
 ``write(md_path, text)`` writes ``report.md`` and ``report.html`` beside it: every study
-calls it where it wrote its report (drystone/studies/*, drystone/free_decay.py).
+calls it where it wrote its report (drystone/studies/*, drystone/analyses/free_decay.py).
 ``to_html(text, base)`` converts the subset the reports use: ATX headings (``#`` to
 ``######``), paragraphs, pipe tables (with ``:---:`` alignment), images ``![alt](file)``
 (embedded from ``base`` as ``data:`` URIs; a missing or remote image is named, not fetched),

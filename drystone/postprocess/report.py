@@ -41,7 +41,8 @@ FINAL_STATE_PNG, ENERGY_PNG = "final_state.png", "energy.png"
 #: energy histories (J) the energy figure draws when histories.npz has them, with their labels
 ENERGY_TERMS = {"kinetic": "kinetic", "potential": "potential (change since t = 0)", "elastic": "elastic (contacts)",
                 "work_loads": "work of the loads", "dissipated_damping": "dissipated by damping",
-                "dissipated_friction": "dissipated by friction"}
+                "dissipated_friction": "dissipated by friction",
+                "removed_kinetic": "carried out by stones that left the model"}
 #: the terms of the balance drawn when the histories have all of them and no balance of their own
 BALANCE_TERMS = ("work_loads", "dissipated_damping", "dissipated_friction")
 #: the energy figure's size (in) and resolution (dots per inch)
@@ -255,9 +256,11 @@ def energy_figure(h: dict, path: Path, spec: dict) -> Path | None:
     the kinetic and elastic energies and the balance on their own scale (a ramped gravity's
     potential change would flatten them). The balance: the histories' own
     ``energy_balance`` or, with every BALANCE_TERMS term recorded, summary.balance_history:
-    dE_k + dE_el + D_damping + D_friction - W_loads (zero for an exact integration; the
+    dE_k + dE_el + D_damping + D_friction + removed_kinetic - W_loads (zero for an exact integration; the
     potential is drawn for reference only: gravity's work is in W_loads)."""
     terms = {k: np.asarray(h[k], float) for k in ENERGY_TERMS if k in h and np.size(h[k]) == np.size(h["t"])}
+    if "removed_kinetic" in terms and not terms["removed_kinetic"].any():
+        del terms["removed_kinetic"]  # no stone left the model: nothing to draw, nothing in the balance
     if not terms or not len(h["t"]):
         return None
     t = np.asarray(h["t"], float)

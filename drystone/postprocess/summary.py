@@ -277,7 +277,9 @@ ENERGY_CONVENTION = (
     "work_loads > 0: the loads (gravity, tilt and base excitation as the body force m g_eff, applied forces, "
     "velocity jumps, settling blocks through their contacts) put energy into the free blocks; dissipated_* >= 0: "
     "energy taken out by the contacts' damping and by Coulomb slip. Balance B = kinetic + elastic + "
-    "dissipated_damping + dissipated_friction - work_loads is constant; balance_error_J = max |B(t) - B(t0)| over "
+    "dissipated_damping + dissipated_friction + removed_kinetic - work_loads is constant (removed_kinetic: the "
+    "kinetic energy carried out by the blocks taken out of the scene when they left the model); "
+    "balance_error_J = max |B(t) - B(t0)| over "
     "the samples (t0 the first), balance_error_rel = that / the largest magnitude any term reached "
     "(docs/energy.md)")
 
@@ -288,6 +290,8 @@ def balance_history(h: dict) -> np.ndarray:
     work of gravity is in work_loads); zero for an exact integration."""
     b = (np.asarray(h["kinetic"], float) + np.asarray(h["elastic"], float) + np.asarray(h["dissipated_damping"], float)
          + np.asarray(h["dissipated_friction"], float) - np.asarray(h["work_loads"], float))
+    if "removed_kinetic" in h:  # carried out by the blocks that left the model (histories of this version on)
+        b = b + np.asarray(h["removed_kinetic"], float)
     return b - b[0]
 
 
@@ -309,6 +313,9 @@ def energy_balance(h: dict) -> dict:
     if not len(t) or any(k not in h for k in keys):
         out["note"] = "histories.npz has no energy terms (a run of an older version)"
         return out
+    if "removed_kinetic" in h:
+        keys = keys + ("removed_kinetic",)
+        out["final"]["removed_kinetic_J"] = None
     v = {k: np.asarray(h[k], float) for k in keys}
     for k in keys:
         out["final"][f"{k}_J"] = float(v[k][-1]) if np.isfinite(v[k][-1]) else None
@@ -329,11 +336,16 @@ def left_model_report(spec: dict, h: dict, left: dict, info: dict) -> dict:
     and when (``left_model``), the region and its rule (drystone/mechanics/stability.py), and when the
     run stopped because every free block had left (run_info's ``all_left_model_s``)."""
     region = stability.ModelRegion.from_blocks(spec["blocks"]) if "blocks" in spec else None
-    return {"count": len(left), "free_blocks": len(h["block_ids"]),
-            "blocks": [{"block": b, "time_s": r["time_s"], "where": r["where"]}
-                       for b, r in sorted(left.items(), key=lambda x: (x[1]["time_s"], x[0]))],
-            "stopped_all_left_s": info.get("all_left_model_s"),
-            "region": region.as_dict() if region is not None else None, "rule": stability.REGION_RULE}
+    out = {"count": len(left), "free_blocks": len(h["block_ids"]),
+           "blocks": [{"block": b, "time_s": r["time_s"], "where": r["where"]}
+                      for b, r in sorted(left.items(), key=lambda x: (x[1]["time_s"], x[0]))],
+           "stopped_all_left_s": info.get("all_left_model_s"),
+           "region": region.as_dict() if region is not None else None, "rule": stability.REGION_RULE}
+    if "removed_kinetic" in h:  # runs of this version: the driver took them out of the scene
+        out["taken_out"] = ("each was taken out of the scene at the sample it left (no contact search, integration "
+                            "nor energy from then on); its later samples repeat the position where it left")
+        out["removed_kinetic_J"] = float(np.asarray(h["removed_kinetic"], float)[-1]) if len(h["t"]) else 0.0
+    return out
 
 
 def contact_stability(spec: dict, info: dict, blocks_left_model: int = 0) -> dict | None:

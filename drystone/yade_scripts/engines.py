@@ -204,6 +204,24 @@ class Engine:
     def add_work(self, J: float) -> None:
         """Work of a load given at once (J): a velocity jump's kinetic energy."""
 
+    def retire(self, i: int) -> None:
+        """Take body ``i`` (a free block that left the model) out of the scene: YADE blocks
+        every DOF, its velocities are zeroed (it stays where it left, no longer integrated)
+        and its shapes interact with nothing (group mask 0: YADE's collider; the native
+        geometry's shapes get non-finite vertices, which the broad phase pairs with nothing,
+        drystone.mechanics.overlap.sweep_pairs)."""
+        run = self.run
+        st = run.states[i]
+        st.blockedDOFs = "xyzXYZ"
+        st.vel = yade.Vector3(0, 0, 0)
+        st.angVel = yade.Vector3(0, 0, 0)
+        run.vel[i] = 0.0
+        run.angvel[i] = 0.0
+        for k in [i] + list(run.members.get(i, ())):
+            run.O.bodies[k].groupMask = 0
+        if self.step is not None and hasattr(self.step, "shapes"):
+            self.step.shapes.verts[self.step.owner == i] = np.nan
+
     def check_depth(self) -> None:
         """Stop the run on a contact deeper than stability.TUNNEL_FRACTION x the smaller
         block's smallest dimension (every step: a tunnelling block can pass through in
@@ -289,6 +307,13 @@ class NumpyEngine(Engine):
 
     def add_work(self, J):
         self.ledger.add_work(J)
+
+    def retire(self, i):
+        super().retire(i)
+        self.ledger.lin_free[i] = 0.0  # no work on it from here on: its kinetic energy leaves with it
+        if self.ledger.pending:  # the step under way is charged with its velocities zeroed
+            self.ledger._pending[7][i] = 0.0
+            self.ledger._pending[8][i] = 0.0
 
 
 class CompiledEngine(Engine):
@@ -498,6 +523,13 @@ class CompiledEngine(Engine):
 
     def add_work(self, J):
         self.step.energy[0] += float(J)
+
+    def retire(self, i):
+        super().retire(i)
+        self.lin_free[i] = 0.0  # integrate() and energy.account: it moves no more, no work on it
+        self.rot_free[i] = 0.0
+        self.aspherical[i] = False
+        self.angmom[i] = 0.0
 
 
 #: the step engines by name (``ContactLaw.engines`` in drystone/mechanics/laws.py names them)

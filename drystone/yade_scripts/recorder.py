@@ -4,7 +4,10 @@ energies at the half step t - dt/2, where leapfrog velocities live. The energy b
 cumulative terms (J from the run's start; drystone/mechanics/energy.py): ``work_loads``,
 ``dissipated_damping``, ``dissipated_friction``, accumulated by the engine at every step
 up to the same half step; NaN for an engine that cannot account (the stock YADE law).
-A run with [[loads]] also records the loads' total force ``load_force`` (N) and their
+``removed_kinetic``: the kinetic energy (J, cumulative) carried out of the model by the free
+blocks taken out of the scene when they left it (the driver's ``retire``): from then on they
+stay where they left (their samples repeat that position), with no kinetic nor potential
+energy. A run with [[loads]] also records the loads' total force ``load_force`` (N) and their
 total moment about the platform frame's origin ``load_moment`` (N m, each stone's force at
 its initial centroid plus its moment), as applied at the sample's step.
 """
@@ -36,7 +39,7 @@ class Recorder:
         self.named = [(c["name"], y[c["blocks"][0]], y[c["blocks"][1]]) for c in run.spec.output["contacts"]]
         self.h = {k: [] for k in ("t", "tilt_deg", "g_eff", "base_acc", "pos", "quat", "vel", "angvel",
                                   "cp", "reaction", "n_contacts", "kinetic", "potential", "elastic",
-                                  *energy.TERMS)}
+                                  *energy.TERMS, "removed_kinetic")}
         if run.loads is not None:
             self.h.update(load_force=[], load_moment=[])
             self.centroid0 = run.pos0.copy()  # where the loads' forces act (fixed, drystone/model/loads.py)
@@ -75,11 +78,13 @@ class Recorder:
         ke = float(ke_b.sum())
         h["kinetic"].append(ke)
         x_half = run.pos[d] - 0.5 * run.O.dt * run.vel[d]
-        h["potential"].append(-float(np.sum(m * (x_half @ g))))
+        live = ~run.removed[d]  # blocks taken out of the scene hold no potential energy of the model
+        h["potential"].append(-float(np.sum((m * (x_half @ g))[live])))
         h["elastic"].append(run.engine.elastic_energy())
         terms = run.engine.energy_terms()
         for k, v in zip(energy.TERMS, terms if terms is not None else (np.nan,) * len(energy.TERMS)):
             h[k].append(v)
+        h["removed_kinetic"].append(run.removed_kinetic)
         if run.loads is not None:
             F, T = run.loads.wrench()
             h["load_force"].append(F.sum(axis=0))

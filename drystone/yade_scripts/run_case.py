@@ -52,6 +52,7 @@ class Driver:
         engine_class = ENGINES[laws.get(spec.law).engine(engine, spec.detection)]
         tables = sc.build(spec, integrate=engine_class.yade_integrates)
         self.newton, self.yid, self.bid = tables["newton"], tables["yid"], tables["bid"]
+        self.members = tables["members"]  # a clump's YADE id -> its members' ids
         self.dyn = np.array(tables["dynamic"], int)
         O, nb = self.O, len(self.O.bodies)
         self.states = [O.bodies[i].state for i in range(nb)]
@@ -87,6 +88,10 @@ class Driver:
         self.z_floor = min((min(v[2] for v in b["vertices"]) for b in spec.blocks if b["role"] == "platform"),
                            default=-np.inf)
         self.region = stability.ModelRegion.from_blocks(spec.blocks)
+        # free blocks taken out of the scene when they left the model (``retire``), and the kinetic
+        # energy they carried out of it then (J, cumulative: histories.npz ``removed_kinetic``)
+        self.removed = np.zeros(nb, bool)
+        self.removed_kinetic = 0.0
         self.stability = monitors.Stability(self.w_free, self.size)
         self.monitors = [self.stability, monitors.LeftModel(self.region)]
         self.stage, self.stop_at, self.done, self.failure, self.collapse = -1, None, False, None, None
@@ -180,6 +185,15 @@ class Driver:
         m = self.prog.monitor(k, self)
         if m is not None:
             self.monitors = sorted(self.monitors + [m], key=lambda x: x.order)
+
+    def retire(self, i: int, kinetic_J: float) -> None:
+        """Take free body ``i`` out of the scene: it left the model (monitors.LeftModel) at
+        this sample, whose kinetic energy of it, ``kinetic_J``, leaves the energy balance with
+        it (``removed_kinetic``). From the next step on it is neither integrated (it stays
+        where it left) nor in any contact search, and carries no kinetic energy nor work."""
+        self.removed[i] = True
+        self.removed_kinetic += float(kinetic_J)
+        self.engine.retire(i)
 
     def load_limit(self, t, why):
         """A load is undefined at t (the retained soil's Mononobe-Okabe limit, ``why``): before

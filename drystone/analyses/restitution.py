@@ -315,12 +315,12 @@ def report_section(tmp: Path, kns=TABLE_KNS, dampings=TABLE_DAMPINGS, curve_damp
             "theta0_rad": THETA0_FRACTION * a, "housner": rh, "min_amplitude_rad": MIN_AMPLITUDE * a,
             "table": table, "curve_kn": curve_kn, "curve": curve,
             "measure": "r_n = sqrt(E(theta_n+1) / E(theta_n)), theta_n the rocking amplitudes, E the rigid "
-                       "block's rocking energy (drystone/restitution.py)"}
+                       "block's rocking energy (drystone/analyses/restitution.py)"}
     n = max(len(t["r"]) for t in table)
     lines = ["", "## Rocking restitution per impact against Housner's rigid block", "",
              f"Block {B} x {D} x {H} m (b x d x h), {RHO:g} kg/m^3, K_t = {KT_RATIO:g} K_n, mu {MU:g}, released "
              f"from rest tilted {THETA0_FRACTION:g} alpha = {THETA0_FRACTION * a:.3f} rad on one bottom edge "
-             f"(alpha = atan(b/h) = {a:.4f} rad) and left to rock (drystone/restitution.py). r_n = "
+             f"(alpha = atan(b/h) = {a:.4f} rad) and left to rock (drystone/analyses/restitution.py). r_n = "
              "sqrt(E(theta_n+1) / E(theta_n)): the angular-velocity restitution of impact n from the rocking "
              "amplitudes theta_n before and after it (E the rigid block's rocking energy; the energy ratio is "
              f"r^2). Housner's rigid block: r = 1 - 1.5 sin^2(alpha) = {rh:.3f}. Impacts counted while the "

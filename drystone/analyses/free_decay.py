@@ -14,7 +14,7 @@ Each modal coordinate is read from the recorded velocities (no static offset) an
 damping ratio taken from the logarithmic decrement of successive peaks. ``python -m
 drystone free-decay`` runs every mode for both contact geometries and two damping inputs
 and writes results/free_decay/report.md and free_decay.json, with the rocking restitution per
-impact of a slender block (drystone/restitution.py) beside them. Units SI.
+impact of a slender block (drystone/analyses/restitution.py) beside them. Units SI.
 """
 from __future__ import annotations
 
@@ -116,7 +116,8 @@ def measure(outdir: Path, detection: str, xi: float) -> dict:
 def report(out: Path | None = None, dampings=(0.05, 0.3)) -> Path:
     """Run every mode, both geometries, and write report.md + free_decay.json."""
     import drystone
-    from drystone import paths, provenance, restitution
+    from drystone import paths, provenance
+    from drystone.analyses import restitution
 
     out = Path(out) if out is not None else paths.RESULTS / "free_decay"
     out.mkdir(parents=True, exist_ok=True)
@@ -136,7 +137,7 @@ def report(out: Path | None = None, dampings=(0.05, 0.3)) -> Path:
     atomic.write_text(out / "free_decay.json", json.dumps(data, indent=1))
     lines = ["# Free decay of one block: damping ratio per mode (logarithmic decrement)", "",
              f"Block {B} x {D} x {H} m, {RHO:g} kg/m^3, K_n {KN:g}, K_t {KT:g} N/m^3 on the platform "
-             "(drystone/free_decay.py). Modes: bouncing "
+             "(drystone/analyses/free_decay.py). Modes: bouncing "
              f"{freqs['bouncing']:.1f} Hz; rocking-sliding {freqs['mode_1']:.1f} Hz (mostly rocking) and "
              f"{freqs['mode_2']:.1f} Hz (mostly sliding), closed form.", "",
              "| geometry | damping asked | bouncing | rocking-sliding 1 | rocking-sliding 2 |", "|---|---|---|---|---|"]
