@@ -34,7 +34,9 @@ def test_assess_quick_one_stone(tmp_path):
     slide = math.degrees(math.atan(0.4))
     assert slide - tol.QUICK_SLIDE_EARLY_DEG <= p["tilt"]["headline_deg"] <= slide + tol.QUICK_SLIDE_LAG_DEG
     fr = json.loads((out / "fragility" / "fragility.json").read_text())
-    assert data["cost"]["runs"] == 1 + fr["cost"]["runs"]
+    modal = json.loads((out / "modal" / "modal.json").read_text())
+    assert data["cost"]["runs"] == 1 + 1 + bool(modal.get("identification")) + fr["cost"]["runs"]
+    assert len(modal["frequencies_hz"]) > 0 and min(modal["frequencies_hz"]) > 0
     assert data["cost"]["core_minutes"] > 0
     html = (out / "report.html").read_text()
     for link in ("tilt/report.html", "fragility/report.html", "fragility/collapse/report.html"):

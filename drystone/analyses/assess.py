@@ -91,6 +91,8 @@ def assess(case, quick: bool = False, records=None, out=None, workers=None, back
             m = modalmod.modal(case_path, out=out_dir / "modal", workers=workers, backend=backend, address=address,
                                overrides=overrides, log=log)
             f = list(m.get("frequencies_hz") or [])
+            runs += 1 + bool(m.get("identification"))  # the settling run (+ the white noise, if identified)
+            run_s += float((m.get("settle") or {}).get("wall_s") or 0.0)
             parts["modal"] = {"report": "modal/report.html", "frequencies_hz": f[:6]}
             summary.append("modal: " + (", ".join(f"{x:.3g}" for x in f[:4]) + " Hz" if f else "no frequencies"))
         except (TypeError, AttributeError, common.casemod.CaseError) as exc:  # its API or its refusal, said so
