@@ -42,3 +42,40 @@ def test_assess_quick_one_stone(tmp_path):
     for link in ("tilt/report.html", "fragility/report.html", "fragility/collapse/report.html"):
         assert link in html
     assert "modal" in html.lower()
+
+
+@pytest.mark.slow
+@requires_yade
+def test_assess_quick_on_a_drawn_wall_with_a_re_entrant_stone(tmp_path):
+    """A user's own wall as a CAD drawing: an L-shaped (re-entrant, two-part) stone with a
+    stone seated in its notch and a slab over both, all free on a drawn platform
+    (tests/test_dxf.py's L stone). ``assess --quick`` runs every part on it: the tilt
+    onset, positive frequencies of the settled wall, a PGA-at-collapse bracket or a
+    censored search per record, and the joined report."""
+    from drystone.analyses import assess
+    from test_analyses_fragility import pulse_file
+    from test_dxf import L_STONE, write_dxf
+
+    stones = {1: L_STONE, 2: [(400, 300), (1000, 300), (1000, 700), (400, 700)],
+              3: [(0, 700), (1000, 700), (1000, 900), (0, 900)]}
+    write_dxf(tmp_path / "wall.dxf", stones, layers={1: "free", 2: "free", 3: "free"},
+              platform=[(-500, -100), (1500, -100), (1500, 0), (-500, 0)])
+    case = tmp_path / "wall.toml"
+    case.write_text('[case]\nname = "drawn_l_wall"\n'
+                    'geometry = {generator = "dxf", file = "wall.dxf", thickness = 0.4}\n\n'
+                    '[[stages]]\ntype = "gravity"\nduration = 0.4\nramp = 0.2\n\n[output]\ninterval = 0.02\n')
+    recs = [pulse_file(tmp_path / "pulse_a.txt", 1.0), pulse_file(tmp_path / "pulse_b.txt", 3.5)]
+    res = assess.assess(case, quick=True, records=recs, out=tmp_path / "out", workers=2, log=lambda *a: None)
+    out = Path(res["out_dir"])
+    data = json.loads((out / "assess.json").read_text())
+    p = data["parts"]
+    assert "skipped" not in p["modal"], p["modal"]
+    assert len(p["modal"]["frequencies_hz"]) > 0 and min(p["modal"]["frequencies_hz"]) > 0
+    assert 0.0 < p["tilt"]["headline_deg"] < 90.0
+    col = json.loads((out / "fragility" / "collapse" / "collapse.json").read_text())
+    assert set(col["records"]) == {"pulse_a", "pulse_b"}
+    for r in col["records"].values():
+        assert r["status"] in ("bracketed", "censored", "budget"), r
+    html = (out / "report.html").read_text()
+    for link in ("tilt/report.html", "modal/report.html", "fragility/report.html"):
+        assert link in html
