@@ -413,6 +413,8 @@ def run(path, workers: int | None = None, backend: str = "local", dask_address: 
 
 
 #: the columns of a sweep's results table (results/<sweep>/runs.csv)
+#: the widest cell of the printed results table (characters)
+PRINT_CELL = 60
 TABLE_COLUMNS = ("run", "overrides", "status", "collapsed", "collapsed_stones", "largest_residual_mm",
                  "onset_deg")
 
@@ -457,9 +459,13 @@ def results_table(root: Path, name: str, jobs: list[Job], status: dict) -> Path:
     path = atomic.write_text(Path(root) / "runs.csv", buf.getvalue())
     head = {"run": "run", "overrides": "overrides", "status": "status", "collapsed": "collapsed",
             "collapsed_stones": "stones", "largest_residual_mm": "residual mm", "onset_deg": "onset deg"}
-    width = {c: max(len(head[c]), *(len(r[c]) for r in rows)) for c in TABLE_COLUMNS}
+    # printed cells are clipped to PRINT_CELL characters (an analysis's override can be a whole
+    # stage list); runs.csv keeps them whole
+    shown = [{c: r[c] if len(r[c]) <= PRINT_CELL else r[c][:PRINT_CELL - 3] + "..." for c in TABLE_COLUMNS}
+             for r in [head] + rows]
+    width = {c: max(len(r[c]) for r in shown) for c in TABLE_COLUMNS}
     print(f"[{name}] results ({path}):", flush=True)
-    for r in [head] + rows:
+    for r in shown:
         print("  " + "  ".join(r[c].ljust(width[c]) for c in TABLE_COLUMNS).rstrip(), flush=True)
     return path
 
