@@ -73,6 +73,10 @@ FORCE_TOL = 1e-3
 RELAX = 0.5
 MAX_ITER = 60
 _LETTERS = "xyzXYZ"
+#: HiGHS's interior-point method with crossover (a vertex solution and its duals): on these
+#: problems, degenerate (many corners with the same lever), 5-10 times faster than its
+#: dual simplex (``make bench``, section limit)
+METHOD = "highs-ipm"
 
 
 @dataclass
@@ -116,8 +120,12 @@ class Result:
 
 @dataclass
 class Problem:
-    """The assembled LP (``assemble``): equality rows per free body DOF, one column per
-    corner normal force and per corner facet force, then lambda."""
+    """The assembled LP (``assemble``): the equilibrium rows (one per free body DOF, forces
+    in units of ``force_scale``, moment rows divided by the body's size: ``row_scale``) of
+    the corner force columns: with ``cone``, per corner the ``facets`` edge rays
+    n + mu t_k of its friction pyramid (associative: every force in the pyramid is a
+    non-negative combination of them, no further row); else per corner its normal force
+    (along n) then the ``facets`` tangential directions t_k (their sum capped by a row)."""
     A: sparse.csr_matrix
     b: np.ndarray
     live: np.ndarray
@@ -127,6 +135,7 @@ class Problem:
     mu: np.ndarray  # per corner
     ncorner: int
     facets: int
+    cone: bool
     force_scale: float
     row_scale: np.ndarray
 
@@ -141,15 +150,14 @@ def _basis(n: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def assemble(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.0, 0.0, -9.81),
-             facets: int = FACETS) -> Problem:
+             facets: int = FACETS, cone: bool = True) -> Problem:
     """The LP's matrices for a load along ``direction`` (unit horizontal vector); ``mu``
-    per interface (or one value); ``gravity`` m/s^2."""
+    per interface (or one value); ``gravity`` m/s^2; ``cone``: the column layout (``Problem``)."""
     d = np.asarray(direction, float)
     d = d / np.linalg.norm(d)
     g = np.asarray(gravity, float)
     nb = len(bodies.ids)
     mu_i = np.broadcast_to(np.asarray(mu, float), (len(ifaces),))
-    # equality rows: free bodies' unblocked DOFs
     row_of = -np.ones((nb, 6), np.int64)
     rows = []
     for bi in np.flatnonzero(~bodies.fixed):
@@ -160,96 +168,83 @@ def assemble(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.
     rows = np.array(rows, np.int64).reshape(-1, 2)
     free_w = bodies.mass[~bodies.fixed] * np.linalg.norm(g)
     force_scale = float(free_w.max()) if len(free_w) else 1.0
-    # corners
-    cx, ci, cn, cdirs, cmu = [], [], [], [], []
     ang = 2 * np.pi * np.arange(facets) / facets
+    cx, ci, cn, cdirs = [], [], [], []
     for k, f in enumerate(ifaces):
         e1, e2 = _basis(f.normal, d)
         dirs = np.outer(np.cos(ang), e1) + np.outer(np.sin(ang), e2)
-        for x in f.polygon:
-            cx.append(x)
-            ci.append(k)
-            cn.append(f.normal)
-            cdirs.append(dirs)
-            cmu.append(mu_i[k])
+        cx.append(f.polygon)
+        ci.append(np.full(len(f.polygon), k))
+        cn.append(np.broadcast_to(f.normal, f.polygon.shape))
+        cdirs.append(np.broadcast_to(dirs, (len(f.polygon), facets, 3)))
+    cx = np.concatenate(cx) if cx else np.zeros((0, 3))
+    ci = np.concatenate(ci).astype(np.int64) if ci else np.zeros(0, np.int64)
+    cn = np.concatenate(cn) if cn else np.zeros((0, 3))
+    cdirs = np.concatenate(cdirs) if cdirs else np.zeros((0, facets, 3))
     nc = len(cx)
-    cx = np.array(cx).reshape(nc, 3)
-    ci = np.array(ci, np.int64)
-    cn = np.array(cn).reshape(nc, 3)
-    cdirs = np.array(cdirs).reshape(nc, facets, 3)
-    # columns: corner c's normal force is column c; its facet k is nc + c * facets + k
-    ncol = nc * (1 + facets)
-    u = np.concatenate([cn, cdirs.reshape(-1, 3)])  # (ncol, 3) direction of each column's force on b
-    col_corner = np.concatenate([np.arange(nc), np.repeat(np.arange(nc), facets)])
+    cmu = mu_i[ci]
+    if cone:  # corner c's ray k is column c * facets + k
+        u = (cn[:, None, :] + cmu[:, None, None] * cdirs).reshape(-1, 3)
+        col_corner = np.repeat(np.arange(nc), facets)
+    else:  # corner c's normal is column c, its direction k column nc + c * facets + k
+        u = np.concatenate([cn, cdirs.reshape(-1, 3)])
+        col_corner = np.concatenate([np.arange(nc), np.repeat(np.arange(nc), facets)])
     x = cx[col_corner]
     ia = np.array([f.a for f in ifaces], np.int64)[ci[col_corner]]
     ib = np.array([f.b for f in ifaces], np.int64)[ci[col_corner]]
-    size = bodies.size
     r_i, c_i, v_i = [], [], []
     for body, sign in ((ib, 1.0), (ia, -1.0)):
-        arm = x - bodies.centroid[body]
-        mom = np.cross(arm, u)
+        mom = np.cross(x - bodies.centroid[body], u)
         for c in range(6):
             r = row_of[body, c]
             ok = r >= 0
-            val = u[:, c] if c < 3 else mom[:, c - 3] / size[body]
+            val = u[:, c] if c < 3 else mom[:, c - 3] / bodies.size[body]
             r_i.append(r[ok])
             c_i.append(np.flatnonzero(ok))
             v_i.append(sign * val[ok])
-    r_i, c_i, v_i = np.concatenate(r_i), np.concatenate(c_i), np.concatenate(v_i)
     nr = len(rows)
-    A = sparse.csr_matrix((v_i, (r_i, c_i)), shape=(nr, ncol))
-    # loads (scaled by force_scale; moment rows by each body's size: row_scale)
+    A = sparse.csr_matrix((np.concatenate(v_i), (np.concatenate(r_i), np.concatenate(c_i))), shape=(nr, len(u)))
     b = np.zeros(nr)
     live = np.zeros(nr)
-    row_scale = np.where(rows[:, 1] < 3, 1.0, 1.0 / size[rows[:, 0]]) if nr else np.zeros(0)
-    for r, (bi, c) in enumerate(rows):
-        if c < 3:
-            b[r] = -bodies.mass[bi] * g[c] / force_scale
-            live[r] = -bodies.mass[bi] * np.linalg.norm(g) * d[c] / force_scale
-    return Problem(A, b, live, rows, ci, cx, np.array(cmu), nc, facets, force_scale, row_scale)
+    row_scale = np.where(rows[:, 1] < 3, 1.0, 1.0 / bodies.size[rows[:, 0]]) if nr else np.zeros(0)
+    trans = rows[:, 1] < 3
+    b[trans] = -bodies.mass[rows[trans, 0]] * g[rows[trans, 1]] / force_scale
+    live[trans] = -bodies.mass[rows[trans, 0]] * np.linalg.norm(g) * d[rows[trans, 1]] / force_scale
+    return Problem(A, b, live, rows, ci, cx, cmu, nc, facets, cone, force_scale, row_scale)
 
 
-def _friction_rows(p: Problem, capacity=None) -> tuple[sparse.csr_matrix, np.ndarray]:
-    """sum_k s_vk - mu N_v <= 0 (associative) or sum_k s_vk <= capacity_v (fixed)."""
-    nc, m = p.ncorner, p.facets
-    rows = np.repeat(np.arange(nc), m)
-    cols = nc + np.arange(nc * m)
-    vals = np.ones(nc * m)
-    if capacity is None:
-        rows = np.concatenate([rows, np.arange(nc)])
-        cols = np.concatenate([cols, np.arange(nc)])
-        vals = np.concatenate([vals, -p.mu])
-        rhs = np.zeros(nc)
-    else:
-        rhs = np.asarray(capacity, float) / p.force_scale
-    A = sparse.csr_matrix((vals, (rows, cols)), shape=(nc, nc * (1 + m) + 1))
-    return A, rhs
-
-
-def _solve(p: Problem, capacity=None) -> tuple[Result, object]:
+def _solve(p: Problem, capacity=None) -> tuple[Result, np.ndarray | None]:
+    """One LP: maximise lambda. ``capacity`` (N, per corner) only with the capped layout:
+    sum_k s_vk <= capacity_v. Returns the result (normal force per corner, N) and the
+    equilibrium rows' duals (or None)."""
     t0 = time.perf_counter()
     ncol = p.A.shape[1]
-    A_eq = sparse.hstack([p.A, sparse.csr_matrix(-p.live.reshape(-1, 1))]).tocsr()
     # A f + (weights) + lambda (unit loads) = 0, i.e. A f - lambda live = b (assemble: b = -weights, live = -loads)
-    A_ub, b_ub = _friction_rows(p, capacity)
+    A_eq = sparse.hstack([p.A, sparse.csr_matrix(-p.live.reshape(-1, 1))]).tocsr()
+    A_ub = b_ub = None
+    if not p.cone:
+        nc, m = p.ncorner, p.facets
+        A_ub = sparse.csr_matrix((np.ones(nc * m), (np.repeat(np.arange(nc), m), nc + np.arange(nc * m))),
+                                 shape=(nc, ncol + 1))
+        b_ub = np.asarray(capacity, float) / p.force_scale
     c = np.zeros(ncol + 1)
     c[-1] = -1.0
     bounds = np.zeros((ncol + 1, 2))
     bounds[:, 1] = np.inf
     bounds[-1] = (-np.inf, np.inf)
-    res = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=p.b, bounds=bounds, method="highs")
+    res = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=p.b, bounds=bounds, method=METHOD)
     dt = time.perf_counter() - t0
     if res.status == 2:
-        return Result("infeasible", None, res.message, solve_s=dt), res
+        return Result("infeasible", None, res.message, solve_s=dt), None
     if res.status == 3:
-        return Result("unbounded", None, res.message, solve_s=dt), res
+        return Result("unbounded", None, res.message, solve_s=dt), None
     if res.status != 0:
-        return Result("failed", None, res.message, solve_s=dt), res
+        return Result("failed", None, res.message, solve_s=dt), None
     lam = float(res.x[-1])
-    normal = res.x[:p.ncorner] * p.force_scale
-    y = np.asarray(res.eqlin.marginals)
-    return Result("collapse" if lam >= 0 else "cannot_stand", lam, res.message, normal=normal, solve_s=dt), (res, y)
+    xs = res.x[:-1] * p.force_scale
+    normal = xs.reshape(p.ncorner, p.facets).sum(axis=1) if p.cone else xs[:p.ncorner]
+    return (Result("collapse" if lam >= 0 else "cannot_stand", lam, res.message, normal=normal, solve_s=dt),
+            np.asarray(res.eqlin.marginals))
 
 
 def _velocities(p: Problem, y: np.ndarray, bodies: Bodies) -> np.ndarray:
@@ -276,9 +271,9 @@ def solve(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.0, 
     """Associative friction: the largest multiplier and its mechanism (module docstring)."""
     t0 = time.perf_counter()
     p = assemble(bodies, ifaces, mu, direction, gravity, facets)
-    r, extra = _solve(p)
-    if r.multiplier is not None:
-        r.velocity = _normalise(_velocities(p, extra[1], bodies), bodies, ifaces)
+    r, y = _solve(p)
+    if y is not None:
+        r.velocity = _normalise(_velocities(p, y, bodies), bodies, ifaces)
     r.history = [r.multiplier]
     r.solve_s = time.perf_counter() - t0
     return r
@@ -289,34 +284,34 @@ def solve_coulomb(bodies: Bodies, ifaces: list[Interface], mu, direction, gravit
                   lambda_tol: float = LAMBDA_TOL, force_tol: float = FORCE_TOL) -> Result:
     """Non-associative Coulomb friction by the iterative scheme of the module docstring."""
     t0 = time.perf_counter()
-    p = assemble(bodies, ifaces, mu, direction, gravity, facets)
-    r, extra = _solve(p)
-    if r.multiplier is None:
+    r = solve(bodies, ifaces, mu, direction, gravity, facets)
+    if r.status != "collapse":
         r.solve_s = time.perf_counter() - t0
         return r
+    p = assemble(bodies, ifaces, mu, direction, gravity, facets, cone=False)
     hist = [r.multiplier]
     n_prev = r.normal
-    last = r
+    last, y = r, None
     converged = False
-    y = extra[1]
-    for it in range(1, max_iter + 1):
-        r, extra = _solve(p, capacity=p.mu * n_prev)
-        if r.multiplier is None:
-            r.iterations = it + 1
+    dl = dn = float("nan")
+    for _ in range(max_iter):
+        r, y_new = _solve(p, capacity=p.mu * n_prev)
+        if r.multiplier is None:  # no admissible forces with the capped joints
+            r.iterations = len(hist) + 1
             r.history = hist
             r.solve_s = time.perf_counter() - t0
             return r
         hist.append(r.multiplier)
-        n_new = relax * r.normal + (1 - relax) * n_prev
-        scale = max(float(np.abs(n_new).max()), 1e-300)
+        scale = max(float(np.abs(r.normal).max()), 1e-300)
         dl = abs(hist[-1] - hist[-2]) / max(abs(hist[-1]), 1e-12)
         dn = float(np.abs(r.normal - n_prev).max()) / scale
-        n_prev = n_new
-        last, y = r, extra[1]
+        n_prev = relax * r.normal + (1 - relax) * n_prev
+        last, y = r, y_new
         if dl <= lambda_tol and dn <= force_tol:
             converged = True
             break
-    last.velocity = _normalise(_velocities(p, y, bodies), bodies, ifaces)
+    if y is not None:
+        last.velocity = _normalise(_velocities(p, y, bodies), bodies, ifaces)
     last.iterations = len(hist)
     last.history = hist
     if not converged:
