@@ -71,6 +71,9 @@ ACTIVE = 1e-3
 LAMBDA_TOL = 1e-4
 FORCE_TOL = 1e-3
 RELAX = 0.5
+#: the modified joint's residual friction: shear <= (1 - SLOPE) mu N_prev + SLOPE mu N (Coulomb
+#: where N = N_prev, the fixed point; a dilatancy of atan(SLOPE mu) in the mechanism)
+SLOPE = 0.3
 MAX_ITER = 60
 _LETTERS = "xyzXYZ"
 #: HiGHS's interior-point method with crossover (a vertex solution and its duals): on these
@@ -116,6 +119,8 @@ class Result:
     iterations: int = 1
     history: list = field(default_factory=list)
     solve_s: float = 0.0
+    shear: np.ndarray | None = None
+    coulomb_residual: float | None = None
 
 
 @dataclass
@@ -213,19 +218,24 @@ def assemble(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.
     return Problem(A, b, live, rows, ci, cx, cmu, nc, facets, cone, force_scale, row_scale)
 
 
-def _solve(p: Problem, capacity=None) -> tuple[Result, np.ndarray | None]:
-    """One LP: maximise lambda. ``capacity`` (N, per corner) only with the capped layout:
-    sum_k s_vk <= capacity_v. Returns the result (normal force per corner, N) and the
-    equilibrium rows' duals (or None)."""
+def _solve(p: Problem, capacity=None, slope: float = 0.0) -> tuple[Result, np.ndarray | None]:
+    """One LP: maximise lambda. ``capacity`` (N, per interface) only with the capped layout:
+    sum over the interface's corners v and directions k of s_vk <= capacity + slope mu N
+    (N the interface's normal force). Returns the
+    result (normal force per corner, N; the tangential force sum per interface, N, in
+    ``shear``) and the equilibrium rows' duals (or None)."""
     t0 = time.perf_counter()
     ncol = p.A.shape[1]
     # A f + (weights) + lambda (unit loads) = 0, i.e. A f - lambda live = b (assemble: b = -weights, live = -loads)
     A_eq = sparse.hstack([p.A, sparse.csr_matrix(-p.live.reshape(-1, 1))]).tocsr()
     A_ub = b_ub = None
-    if not p.cone:
+    if not p.cone:  # per interface, the corners' tangential forces sum to at most its capacity
         nc, m = p.ncorner, p.facets
-        A_ub = sparse.csr_matrix((np.ones(nc * m), (np.repeat(np.arange(nc), m), nc + np.arange(nc * m))),
-                                 shape=(nc, ncol + 1))
+        ni = int(p.corner_iface.max()) + 1 if nc else 0
+        rows = np.concatenate([np.repeat(p.corner_iface, m), p.corner_iface])
+        cols = np.concatenate([nc + np.arange(nc * m), np.arange(nc)])
+        vals = np.concatenate([np.ones(nc * m), -slope * p.mu])
+        A_ub = sparse.csr_matrix((vals, (rows, cols)), shape=(ni, ncol + 1))
         b_ub = np.asarray(capacity, float) / p.force_scale
     c = np.zeros(ncol + 1)
     c[-1] = -1.0
@@ -243,8 +253,11 @@ def _solve(p: Problem, capacity=None) -> tuple[Result, np.ndarray | None]:
     lam = float(res.x[-1])
     xs = res.x[:-1] * p.force_scale
     normal = xs.reshape(p.ncorner, p.facets).sum(axis=1) if p.cone else xs[:p.ncorner]
-    return (Result("collapse" if lam >= 0 else "cannot_stand", lam, res.message, normal=normal, solve_s=dt),
-            np.asarray(res.eqlin.marginals))
+    r = Result("collapse" if lam >= 0 else "cannot_stand", lam, res.message, normal=normal, solve_s=dt)
+    if not p.cone:
+        r.shear = np.bincount(p.corner_iface, xs[p.ncorner:].reshape(p.ncorner, p.facets).sum(axis=1),
+                              minlength=len(capacity))
+    return r, np.asarray(res.eqlin.marginals)
 
 
 def _velocities(p: Problem, y: np.ndarray, bodies: Bodies) -> np.ndarray:
@@ -281,7 +294,7 @@ def solve(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.0, 
 
 def solve_coulomb(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.0, 0.0, -9.81),
                   facets: int = FACETS, relax: float = RELAX, max_iter: int = MAX_ITER,
-                  lambda_tol: float = LAMBDA_TOL, force_tol: float = FORCE_TOL) -> Result:
+                  lambda_tol: float = LAMBDA_TOL, force_tol: float = FORCE_TOL, slope: float = SLOPE) -> Result:
     """Non-associative Coulomb friction by the iterative scheme of the module docstring."""
     t0 = time.perf_counter()
     r = solve(bodies, ifaces, mu, direction, gravity, facets)
@@ -289,25 +302,30 @@ def solve_coulomb(bodies: Bodies, ifaces: list[Interface], mu, direction, gravit
         r.solve_s = time.perf_counter() - t0
         return r
     p = assemble(bodies, ifaces, mu, direction, gravity, facets, cone=False)
+    mu_i = np.broadcast_to(np.asarray(mu, float), (len(ifaces),))
+    ni = len(ifaces)
     hist = [r.multiplier]
-    n_prev = r.normal
+    n_prev = np.bincount(p.corner_iface, r.normal, minlength=ni)  # per interface
     last, y = r, None
     converged = False
-    dl = dn = float("nan")
+    dl = res_c = float("nan")
     for _ in range(max_iter):
-        r, y_new = _solve(p, capacity=p.mu * n_prev)
+        r, y_new = _solve(p, capacity=(1 - slope) * mu_i * n_prev, slope=slope)
         if r.multiplier is None:  # no admissible forces with the capped joints
             r.iterations = len(hist) + 1
             r.history = hist
             r.solve_s = time.perf_counter() - t0
             return r
         hist.append(r.multiplier)
-        scale = max(float(np.abs(r.normal).max()), 1e-300)
+        n_new = np.bincount(p.corner_iface, r.normal, minlength=ni)
+        # Coulomb with the iterate's own normal forces: shear above mu N, of the largest mu N
+        res_c = float(np.max(r.shear - mu_i * n_new, initial=0.0)) / max(float(np.max(mu_i * n_new, initial=0.0)),
+                                                                          1e-300)
         dl = abs(hist[-1] - hist[-2]) / max(abs(hist[-1]), 1e-12)
-        dn = float(np.abs(r.normal - n_prev).max()) / scale
-        n_prev = relax * r.normal + (1 - relax) * n_prev
+        n_prev = relax * n_new + (1 - relax) * n_prev
         last, y = r, y_new
-        if dl <= lambda_tol and dn <= force_tol:
+        last.coulomb_residual = res_c
+        if dl <= lambda_tol and res_c <= force_tol:
             converged = True
             break
     if y is not None:
@@ -317,7 +335,7 @@ def solve_coulomb(bodies: Bodies, ifaces: list[Interface], mu, direction, gravit
     if not converged:
         last.status = "not_converged"
         last.message = (f"the non-associative iteration did not converge in {max_iter} steps "
-                        f"(last relative change of lambda {dl:.2g}, of the normal forces {dn:.2g})")
+                        f"(last relative change of lambda {dl:.2g}; shear above mu N {res_c:.2g} of the largest mu N)")
     last.solve_s = time.perf_counter() - t0
     return last
 
