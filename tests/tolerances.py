@@ -745,3 +745,17 @@ HAND_MARGIN_REL = 1e-12
 #: compared with block_limits at the root: the margin's slope is O(W) per rad or per m, so the
 #: margin at the root is O(1e-12 W); 1e-9 of W leaves room for the closed form's round-off
 HAND_ROOT_REL = 1e-9
+
+# ---------------------------------------------------------------------------------------
+# Rigid-block limit analysis (drystone/mechanics/limit_analysis.py).
+# ---------------------------------------------------------------------------------------
+
+#: a multiplier from HiGHS against its closed form: the LP is solved to HiGHS's primal and
+#: dual feasibility tolerances (1e-7) on rows scaled to the heaviest stone's weight and the
+#: stone's size (entries of order one), so the optimum is good to ~1e-7 relative; margin 10
+LP_REL = 1e-6
+#: the non-associative iteration against the associative value where the mechanism is pure
+#: rocking (friction never governs): it stops when lambda changes by less than
+#: limit_analysis.LAMBDA_TOL (1e-4) relative between iterations; the value may still move by
+#: that much, so 1e-4 x 10
+LIMIT_ITERATION_REL = 1e-3

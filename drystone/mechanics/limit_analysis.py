@@ -37,15 +37,20 @@ the corners not opening) and sliding (tangential velocity at the hinge).
 Non-associative Coulomb friction (``solve_coulomb``): associative flow makes sliding dilate
 (opening mu x slip), which the joints of a real wall do not, so the associative lambda is
 an upper estimate where sliding governs. The iterative scheme of Gilbert, Casapulla &
-Ahmed (2006, Computers & Structures 84, 873-887) in its simplest form: solve the
-associative problem, then repeatedly solve the problem with each corner's friction
-replaced by a fixed shear capacity mu N_v^(k-1) from the previous normal forces (a
-cohesive, non-dilatant joint: sum_k s_vk <= mu N_v^(k-1), N_v >= 0), under-relaxed
-(N^k <- omega N^k + (1 - omega) N^(k-1)), until lambda changes by less than ``LAMBDA_TOL``
-(relative) and every corner's normal force by less than ``FORCE_TOL`` x the largest. At the
-fixed point the forces are statically admissible with Coulomb's friction and the
-mechanism slides without dilatancy. Not converged in ``MAX_ITER`` steps is reported as
-such, with the last iterate.
+Ahmed (2006, Computers & Structures 84, 873-887): solve the associative problem, then
+repeatedly solve the problem with each corner's friction replaced by a modified joint
+whose shear capacity is fixed by the previous normal forces, sum_k s_vk <= (1 - SLOPE) mu
+N_v^(k-1) + SLOPE mu N_v (a cohesive joint with a small residual friction SLOPE mu that
+keeps the normal forces from jumping between the LP's many equivalent distributions; it
+is Coulomb's where N_v = N_v^(k-1)), under-relaxed (N^k <- omega N^k + (1 - omega)
+N^(k-1)), until lambda changes by less than ``LAMBDA_TOL`` (relative) and, per interface,
+the corners' shear exceeds mu x the interface's own normal force by less than
+``FORCE_TOL`` x the largest mu N. At that point the forces are statically admissible with
+Coulomb's friction (per interface) and the mechanism slides with a dilatancy of at most
+atan(SLOPE mu). Not converged in ``MAX_ITER`` steps is reported as such, with the last
+iterate. The scheme finds one solution of the non-associative problem, not necessarily
+the lowest: normal forces locked in by the associative start (a lateral self-stress across
+a vertical joint) may persist (docs/limit-analysis.md).
 
 Units: SI (kg, m, N); velocities are dimensionless (normalised).
 """
@@ -231,8 +236,8 @@ def _solve(p: Problem, capacity=None, slope: float = 0.0) -> tuple[Result, np.nd
     A_ub = b_ub = None
     if not p.cone:  # per interface, the corners' tangential forces sum to at most its capacity
         nc, m = p.ncorner, p.facets
-        ni = int(p.corner_iface.max()) + 1 if nc else 0
-        rows = np.concatenate([np.repeat(p.corner_iface, m), p.corner_iface])
+        ni = nc
+        rows = np.concatenate([np.repeat(np.arange(nc), m), np.arange(nc)])
         cols = np.concatenate([nc + np.arange(nc * m), np.arange(nc)])
         vals = np.concatenate([np.ones(nc * m), -slope * p.mu])
         A_ub = sparse.csr_matrix((vals, (rows, cols)), shape=(ni, ncol + 1))
@@ -255,8 +260,7 @@ def _solve(p: Problem, capacity=None, slope: float = 0.0) -> tuple[Result, np.nd
     normal = xs.reshape(p.ncorner, p.facets).sum(axis=1) if p.cone else xs[:p.ncorner]
     r = Result("collapse" if lam >= 0 else "cannot_stand", lam, res.message, normal=normal, solve_s=dt)
     if not p.cone:
-        r.shear = np.bincount(p.corner_iface, xs[p.ncorner:].reshape(p.ncorner, p.facets).sum(axis=1),
-                              minlength=len(capacity))
+        r.shear = xs[p.ncorner:].reshape(p.ncorner, p.facets).sum(axis=1)
     return r, np.asarray(res.eqlin.marginals)
 
 
@@ -303,9 +307,9 @@ def solve_coulomb(bodies: Bodies, ifaces: list[Interface], mu, direction, gravit
         return r
     p = assemble(bodies, ifaces, mu, direction, gravity, facets, cone=False)
     mu_i = np.broadcast_to(np.asarray(mu, float), (len(ifaces),))
-    ni = len(ifaces)
+    mu_i = p.mu  # per corner
     hist = [r.multiplier]
-    n_prev = np.bincount(p.corner_iface, r.normal, minlength=ni)  # per interface
+    n_prev = r.normal
     last, y = r, None
     converged = False
     dl = res_c = float("nan")
@@ -317,10 +321,12 @@ def solve_coulomb(bodies: Bodies, ifaces: list[Interface], mu, direction, gravit
             r.solve_s = time.perf_counter() - t0
             return r
         hist.append(r.multiplier)
-        n_new = np.bincount(p.corner_iface, r.normal, minlength=ni)
-        # Coulomb with the iterate's own normal forces: shear above mu N, of the largest mu N
-        res_c = float(np.max(r.shear - mu_i * n_new, initial=0.0)) / max(float(np.max(mu_i * n_new, initial=0.0)),
-                                                                          1e-300)
+        n_new = r.normal
+        # Coulomb with the iterate's own normal forces, per interface: its corners' shear above
+        # mu x its normal force, of the largest mu N of an interface
+        shear_i = np.bincount(p.corner_iface, r.shear, minlength=len(ifaces))
+        mun_i = np.bincount(p.corner_iface, mu_i * n_new, minlength=len(ifaces))
+        res_c = float(np.max(shear_i - mun_i, initial=0.0)) / max(float(np.max(mun_i, initial=0.0)), 1e-300)
         dl = abs(hist[-1] - hist[-2]) / max(abs(hist[-1]), 1e-12)
         n_prev = relax * n_new + (1 - relax) * n_prev
         last, y = r, y_new
