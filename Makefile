@@ -14,13 +14,14 @@ RUN     := $(PY) -m drystone
 .PHONY: setup system-deps test demo run gravity4 settlement4 bench clean help records spectrum ogawa3d ogawa \
         reference sweep tilt tilt-rate tilt-sensitivity tilt-report sacsayhuaman sacsayhuaman-report vtk ogawa-pga readme docs free-decay \
         fragility fragility-small fragility-report crosscheck shape-study shape-study-small shape-study-report \
-        site-study site-study-small site-study-report report
+        site-study site-study-small site-study-report report analyse
 
 help:
 	@echo "make setup        install Debian's YADE, make .venv, install PyPI dependencies"
 	@echo "make demo         the main job: verification cases + the 40-stone wall under one record at two PGAs (~3 min)"
 	@echo "make test         the test suite"
 	@echo "make run CASE=cases/x.toml [SET='key=value ...'] [THREADS=1]   run any case file (one thread: bitwise reproducible)"
+	@echo "make analyse ANALYSIS=tilt|collapse|... CASE=cases/x.toml [ARGS='--towards all'] [DASK=...]   an analysis of any case (python -m drystone ANALYSIS CASE ARGS) -> results/<case name>/<analysis>/"
 	@echo "make gravity4 | settlement4   the paper's four-block verification cases"
 	@echo "make bench [BENCH='--only scale --sizes 500']   speed figures (not a test; all sections ~15 min on 2 cores)"
 	@echo "make reference    regenerate tests/data/reference/ (stored histories of test_regression.py) after an intended change"
@@ -126,6 +127,10 @@ records: setup
 spectrum: setup
 	@test -n "$(FILE)" || { echo "usage: make spectrum FILE=path/to/record [ARGS='--component EW --units gal --dt 0.01']"; exit 2; }
 	$(PY) -m drystone.motions spectrum "$(FILE)" $(ARGS)
+
+analyse: setup
+	@test -n "$(ANALYSIS)" -a -n "$(CASE)" || { echo "usage: make analyse ANALYSIS=tilt|collapse|... CASE=cases/x.toml [ARGS='...'] [DASK=tcp://host:8786|local]"; exit 2; }
+	$(RUN) $(ANALYSIS) $(CASE) --workers $(JOBS) $(if $(DASK),--dask $(DASK)) $(ARGS)
 
 sweep: setup
 	@test -n "$(SWEEP)" || { echo "usage: make sweep SWEEP=cases/sweeps/x.toml [DASK=tcp://host:8786|local]"; exit 2; }

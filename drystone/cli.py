@@ -1,4 +1,5 @@
-"""Command line: python -m drystone {run, report, sweep, keys, layout, compare, bench, free-decay}."""
+"""Command line: python -m drystone {run, report, sweep, keys, layout, compare, bench, free-decay} and the
+analyses of any case (drystone/analyses: tilt, modal, collapse, fragility, limit, assess)."""
 from __future__ import annotations
 
 import argparse
@@ -18,6 +19,18 @@ def interrupt_on_sigterm() -> None:
         raise KeyboardInterrupt
 
     signal.signal(signal.SIGTERM, _interrupt)
+
+
+def _add_analyses(sub) -> dict:
+    """One subcommand per analysis of drystone/analyses (REGISTRY) whose module is present:
+    name -> module (``add_arguments``, ``main``)."""
+    from drystone import analyses
+
+    mods = analyses.available()
+    for name, mod in mods.items():
+        mod.add_arguments(sub.add_parser(name, help=mod.HELP, description=mod.__doc__,
+                                         formatter_class=argparse.RawDescriptionHelpFormatter))
+    return mods
 
 
 def main(argv=None) -> int:
@@ -72,8 +85,11 @@ def main(argv=None) -> int:
     rep = sub.add_parser("report", help="write RUN_DIR/report.html: one self-contained page of a finished run "
                          "(a study's folder: its report.md as report.html)")
     rep.add_argument("run_dir", metavar="RUN_DIR")
+    analyses = _add_analyses(sub)
     a = ap.parse_args(argv)
     try:
+        if a.cmd in analyses:
+            return int(analyses[a.cmd].main(a) or 0)
         if a.cmd == "run":
             from drystone import runner
             s = runner.run(a.case, a.set, a.out, a.threads, a.quiet, engine=a.engine)

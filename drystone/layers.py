@@ -52,10 +52,13 @@ LAYERS = (
     Layer(4, "postprocess", (), ("drystone.postprocess",), "`drystone/postprocess/`",
           "`summary.json` from histories, figures, comparison with the papers, identification, VTK"),
     Layer(5, "applications", ("drystone.runner", "drystone.sweep", "drystone.cli", "drystone.bench",
-                              "drystone.free_decay", "drystone.restitution", "drystone.__main__"), (),
-          "`drystone/` (`runner.py`, `sweep.py`, `cli.py`, `bench.py`, `free_decay.py`, `restitution.py`)",
+                              "drystone.free_decay", "drystone.restitution", "drystone.__main__"),
+          ("drystone.analyses",),
+          "`drystone/` (`runner.py`, `sweep.py`, `cli.py`, `bench.py`, `free_decay.py`, `restitution.py`), "
+          "`drystone/analyses/`",
           "run a case, sweeps (local or Dask), the command line, speed figures, the free-decay check and the "
-          "rocking restitution"),
+          "rocking restitution; the analyses of any case (tilt, modal, collapse, fragility, ...: one command "
+          "each, the one collapse criterion `analyses/common.py` outcome)"),
     Layer(6, "studies", (), ("drystone.studies",), "`drystone/studies/`",
           "the papers and beyond, one package each: `tilt/`, `ogawa/`, `sacsayhuaman/`, `fragility/`, `shape/`, "
           "`site/`, `crosscheck/` (LMGC90); `rounds.py` (bisection searches as resumable rounds of sweeps), "

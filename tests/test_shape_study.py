@@ -16,7 +16,7 @@ import tolerances as tol
 from conftest import assert_figure, requires_yade
 from drystone.geometry import blockfile as bf
 from drystone.motions.record import Record
-from drystone.studies.shape import bisect as B
+from drystone.analyses import bisect as B
 from drystone.studies.shape import plan as P
 from drystone.studies.shape import study as S
 

@@ -19,7 +19,7 @@ from drystone import sweep
 from drystone.model import case as casemod
 from drystone.motions import readers
 from drystone.studies import rounds
-from drystone.studies.shape import bisect as B
+from drystone.analyses import bisect as B
 from drystone.studies.site import plan as P
 from drystone.studies.site import report as R
 from drystone.studies.site import run as S

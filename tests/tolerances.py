@@ -747,6 +747,23 @@ HAND_MARGIN_REL = 1e-12
 HAND_ROOT_REL = 1e-9
 
 # ---------------------------------------------------------------------------------------
+# Analyses of any case: PGA at collapse by IDA (drystone/analyses/, tests/test_analyses_collapse.py)
+# ---------------------------------------------------------------------------------------
+
+#: the rocking block's stiff joint (K_n 2e10 N/m^3, damping 0.8) restitutes 0.905-0.909 of the
+#: angular velocity per impact (docs/damping-and-impacts.md), Housner's rigid block 0.912: the
+#: reference minimum overturning amplitude (one impact at omega_p = 2 p) is computed at
+#: Housner's r and at this lower r (0.306 and 0.310 g), which bounds the joint's from above
+ROCKING_PULSE_R_LOW = 0.8
+#: the package's sine is sampled at 64 points per period and linearly interpolated: the chords
+#: lie inside the sine, at most 1 - cos(pi / 64) = 1.2e-3 of the amplitude below it; 2e-3
+PULSE_SAMPLED_REL = 2e-3
+#: the rigid rocking integrator (drystone/mechanics/analytic.py rocking_pulse) against the
+#: linearised closed form of a rectangular pulse (Housner): sin and cos linearised, an error
+#: O(alpha^2) relative, 2.5e-3 at b/h = 0.05 (measured 9e-4); alpha^2
+ROCKING_LINEARISED_REL_PER_ALPHA2 = 1.0
+
+# ---------------------------------------------------------------------------------------
 # Rigid-block limit analysis (drystone/mechanics/limit_analysis.py).
 # ---------------------------------------------------------------------------------------
 

@@ -1,4 +1,6 @@
-"""Collapse angle of a tilt run from its recorded motion (plain Python, no YADE).
+"""Collapse of a stone (``stone``: the package's one geometric rule, applied to every run by
+drystone/analyses/common.py ``outcome``) and collapse angle of a tilt run from its recorded
+motion (plain Python, no YADE).
 
 A tilt run stops shortly after a collapse is *detected* (drystone/yade_scripts/run_case.py: the
 vertical reaction drops or a block moves more than its threshold). Detection lags the
@@ -15,7 +17,48 @@ state at 0.2 and at 1 deg/s (a speed threshold of 5 mm/s is 5 mm/deg at 1 deg/s 
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
+
+def tipping(axis_z, L: float, D: float, H: float) -> tuple[float, float]:
+    """(lean, tipping angle), rad, of a stone of bounding box L x D x H (x along the wall,
+    y out of plane, z up) whose own vertical axis is now the unit vector ``axis_z``: the
+    lean is the axis's angle from the vertical; the tipping angle in the direction phi it
+    leans towards is atan(w / (H/2)), w = |cos phi| L/2 + |sin phi| D/2 the half-width of
+    the box in that direction (its centroid is then over the edge it rocks on)."""
+    zx, zy, zz = (float(v) for v in axis_z)
+    lean = math.acos(max(-1.0, min(1.0, zz)))
+    phi = math.atan2(zy, zx)
+    w = abs(math.cos(phi)) * 0.5 * L + abs(math.sin(phi)) * 0.5 * D
+    return lean, math.atan2(w, 0.5 * H)
+
+
+def stone(extent, u, rotvec) -> tuple[list[str], bool]:
+    """The collapse rule for one stone still in the model (docs/physics.md, "Collapse of a
+    stone"). ``extent`` (L, D, H): its bounding box at rest (m; x along the wall, y out of
+    plane, z up), ``u`` its centroid's displacement (m) and ``rotvec`` its rotation (rotation
+    vector, rad) since it stood (the end of gravity), in the platform frame. It has collapsed
+    when it fell (u_z < -H/2: its centroid dropped by more than half its height), overturned
+    (it leans past its tipping angle, ``tipping``) or was pushed out of the wall (|u_y| >
+    D/2: its centroid is no longer over the bed it was built on). Returns (the reasons among
+    "fell", "overturned", "out_of_plane"; [] when it stands) and whether a standing stone
+    slid along the wall by more than half its length (|u_x| > L/2: in-plane sliding, a damage
+    reported as such, not collapse). A stone that left the model has collapsed (the caller
+    knows it: it has no displacement left to judge)."""
+    from scipy.spatial.transform import Rotation
+
+    L, D, H = (float(x) for x in extent)
+    reasons = []
+    if u[2] < -0.5 * H:
+        reasons.append("fell")
+    lean, tip = tipping(Rotation.from_rotvec(np.asarray(rotvec, float)).apply([0.0, 0.0, 1.0]), L, D, H)
+    if lean > tip:
+        reasons.append("overturned")
+    if abs(u[1]) > 0.5 * D:
+        reasons.append("out_of_plane")
+    return reasons, (not reasons and abs(u[0]) > 0.5 * L)
+
 
 RATE_M_PER_DEG = 5e-3  # m of block displacement per degree of tilt
 WINDOW_DEG = 0.2  # deg of tilt over which the displacement is measured (filters rattling)

@@ -2,7 +2,7 @@
 (drystone/studies/shape/) and the site study (drystone/studies/site/) share.
 
 A search (``Search``) is one bisection over one quantity, a PGA in g or a water level in
-m, on its own grid (drystone/studies/shape/bisect.py: ``low`` assumed safe and not run,
+m, on its own grid (drystone/analyses/bisect.py: ``low`` assumed safe and not run,
 ``cap`` the highest value run, ``resolution`` the final bracket's width). ``job(x)`` gives
 the sweep job of the run at x (as drystone.sweep.load builds it from a round file: the
 common overrides, the run's own ``own(x)``, then ``case.name=<sweep>/<run>``), ``read(out)``
@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Callable
 
 from drystone import paths, sweep, tomlio
-from drystone.studies.shape import bisect
+from drystone.analyses import bisect
 
 #: most bisection rounds of one invocation (a search needs at most log2(cap / resolution) + 1)
 MAX_ROUNDS = 30

@@ -37,7 +37,7 @@ import numpy as np
 from drystone import sweep
 from drystone.postprocess import markdown
 from drystone.studies import rounds
-from drystone.studies.shape import bisect
+from drystone.analyses import bisect
 from drystone.studies.shape import plan as planmod
 
 #: two variants differ "beyond the seed-to-seed spread" when an exact two-sided permutation
@@ -544,7 +544,7 @@ def report(config="full") -> Path:
           "collapse angle as the tilt study measures it (onset of the motion that led to collapse, "
           "drystone/mechanics/collapse.py), the reaction-drop angle beside it.",
           f"* PGA at collapse: bisection on a {cfg.resolution_g:g} g grid between {cfg.pga_low_g:g} g (assumed "
-          f"standing) and {cfg.pga_cap_g:g} g (drystone/studies/shape/bisect.py), each step a run; collapse = at least "
+          f"standing) and {cfg.pga_cap_g:g} g (drystone/analyses/bisect.py), each step a run; collapse = at least "
           "one stone collapsed as the fragility study's DS3 reads it (centroid out of plane by more than half the "
           "stone's depth, or down by more than its height, or off the model). Result: the bracket (highest PGA "
           "standing, lowest collapsing]; its middle is the estimate. A wall standing at the cap is censored (counted "

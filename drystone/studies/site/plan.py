@@ -19,7 +19,7 @@ peaks changes with it (a sample a > 0 accelerates the ground towards the soil: t
 inertia and Mononobe-Okabe's k_h point outwards).
 
 Searches: the PGA at collapse at rock (g) of each wall, site, record and polarity by
-bisection (drystone/studies/shape/bisect.py, drystone/studies/rounds.py) between 0 (assumed
+bisection (drystone/analyses/bisect.py, drystone/studies/rounds.py) between 0 (assumed
 standing) and a cap, then, where ``refine_g`` names the wall, a second bisection on that finer
 grid inside the first one's final bracket (its ends are runs already made, reused); the water level (m above the platform) at which the retained wall fails
 statically, by bisection over static runs (cases/site/retained_static.toml: the load type
@@ -44,7 +44,7 @@ import numpy as np
 
 from drystone import paths, tomlio
 from drystone.studies.rounds import StudyFolders, write_if_changed, write_sweep
-from drystone.studies.shape import bisect
+from drystone.analyses import bisect
 from drystone.studies.shape import plan as shape_plan
 
 CASES = paths.CASES / "site"

@@ -416,7 +416,7 @@ def write(config="full") -> Path:
           "represent the soil holding a wall that leans into it. Where the onset of motion came before the tilt began "
           "(\"before the tilt\": the retained wall's stones creep as its soil's load comes on with gravity, and the "
           "onset rule dates the motion there), the reaction drop is the angle to compare.",
-          "* PGA at collapse (at rock): bisection (drystone/studies/shape/bisect.py, drystone/studies/rounds.py) "
+          "* PGA at collapse (at rock): bisection (drystone/analyses/bisect.py, drystone/studies/rounds.py) "
           "between 0 g (assumed standing) and a cap, on a grid of "
           + ", ".join(f"{cfg.resolution_g[w]:g} g ({w})" for w in walls)
           + "; collapse = at least one stone collapsed as the Sacsayhuaman study reads it (centroid out of plane by "

@@ -1,5 +1,9 @@
 """Bisection of the PGA at collapse on a grid of ``resolution`` g (pure Python, no runs).
 
+The searches' one home is drystone/analyses/: ``ida.py`` (hunt-and-fill, what the
+``collapse`` analysis runs on any case) and this fixed-grid bisection, which the shape and
+site studies ran (drystone/studies/rounds.py) and keep, so that their stored runs replay.
+
 One search is one wall, seed and record. Its state is the set of PGAs run so far and
 whether the wall collapsed at each (``observed``: {pga_g: collapsed}); ``bracket`` gives
 what they say and which PGA to run next, so a search can be replayed from the runs on
