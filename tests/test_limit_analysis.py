@@ -160,3 +160,25 @@ def test_directions():
     assert lim.directions(["all"]) == ["+x", "-x", "+y", "-y"]
     with pytest.raises(ValueError, match="one of"):
         lim.directions(["+z"])
+
+
+def test_limit_of_a_case_file(tmp_path):
+    """python -m drystone limit on the hand-written one-block case (mu 0.4 < b/h 1): sliding at
+    lambda = 0.4, the tilt angle atan(0.4) = 21.80 deg, both frictions; limit.json, the
+    mechanism figures and report.html written."""
+    from drystone import cli, paths
+
+    case = paths.ROOT / "cases" / "examples" / "one_block_tilt.toml"
+    assert cli.main(["limit", str(case), "--towards", "+y", "-x", "--out", str(tmp_path)]) == 0
+    import json
+    d = json.loads((tmp_path / "limit.json").read_text())
+    assert set(d["directions"]) == {"+y", "-x"}
+    for e in d["directions"].values():
+        assert e["friction"] == "coulomb" and set(e["by_friction"]) == set(lim.FRICTIONS)
+        for x in e["by_friction"].values():
+            assert x["multiplier"] == pytest.approx(0.4, rel=LP_REL)
+            assert x["angle_deg"] == pytest.approx(math.degrees(math.atan(0.4)), rel=LP_REL)
+            assert x["mechanism"]["moving_stones"] == [1]
+    assert "provenance" in d and d["geometry"] == "as built"
+    assert (tmp_path / "report.html").stat().st_size > 0
+    assert len(list(tmp_path.glob("mechanism_*.png"))) == 4
