@@ -169,7 +169,7 @@ def test_limit_of_a_case_file(tmp_path):
     from drystone import cli, paths
 
     case = paths.ROOT / "cases" / "examples" / "one_block_tilt.toml"
-    assert cli.main(["limit", str(case), "--towards", "+y", "-x", "--out", str(tmp_path)]) == 0
+    assert cli.main(["limit", str(case), "--towards", "+y", "--towards=-x", "--out", str(tmp_path)]) == 0
     import json
     d = json.loads((tmp_path / "limit.json").read_text())
     assert set(d["directions"]) == {"+y", "-x"}

@@ -289,15 +289,16 @@ def add_arguments(p) -> None:
     from drystone.analyses import common
 
     common.add_common_arguments(p)
-    p.add_argument("--towards", nargs="+", default=["+y"], metavar="DIR",
-                   help="load direction(s): +y -y +x -x, or all (default +y)")
+    p.add_argument("--towards", nargs="+", action="extend", default=None, metavar="DIR",
+                   help="load direction(s): +y +x, all, or with a minus sign --towards=-x (argparse reads a "
+                        "bare -x as an option); repeatable (default +y)")
     p.add_argument("--friction", nargs="+", default=list(FRICTIONS), choices=FRICTIONS,
                    help="associative and/or coulomb (non-associative, iterated); default both")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override a case key")
 
 
 def main(args) -> int:
-    d = limit(args.case, args.towards, args.friction, args.out, args.set)
+    d = limit(args.case, args.towards or ["+y"], args.friction, args.out, args.set)
     for t, e in d["directions"].items():
         for fr, x in e["by_friction"].items():
             if x["multiplier"] is not None:
