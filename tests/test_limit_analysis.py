@@ -182,3 +182,13 @@ def test_limit_of_a_case_file(tmp_path):
     assert "provenance" in d and d["geometry"] == "as built"
     assert (tmp_path / "report.html").stat().st_size > 0
     assert len(list(tmp_path.glob("mechanism_*.png"))) == 4
+
+
+def test_bad_direction_is_one_line_error(tmp_path, capsys):
+    from drystone import cli, paths
+
+    case = paths.ROOT / "cases" / "examples" / "one_block_tilt.toml"
+    assert cli.main(["limit", str(case), "--towards", "+z", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--towards '+z'" in err[0]
+    assert not (tmp_path / "limit.json").exists()
