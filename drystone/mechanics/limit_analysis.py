@@ -7,19 +7,20 @@ unit direction d: the largest lambda for which interface forces exist that are
   centroid): 3 force and 3 moment equations (about the centroid) per body, a DOF the
   body's ``blocked`` letters fix (x y z X Y Z, global axes) left out (its reaction free);
 * compressive (no tension) and frictional: at each corner x_v of each contact polygon
-  (normal n from body a to body b), the force on b is f_v = N_v n + sum_k s_vk t_k with
-  N_v >= 0, s_vk >= 0 and t_k = cos(2 pi k / m) e1 + sin(2 pi k / m) e2 (m = ``FACETS``
-  unit directions in the interface plane, e1 the load direction's projection on it), so
-  that the tangential force lies in the m-gon inscribed in the circle of radius mu N_v
-  with a corner on e1:  sum_k s_vk <= mu N_v  (associative friction). The m-gon is
-  inside Coulomb's cone (a lower bound of it: the shear along e1 is exact, in between
-  directions low by at most 1 - cos(pi / m), 7.6 % at m = 8);
+  (normal n from body a to body b), the force on b is a non-negative combination of the
+  m = ``FACETS`` edge rays of a friction pyramid, f_v = sum_k c_vk (n + mu t_k), c_vk >= 0,
+  t_k = cos(2 pi k / m) e1 + sin(2 pi k / m) e2 (e1 the load direction's projection on the
+  interface plane): its normal part N_v = sum_k c_vk >= 0 and its tangential part lies in
+  the m-gon inscribed in the circle of radius mu N_v with a corner on e1 (associative
+  friction; no inequality row is needed). The m-gon is inside Coulomb's cone: the shear
+  along e1 is exact, in between directions low by at most 1 - cos(pi / m), 7.6 % at m = 8;
 * the force on a is -f_v.
 
 Forces at the polygon's corners represent any distribution of normal and shear stress
 over a flat convex interface whose resultant lies inside it (the standard formulation of
-Livesley 1978, Ferris & Tin-Loi 2001, Portioli et al. 2014). maximise lambda over
-(N, s, lambda), lambda free in sign: lambda < 0 at the optimum means the wall cannot carry
+Livesley 1978, Ferris & Tin-Loi 2001, Portioli et al. 2014). Maximise lambda over
+(c, lambda), lambda free in sign, by ``scipy.optimize.linprog`` with HiGHS (``METHOD``), sparse
+matrices, the rows scaled to the heaviest stone's weight and each stone's size: lambda < 0 at the optimum means the wall cannot carry
 its own weight without a push the other way; an infeasible problem that no lambda can
 balance (a stone touching nothing, an overhang). Both are reported as such
 (``Result.status``), not as multipliers.
