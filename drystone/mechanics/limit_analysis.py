@@ -292,7 +292,7 @@ def solve(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.0, 
     r, y = _solve(p)
     if y is not None:
         r.velocity = _normalise(_velocities(p, y, bodies), bodies, ifaces)
-    r.history = [r.multiplier]
+    r.history = [] if r.multiplier is None else [r.multiplier]
     r.solve_s = time.perf_counter() - t0
     return r
 
