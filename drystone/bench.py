@@ -685,7 +685,7 @@ def write_results(results: dict, path: Path | None = None) -> Path:
 #: fixed), STONE_LENGTH x COURSE_HEIGHT x THICKNESS stones
 LIMIT_WALL = {"generator": "running_bond", "length": 25 * STONE_LENGTH, "height": 40 * COURSE_HEIGHT,
               "thickness": THICKNESS, "courses": 40, "per_course": 25}
-#: the speed goals of the limit analysis (s, geometry + interfaces + associative LP, one process)
+#: the speed goals of the limit analysis (CPU s of one process: geometry + interfaces + associative LP)
 LIMIT_GOALS_S = {"sacsayhuaman": 1.0, "running_bond_1000": 10.0}
 
 
@@ -720,7 +720,8 @@ def limit_section() -> list[dict]:
                "interfaces_s": t2 - t1, "lp_s": t3 - t2, "total_s": t3 - t0, "lp_cpu_s": c3 - c2,
                "total_cpu_s": c3 - c0, "multiplier": r.multiplier,
                "status": r.status, "goal_s": LIMIT_GOALS_S[name]}
-        row["goal_met"] = row["total_s"] < row["goal_s"]  # wall time; the CPU time beside it (a shared machine)
+        # one core's CPU time: on a shared machine the wall time measures the other jobs too
+        row["goal_met"] = row["total_cpu_s"] < row["goal_s"]
         if name == "sacsayhuaman":
             t4 = time.perf_counter()
             rc = la.solve_coulomb(wall.bodies, wall.ifaces, wall.mu, (0.0, 1.0, 0.0))
