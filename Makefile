@@ -14,7 +14,7 @@ RUN     := $(PY) -m drystone
 .PHONY: setup system-deps test demo run gravity4 settlement4 bench clean help records spectrum ogawa3d ogawa \
         reference sweep tilt tilt-rate tilt-sensitivity tilt-report sacsayhuaman sacsayhuaman-report vtk ogawa-pga readme docs free-decay \
         fragility fragility-small fragility-report crosscheck shape-study shape-study-small shape-study-report \
-        site-study site-study-small site-study-report report analyse
+        site-study site-study-small site-study-report report analyse limit
 
 help:
 	@echo "make setup        install Debian's YADE, make .venv, install PyPI dependencies"
@@ -23,6 +23,7 @@ help:
 	@echo "make run CASE=cases/x.toml [SET='key=value ...'] [THREADS=1]   run any case file (one thread: bitwise reproducible)"
 	@echo "make analyse ANALYSIS=tilt|collapse|... CASE=cases/x.toml [ARGS='--towards all'] [DASK=...]   an analysis of any case (python -m drystone ANALYSIS CASE ARGS) -> results/<case name>/<analysis>/"
 	@echo "make gravity4 | settlement4   the paper's four-block verification cases"
+	@echo "make limit [CASE=cases/sacsayhuaman/sine.toml] [ARGS='--towards all']   rigid-block limit analysis: collapse multiplier, tilt angle and mechanism, both frictions (seconds, no YADE) -> results/<case name>/limit/"
 	@echo "make bench [BENCH='--only scale --sizes 500']   speed figures (not a test; all sections ~15 min on 2 cores)"
 	@echo "make reference    regenerate tests/data/reference/ (stored histories of test_regression.py) after an intended change"
 	@echo "make free-decay   damping ratio per mode of one block, both contact geometries, and a slender block's rocking restitution per impact vs Housner at 3 K_n x 4 dampings (~3 min)"
@@ -118,6 +119,10 @@ reference: setup
 
 bench: setup
 	$(RUN) bench $(BENCH)
+
+LIMIT_CASE ?= cases/sacsayhuaman/sine.toml
+limit: setup
+	$(RUN) limit $(or $(CASE),$(LIMIT_CASE)) $(or $(ARGS),--towards all)
 
 free-decay: setup
 	$(RUN) free-decay

@@ -22,6 +22,11 @@
                   sweep), and the thread count this suggests.
 ``sacsayhuaman``  the Sacsayhuaman section's analyses on one core against the paper's
                   Abaqus/Explicit times on 8 cores (ratio and speed-up).
+``limit``         rigid-block limit analysis (``drystone.analyses.limit``, no YADE): the
+                  Sacsayhuaman section (33 free stones) and a running-bond wall of 1000
+                  stones (``LIMIT_WALL``): seconds to read the geometry, to find the
+                  interfaces and to solve the LP towards +y (associative; the
+                  non-associative iteration on the section too), against ``LIMIT_GOALS_S``.
 
 ms per step: a run's YADE wall time has a fixed start-up (about a second: the first step
 loads the compiled kernels) besides its steps, so each measured run goes with a short one
@@ -54,7 +59,7 @@ from drystone.mechanics import laws
 
 from drystone import paths, runner
 
-SECTIONS = ("running_bond", "scale", "threads", "sacsayhuaman")
+SECTIONS = ("running_bond", "scale", "threads", "sacsayhuaman", "limit")
 
 CASE = {
     "case": {"name": "bench_running_bond", "geometry": {"generator": "running_bond"}},
@@ -674,6 +679,61 @@ def write_results(results: dict, path: Path | None = None) -> Path:
     return atomic.write_text(path, json.dumps(old, indent=1))
 
 
+#: the limit section's large wall: running bond, 40 courses of 25 stones (1000, the first course
+#: fixed), STONE_LENGTH x COURSE_HEIGHT x THICKNESS stones
+LIMIT_WALL = {"generator": "running_bond", "length": 25 * STONE_LENGTH, "height": 40 * COURSE_HEIGHT,
+              "thickness": THICKNESS, "courses": 40, "per_course": 25}
+#: the speed goals of the limit analysis (CPU s of one process: geometry + interfaces + associative LP)
+LIMIT_GOALS_S = {"sacsayhuaman": 1.0, "running_bond_1000": 10.0}
+
+
+def limit_section() -> list[dict]:
+    """Times of the limit analysis (module docstring, section ``limit``)."""
+    from drystone.analyses import limit as lim
+    from drystone.geometry import blockfile as bf
+    from drystone.mechanics import limit_analysis as la
+    from drystone.model import case as casemod
+    from drystone.model import resolve
+
+    rows = []
+    for name in LIMIT_GOALS_S:
+        t0, c0 = time.perf_counter(), time.process_time()
+        if name == "sacsayhuaman":
+            path = paths.ROOT / "cases" / "sacsayhuaman" / "sine.toml"
+            case = casemod.load(path)
+            with tempfile.TemporaryDirectory() as tmp:
+                bs, _ = resolve._geometry(case, str(path), Path(tmp))
+            mats = resolve._materials(case, bs, str(path))
+        else:
+            bs = bf.parse(build_wall(LIMIT_WALL), name, check_overlaps=False)
+            mats = {n: {k: getattr(m, k) for k in bf.MATERIAL_PROPERTIES} for n, m in bs.materials.items()}
+        t1 = time.perf_counter()
+        wall = lim.wall_of(bs, mats, 9.81, name)
+        t2 = time.perf_counter()
+        c2 = time.process_time()
+        r = la.solve(wall.bodies, wall.ifaces, wall.mu, (0.0, 1.0, 0.0))
+        t3, c3 = time.perf_counter(), time.process_time()
+        row = {"wall": name, "stones": int((~wall.bodies.fixed).sum()), "interfaces": len(wall.ifaces),
+               "corners": int(sum(len(f.polygon) for f in wall.ifaces)), "geometry_s": t1 - t0,
+               "interfaces_s": t2 - t1, "lp_s": t3 - t2, "total_s": t3 - t0, "lp_cpu_s": c3 - c2,
+               "total_cpu_s": c3 - c0, "multiplier": r.multiplier,
+               "status": r.status, "goal_s": LIMIT_GOALS_S[name]}
+        # one core's CPU time: on a shared machine the wall time measures the other jobs too
+        row["goal_met"] = row["total_cpu_s"] < row["goal_s"]
+        if name == "sacsayhuaman":
+            t4 = time.perf_counter()
+            rc = la.solve_coulomb(wall.bodies, wall.ifaces, wall.mu, (0.0, 1.0, 0.0))
+            row.update(coulomb_s=time.perf_counter() - t4, coulomb_multiplier=rc.multiplier,
+                       coulomb_status=rc.status, coulomb_iterations=rc.iterations)
+        print(f"  limit {name}: {row['stones']} stones, {row['interfaces']} interfaces; geometry "
+              f"{row['geometry_s']:.2f} s, interfaces {row['interfaces_s']:.2f} s, LP {row['lp_s']:.2f} s, total "
+              f"{row['total_s']:.2f} s, CPU {row['total_cpu_s']:.2f} s (goal < {row['goal_s']:g} s: "
+              f"{'met' if row['goal_met'] else 'NOT met'}); "
+              f"lambda {r.multiplier}", flush=True)
+        rows.append(row)
+    return rows
+
+
 def main(only=None, sizes=SIZES, walls=WALLS, steps: int = 300, engines=None) -> dict:
     """Run the sections ``only`` (default all, in SECTIONS' order) and write bench.json."""
     only = list(SECTIONS) if not only else [s for s in SECTIONS if s in only]
@@ -684,7 +744,8 @@ def main(only=None, sizes=SIZES, walls=WALLS, steps: int = 300, engines=None) ->
     t0 = time.time()
     with tempfile.TemporaryDirectory(dir=paths.ROOT) as tmp:
         tmp = Path(tmp)
-        prime(tmp)
+        if set(only) - {"limit"}:  # the limit analysis runs no YADE
+            prime(tmp)
         if "running_bond" in only:
             results["running_bond"] = running_bond_section(tmp)
             results["running_bond_goal"] = goal(results["running_bond"])
@@ -697,6 +758,8 @@ def main(only=None, sizes=SIZES, walls=WALLS, steps: int = 300, engines=None) ->
             results["sacsayhuaman"] = sacsayhuaman_times(tmp)
             results["sacsayhuaman_machine"] = facts
             print_sacsayhuaman(results["sacsayhuaman"])
+        if "limit" in only:
+            results["limit"] = {"rows": limit_section(), "machine": facts}
     results["machine"] = dict(facts, sections=only, wall_s=time.time() - t0)
     out = write_results(results)
     print(f"written {out} ({time.time() - t0:.0f} s)")

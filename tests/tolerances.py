@@ -822,3 +822,15 @@ QUICK_SLIDE_EARLY_DEG = 0.3
 #: a sample mean (or SD) of seeded draws against the distribution's: within 4 standard errors
 #: (a false failure once in 16 000 seeds; the seed is fixed, so a pass is reproducible)
 SAMPLE_MEAN_SIGMAS = 4.0
+# Rigid-block limit analysis (drystone/mechanics/limit_analysis.py).
+# ---------------------------------------------------------------------------------------
+
+#: a multiplier from HiGHS against its closed form: the LP is solved to HiGHS's primal and
+#: dual feasibility tolerances (1e-7) on rows scaled to the heaviest stone's weight and the
+#: stone's size (entries of order one), so the optimum is good to ~1e-7 relative; margin 10
+LIMIT_LP_REL = 1e-6
+#: the non-associative iteration against the associative value where the mechanism is pure
+#: rocking (friction never governs): it stops when lambda changes by less than
+#: limit_analysis.LAMBDA_TOL (1e-4) relative between iterations; the value may still move by
+#: that much, so 1e-4 x 10
+LIMIT_ITERATION_REL = 1e-3

@@ -516,11 +516,12 @@ def _ccw(p: np.ndarray) -> np.ndarray:
     return p if twice >= 0 else p[::-1]
 
 
-def joined(va, fa: ph.Faces, vb, fb: ph.Faces, tol: float = OVERLAP_TOL, min_width: float = JOIN_MIN_WIDTH) -> bool:
-    """Whether two convex parts (vertices m and ``ph.faces``) are joined face to face: a face
-    of one and a face of the other with opposite normals, each face's corners within ``tol``
-    (m) of the other's plane, overlapping in a patch wider than ``min_width`` (m; the width
-    2 x area / perimeter). Parts touching along an edge or at a corner are not."""
+def face_patches(va, fa: ph.Faces, vb, fb: ph.Faces, tol: float = OVERLAP_TOL):
+    """The patches where two convex bodies (vertices m and ``ph.faces``) touch face to face:
+    for each face of one and face of the other with opposite normals, each face's corners
+    within ``tol`` (m) of the other's plane, their common polygon (Sutherland-Hodgman in the
+    plane). Yields (outward normal of the face of ``va`` (3,), the patch (k, 3) m,
+    counter-clockwise about that normal, in that face's plane, area m^2, perimeter m)."""
     va, vb = np.asarray(va, float), np.asarray(vb, float)
     for na, da, pa in zip(fa.normals, fa.offsets, fa.polygons):
         qa = va[pa]
@@ -540,9 +541,16 @@ def joined(va, fa: ph.Faces, vb, fb: ph.Faces, tol: float = OVERLAP_TOL, min_wid
             x, y = patch[:, 0], patch[:, 1]
             area = 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y)))
             perimeter = float(np.linalg.norm(np.roll(patch, -1, axis=0) - patch, axis=1).sum())
-            if perimeter > 0 and 2.0 * area / perimeter > min_width:
-                return True
-    return False
+            yield np.asarray(na, float), patch @ basis.T - da * np.asarray(na, float), area, perimeter
+
+
+def joined(va, fa: ph.Faces, vb, fb: ph.Faces, tol: float = OVERLAP_TOL, min_width: float = JOIN_MIN_WIDTH) -> bool:
+    """Whether two convex parts (vertices m and ``ph.faces``) are joined face to face: a face
+    of one and a face of the other with opposite normals, each face's corners within ``tol``
+    (m) of the other's plane, overlapping in a patch wider than ``min_width`` (m; the width
+    2 x area / perimeter; ``face_patches``). Parts touching along an edge or at a corner are not."""
+    return any(perimeter > 0 and 2.0 * area / perimeter > min_width
+               for _, _, area, perimeter in face_patches(va, fa, vb, fb, tol))
 
 
 def parse(data: dict, where: str = "<blocks>", check_overlaps: bool = True) -> BlockSet:

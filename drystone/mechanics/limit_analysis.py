@@ -1,0 +1,408 @@
+"""Rigid-block limit analysis by linear programming (scipy's HiGHS; no YADE).
+
+The collapse multiplier lambda of a horizontal body force lambda x (self-weight) along a
+unit direction d: the largest lambda for which interface forces exist that are
+
+* in equilibrium with every free body's weight m g and load lambda m |g| d (both at its
+  centroid): 3 force and 3 moment equations (about the centroid) per body, a DOF the
+  body's ``blocked`` letters fix (x y z X Y Z, global axes) left out (its reaction free);
+* compressive (no tension) and frictional: at each corner x_v of each contact polygon
+  (normal n from body a to body b), the force on b is a non-negative combination of the
+  m = ``FACETS`` edge rays of a friction pyramid, f_v = sum_k c_vk (n + mu t_k), c_vk >= 0,
+  t_k = cos(2 pi k / m) e1 + sin(2 pi k / m) e2 (e1 the load direction's projection on the
+  interface plane): its normal part N_v = sum_k c_vk >= 0 and its tangential part lies in
+  the m-gon inscribed in the circle of radius mu N_v with a corner on e1 (associative
+  friction; no inequality row is needed). The m-gon is inside Coulomb's cone: the shear
+  along e1 is exact, in between directions low by at most 1 - cos(pi / m), 7.6 % at m = 8;
+* the force on a is -f_v.
+
+Forces at the polygon's corners represent any distribution of normal and shear stress
+over a flat convex interface whose resultant lies inside it (the standard formulation of
+Livesley 1978, Ferris & Tin-Loi 2001, Portioli et al. 2014). Maximise lambda over
+(c, lambda), lambda free in sign, by ``scipy.optimize.linprog`` with HiGHS (``METHOD``), sparse
+matrices, the rows scaled to the heaviest stone's weight and each stone's size: lambda < 0 at the optimum means the wall cannot carry
+its own weight without a push the other way; an infeasible problem that no lambda can
+balance (a stone touching nothing, an overhang). Both are reported as such
+(``Result.status``), not as multipliers.
+
+Mechanism: the dual variables of the equilibrium equations (HiGHS's marginals) are the
+virtual velocities of the bodies, the centroid's velocity (force rows) and the angular
+velocity (moment rows), normalised so that the largest corner speed of a moving body is 1.
+By LP duality the collapse mechanism is kinematically admissible for the flow rule of
+the faceted cone (opening and sliding at each corner in the cone's normal directions) and
+lambda = -(power of the weights) / (power of the unit load) on it. Moving bodies: corner
+speed above ``MOVING`` (relative to the largest); per interface, the relative velocity at
+its corners gives rotation (opening varying over the polygon: rocking about a hinge line,
+the corners not opening) and sliding (tangential velocity at the hinge).
+
+Non-associative Coulomb friction (``solve_coulomb``): associative flow makes sliding dilate
+(opening mu x slip), which the joints of a real wall do not, so the associative lambda is
+an upper estimate where sliding governs. The iterative scheme of Gilbert, Casapulla &
+Ahmed (2006, Computers & Structures 84, 873-887): solve the associative problem, then
+repeatedly solve the problem with each corner's friction replaced by a modified joint
+whose shear capacity is fixed by the previous normal forces, sum_k s_vk <= (1 - SLOPE) mu
+N_v^(k-1) + SLOPE mu N_v (a cohesive joint with a small residual friction SLOPE mu that
+keeps the normal forces from jumping between the LP's many equivalent distributions; it
+is Coulomb's where N_v = N_v^(k-1)), under-relaxed (N^k <- omega N^k + (1 - omega)
+N^(k-1)), until lambda changes by less than ``LAMBDA_TOL`` (relative) and, per interface,
+the corners' shear exceeds mu x the interface's own normal force by less than
+``FORCE_TOL`` x the largest mu N. At that point the forces are statically admissible with
+Coulomb's friction (per interface) and the mechanism slides with a dilatancy of at most
+atan(SLOPE mu). Not converged in ``MAX_ITER`` steps is reported as such, with the last
+iterate. The scheme finds one solution of the non-associative problem, not necessarily
+the lowest: normal forces locked in by the associative start (a lateral self-stress across
+a vertical joint) may persist (docs/limit-analysis.md).
+
+Units: SI (kg, m, N); velocities are dimensionless (normalised).
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import sparse
+from scipy.optimize import linprog
+
+from drystone.mechanics.interfaces import Interface
+
+#: tangential directions of the friction pyramid at each corner (an inscribed regular m-gon)
+FACETS = 8
+#: a body moves when its largest corner speed exceeds this fraction of the largest one
+MOVING = 1e-3
+#: an interface opens / slides where the relative speed exceeds this fraction of the largest
+ACTIVE = 1e-3
+#: non-associative iteration: relative change of lambda and of the normal forces (of the
+#: largest) below which it has converged; under-relaxation omega; most iterations
+LAMBDA_TOL = 1e-4
+FORCE_TOL = 1e-3
+RELAX = 0.5
+#: the modified joint's residual friction: shear <= (1 - SLOPE) mu N_prev + SLOPE mu N (Coulomb
+#: where N = N_prev, the fixed point; a dilatancy of atan(SLOPE mu) in the mechanism)
+SLOPE = 0.3
+MAX_ITER = 60
+_LETTERS = "xyzXYZ"
+#: HiGHS's interior-point method with crossover (a vertex solution and its duals): on these
+#: problems, degenerate (many corners with the same lever), 5-10 times faster than its
+#: dual simplex (``make bench``, section limit)
+METHOD = "highs-ipm"
+
+
+@dataclass
+class Bodies:
+    """The bodies: ``ids`` (block ids), ``mass`` kg, ``centroid`` (n, 3) m, ``fixed`` bool
+    (platform and fixed stones: no equilibrium equations), ``blocked`` DOF letters per body
+    ("" none), ``size`` (n,) m each body's largest extent (scales the moment rows)."""
+    ids: list
+    mass: np.ndarray
+    centroid: np.ndarray
+    fixed: np.ndarray
+    blocked: list = field(default_factory=list)
+    size: np.ndarray | None = None
+
+    def __post_init__(self):
+        n = len(self.ids)
+        self.mass = np.asarray(self.mass, float)
+        self.centroid = np.asarray(self.centroid, float).reshape(n, 3)
+        self.fixed = np.asarray(self.fixed, bool)
+        self.blocked = list(self.blocked) or [""] * n
+        self.size = np.ones(n) if self.size is None else np.asarray(self.size, float)
+
+
+@dataclass
+class Result:
+    """``status``: "collapse" (a multiplier), "cannot_stand" (lambda < 0: the wall cannot
+    carry its own weight), "infeasible" (no admissible forces at any lambda), "unbounded"
+    (no collapse at any lambda: nothing can move), "not_converged" (non-associative
+    iteration), "failed" (the solver's message in ``message``). ``multiplier`` only for
+    "collapse" and "not_converged" (the last iterate); ``velocity`` (n, 6) per body:
+    centroid velocity and angular velocity, normalised; ``normal`` N_v per corner (N)."""
+    status: str
+    multiplier: float | None
+    message: str = ""
+    velocity: np.ndarray | None = None
+    normal: np.ndarray | None = None
+    iterations: int = 1
+    history: list = field(default_factory=list)
+    solve_s: float = 0.0
+    shear: np.ndarray | None = None
+    coulomb_residual: float | None = None
+
+
+@dataclass
+class Problem:
+    """The assembled LP (``assemble``): the equilibrium rows (one per free body DOF, forces
+    in units of ``force_scale``, moment rows divided by the body's size: ``row_scale``) of
+    the corner force columns: with ``cone``, per corner the ``facets`` edge rays
+    n + mu t_k of its friction pyramid (associative: every force in the pyramid is a
+    non-negative combination of them, no further row); else per corner its normal force
+    (along n) then the ``facets`` tangential directions t_k (their sum capped by a row)."""
+    A: sparse.csr_matrix
+    b: np.ndarray
+    live: np.ndarray
+    rows: np.ndarray  # (body, dof) of each equality row
+    corner_iface: np.ndarray  # interface of each corner
+    corner_x: np.ndarray  # (nc, 3) corner positions
+    mu: np.ndarray  # per corner
+    ncorner: int
+    facets: int
+    cone: bool
+    force_scale: float
+    row_scale: np.ndarray
+
+
+def _basis(n: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    e1 = d - (d @ n) * n
+    if np.linalg.norm(e1) < 1e-9:
+        a = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+        e1 = a - (a @ n) * n
+    e1 = e1 / np.linalg.norm(e1)
+    return e1, np.cross(n, e1)
+
+
+def assemble(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.0, 0.0, -9.81),
+             facets: int = FACETS, cone: bool = True) -> Problem:
+    """The LP's matrices for a load along ``direction`` (unit horizontal vector); ``mu``
+    per interface (or one value); ``gravity`` m/s^2; ``cone``: the column layout (``Problem``)."""
+    d = np.asarray(direction, float)
+    d = d / np.linalg.norm(d)
+    g = np.asarray(gravity, float)
+    nb = len(bodies.ids)
+    mu_i = np.broadcast_to(np.asarray(mu, float), (len(ifaces),))
+    row_of = -np.ones((nb, 6), np.int64)
+    rows = []
+    for bi in np.flatnonzero(~bodies.fixed):
+        for c in range(6):
+            if _LETTERS[c] not in bodies.blocked[bi]:
+                row_of[bi, c] = len(rows)
+                rows.append((bi, c))
+    rows = np.array(rows, np.int64).reshape(-1, 2)
+    free_w = bodies.mass[~bodies.fixed] * np.linalg.norm(g)
+    force_scale = float(free_w.max()) if len(free_w) else 1.0
+    ang = 2 * np.pi * np.arange(facets) / facets
+    cx, ci, cn, cdirs = [], [], [], []
+    for k, f in enumerate(ifaces):
+        e1, e2 = _basis(f.normal, d)
+        dirs = np.outer(np.cos(ang), e1) + np.outer(np.sin(ang), e2)
+        cx.append(f.polygon)
+        ci.append(np.full(len(f.polygon), k))
+        cn.append(np.broadcast_to(f.normal, f.polygon.shape))
+        cdirs.append(np.broadcast_to(dirs, (len(f.polygon), facets, 3)))
+    cx = np.concatenate(cx) if cx else np.zeros((0, 3))
+    ci = np.concatenate(ci).astype(np.int64) if ci else np.zeros(0, np.int64)
+    cn = np.concatenate(cn) if cn else np.zeros((0, 3))
+    cdirs = np.concatenate(cdirs) if cdirs else np.zeros((0, facets, 3))
+    nc = len(cx)
+    cmu = mu_i[ci]
+    if cone:  # corner c's ray k is column c * facets + k
+        u = (cn[:, None, :] + cmu[:, None, None] * cdirs).reshape(-1, 3)
+        col_corner = np.repeat(np.arange(nc), facets)
+    else:  # corner c's normal is column c, its direction k column nc + c * facets + k
+        u = np.concatenate([cn, cdirs.reshape(-1, 3)])
+        col_corner = np.concatenate([np.arange(nc), np.repeat(np.arange(nc), facets)])
+    x = cx[col_corner]
+    ia = np.array([f.a for f in ifaces], np.int64)[ci[col_corner]]
+    ib = np.array([f.b for f in ifaces], np.int64)[ci[col_corner]]
+    r_i, c_i, v_i = [], [], []
+    for body, sign in ((ib, 1.0), (ia, -1.0)):
+        mom = np.cross(x - bodies.centroid[body], u)
+        for c in range(6):
+            r = row_of[body, c]
+            ok = r >= 0
+            val = u[:, c] if c < 3 else mom[:, c - 3] / bodies.size[body]
+            r_i.append(r[ok])
+            c_i.append(np.flatnonzero(ok))
+            v_i.append(sign * val[ok])
+    nr = len(rows)
+    A = sparse.csr_matrix((np.concatenate(v_i), (np.concatenate(r_i), np.concatenate(c_i))), shape=(nr, len(u)))
+    b = np.zeros(nr)
+    live = np.zeros(nr)
+    row_scale = np.where(rows[:, 1] < 3, 1.0, 1.0 / bodies.size[rows[:, 0]]) if nr else np.zeros(0)
+    trans = rows[:, 1] < 3
+    b[trans] = -bodies.mass[rows[trans, 0]] * g[rows[trans, 1]] / force_scale
+    live[trans] = -bodies.mass[rows[trans, 0]] * np.linalg.norm(g) * d[rows[trans, 1]] / force_scale
+    return Problem(A, b, live, rows, ci, cx, cmu, nc, facets, cone, force_scale, row_scale)
+
+
+def _solve(p: Problem, capacity=None, slope: float = 0.0) -> tuple[Result, np.ndarray | None]:
+    """One LP: maximise lambda. ``capacity`` (N, per interface) only with the capped layout:
+    sum over the interface's corners v and directions k of s_vk <= capacity + slope mu N
+    (N the interface's normal force). Returns the
+    result (normal force per corner, N; the tangential force sum per interface, N, in
+    ``shear``) and the equilibrium rows' duals (or None)."""
+    t0 = time.perf_counter()
+    ncol = p.A.shape[1]
+    # A f + (weights) + lambda (unit loads) = 0, i.e. A f - lambda live = b (assemble: b = -weights, live = -loads)
+    A_eq = sparse.hstack([p.A, sparse.csr_matrix(-p.live.reshape(-1, 1))]).tocsr()
+    A_ub = b_ub = None
+    if not p.cone:  # per interface, the corners' tangential forces sum to at most its capacity
+        nc, m = p.ncorner, p.facets
+        ni = nc
+        rows = np.concatenate([np.repeat(np.arange(nc), m), np.arange(nc)])
+        cols = np.concatenate([nc + np.arange(nc * m), np.arange(nc)])
+        vals = np.concatenate([np.ones(nc * m), -slope * p.mu])
+        A_ub = sparse.csr_matrix((vals, (rows, cols)), shape=(ni, ncol + 1))
+        b_ub = np.asarray(capacity, float) / p.force_scale
+    c = np.zeros(ncol + 1)
+    c[-1] = -1.0
+    bounds = np.zeros((ncol + 1, 2))
+    bounds[:, 1] = np.inf
+    bounds[-1] = (-np.inf, np.inf)
+    res = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=p.b, bounds=bounds, method=METHOD)
+    dt = time.perf_counter() - t0
+    if res.status == 2:
+        return Result("infeasible", None, res.message, solve_s=dt), None
+    if res.status == 3:
+        return Result("unbounded", None, res.message, solve_s=dt), None
+    if res.status != 0:
+        return Result("failed", None, res.message, solve_s=dt), None
+    lam = float(res.x[-1])
+    xs = res.x[:-1] * p.force_scale
+    normal = xs.reshape(p.ncorner, p.facets).sum(axis=1) if p.cone else xs[:p.ncorner]
+    r = Result("collapse" if lam >= 0 else "cannot_stand", lam, res.message, normal=normal, solve_s=dt)
+    if not p.cone:
+        r.shear = xs[p.ncorner:].reshape(p.ncorner, p.facets).sum(axis=1)
+    return r, np.asarray(res.eqlin.marginals)
+
+
+def _velocities(p: Problem, y: np.ndarray, bodies: Bodies) -> np.ndarray:
+    """Per body (n, 6): the dual of the equilibrium rows as centroid velocity and angular
+    velocity (a moment row was divided by the body's size: ``row_scale``), signed so that
+    the unit load's power is positive (module docstring); not normalised."""
+    v = np.zeros((len(bodies.ids), 6))
+    if len(y) == 0:
+        return v
+    u = y * p.row_scale
+    if u @ p.live > 0:  # live = -(the unit loads): their power u . loads must be positive
+        u = -u
+    v[p.rows[:, 0], p.rows[:, 1]] = u
+    return v
+
+
+def point_velocity(v: np.ndarray, bodies: Bodies, body: int, x) -> np.ndarray:
+    """Velocity of the point x (m) of a body under the virtual velocities v (n, 6)."""
+    return v[body, :3] + np.cross(v[body, 3:], np.asarray(x, float) - bodies.centroid[body])
+
+
+def solve(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.0, 0.0, -9.81),
+          facets: int = FACETS) -> Result:
+    """Associative friction: the largest multiplier and its mechanism (module docstring)."""
+    t0 = time.perf_counter()
+    p = assemble(bodies, ifaces, mu, direction, gravity, facets)
+    r, y = _solve(p)
+    if y is not None:
+        r.velocity = _normalise(_velocities(p, y, bodies), bodies, ifaces)
+    r.history = [] if r.multiplier is None else [r.multiplier]
+    r.solve_s = time.perf_counter() - t0
+    return r
+
+
+def solve_coulomb(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.0, 0.0, -9.81),
+                  facets: int = FACETS, relax: float = RELAX, max_iter: int = MAX_ITER,
+                  lambda_tol: float = LAMBDA_TOL, force_tol: float = FORCE_TOL, slope: float = SLOPE) -> Result:
+    """Non-associative Coulomb friction by the iterative scheme of the module docstring."""
+    t0 = time.perf_counter()
+    r = solve(bodies, ifaces, mu, direction, gravity, facets)
+    if r.status != "collapse":
+        r.solve_s = time.perf_counter() - t0
+        return r
+    p = assemble(bodies, ifaces, mu, direction, gravity, facets, cone=False)
+    mu_i = np.broadcast_to(np.asarray(mu, float), (len(ifaces),))
+    mu_i = p.mu  # per corner
+    hist = [r.multiplier]
+    n_prev = r.normal
+    last, y = r, None
+    converged = False
+    dl = res_c = float("nan")
+    for _ in range(max_iter):
+        r, y_new = _solve(p, capacity=(1 - slope) * mu_i * n_prev, slope=slope)
+        if r.multiplier is None:  # no admissible forces with the capped joints
+            r.iterations = len(hist) + 1
+            r.history = hist
+            r.solve_s = time.perf_counter() - t0
+            return r
+        hist.append(r.multiplier)
+        n_new = r.normal
+        # Coulomb with the iterate's own normal forces, per interface: its corners' shear above
+        # mu x its normal force, of the largest mu N of an interface
+        shear_i = np.bincount(p.corner_iface, r.shear, minlength=len(ifaces))
+        mun_i = np.bincount(p.corner_iface, mu_i * n_new, minlength=len(ifaces))
+        res_c = float(np.max(shear_i - mun_i, initial=0.0)) / max(float(np.max(mun_i, initial=0.0)), 1e-300)
+        dl = abs(hist[-1] - hist[-2]) / max(abs(hist[-1]), 1e-12)
+        n_prev = relax * n_new + (1 - relax) * n_prev
+        last, y = r, y_new
+        last.coulomb_residual = res_c
+        if dl <= lambda_tol and res_c <= force_tol:
+            converged = True
+            break
+    if y is not None:
+        last.velocity = _normalise(_velocities(p, y, bodies), bodies, ifaces)
+    last.iterations = len(hist)
+    last.history = hist
+    if not converged:
+        last.status = "not_converged"
+        last.message = (f"the non-associative iteration did not converge in {max_iter} steps "
+                        f"(last relative change of lambda {dl:.2g}; shear above mu N {res_c:.2g} of the largest mu N)")
+    last.solve_s = time.perf_counter() - t0
+    return last
+
+
+def _normalise(v: np.ndarray, bodies: Bodies, ifaces: list[Interface]) -> np.ndarray:
+    """Scale the velocities so that the largest speed at any interface corner is 1."""
+    top = 0.0
+    for f in ifaces:
+        for b in (f.a, f.b):
+            if not bodies.fixed[b]:
+                w = v[b, :3] + np.cross(v[b, 3:], f.polygon - bodies.centroid[b])
+                top = max(top, float(np.linalg.norm(w, axis=1).max()))
+    return v / top if top > 0 else v
+
+
+def mechanism(bodies: Bodies, ifaces: list[Interface], v: np.ndarray, moving_tol: float = MOVING,
+              active_tol: float = ACTIVE) -> dict:
+    """The collapse mechanism from the normalised virtual velocities v (n, 6): moving
+    bodies (ids), each one's velocity, and per active interface its opening / sliding and
+    hinge line (module docstring). Speeds are relative to the largest corner speed (1)."""
+    nb = len(bodies.ids)
+    speed = np.zeros(nb)
+    for f in ifaces:
+        for b in (f.a, f.b):
+            w = v[b, :3] + np.cross(v[b, 3:], f.polygon - bodies.centroid[b])
+            speed[b] = max(speed[b], float(np.linalg.norm(w, axis=1).max()))
+    speed = np.maximum(speed, np.linalg.norm(v[:, :3], axis=1))
+    moving = [int(b) for b in np.flatnonzero((speed > moving_tol) & ~bodies.fixed)]
+    joints = []
+    modes = set()
+    body_modes = {b: set() for b in moving}
+    for f in ifaces:
+        if f.a not in body_modes and f.b not in body_modes:
+            continue
+        rel = (v[f.b, :3] + np.cross(v[f.b, 3:], f.polygon - bodies.centroid[f.b])) \
+            - (v[f.a, :3] + np.cross(v[f.a, 3:], f.polygon - bodies.centroid[f.a]))
+        if np.linalg.norm(rel, axis=1).max() <= active_tol:
+            continue
+        opening = rel @ f.normal
+        slip = np.linalg.norm(rel - np.outer(opening, f.normal), axis=1)
+        rotating = float(opening.max() - opening.min()) > active_tol
+        hinge = opening <= opening.min() + active_tol
+        sliding = float(slip[hinge].max()) > active_tol
+        kind = "rocking+sliding" if rotating and sliding else "rocking" if rotating else \
+            "sliding" if sliding else "separation"
+        modes.add(kind)
+        for b in (f.a, f.b):
+            if b in body_modes:
+                body_modes[b].add(kind)
+        j = {"stones": [bodies.ids[f.a], bodies.ids[f.b]], "mode": kind,
+             "max_opening": float(opening.max()), "max_slip": float(slip.max())}
+        if rotating and not sliding and hinge.sum() >= 2:
+            pts = f.polygon[hinge]
+            far = np.argmax(np.linalg.norm(pts - pts[0], axis=1))
+            j["hinge"] = [[float(c) for c in pts[0]], [float(c) for c in pts[far]]]
+        joints.append(j)
+    return {"moving_stones": [bodies.ids[b] for b in moving],
+            "modes": sorted(modes),
+            "stones": {str(bodies.ids[b]): {"speed": float(speed[b]),
+                                            "velocity": [float(c) for c in v[b, :3]],
+                                            "angular_velocity": [float(c) for c in v[b, 3:]],
+                                            "modes": sorted(body_modes[b])} for b in moving},
+            "interfaces": joints}
