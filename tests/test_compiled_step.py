@@ -62,6 +62,7 @@ def test_compiled_forces_equal_numpy_law(seed):
                            {(1, 5): [jprops[k] for k in ("kn", "kt", "mu", "damping")]})
     dt = 2e-4
     slipped = stuck = 0
+    twisted = 0.0  # the largest twisting moment compared, N m
     slip_work = [0.0, 0.0]  # the energy balance's slip work (J), numpy and compiled
     for step in range(40):
         rot = rotations.to_matrix(quat)
@@ -78,6 +79,10 @@ def test_compiled_forces_equal_numpy_law(seed):
         np.testing.assert_array_equal(a.slipping, b.slipping)
         np.testing.assert_allclose(b.shear, a.shear, rtol=0, atol=tol.NUMERICAL_REL * fscale)
         assert fast.elastic[1] == pytest.approx(ref.elastic[1], rel=tol.NUMERICAL_REL)
+        # the twisting moments about n (contact.twist_spring), in the contacts' order
+        mt0 = np.array([v[3] for v in ref._shear.values()])
+        np.testing.assert_allclose(fast.shear_store[:, 3], mt0, rtol=0, atol=tol.NUMERICAL_REL * tscale)
+        twisted = max(twisted, float(np.abs(mt0).max()))
         # the energy balance's terms (drystone/mechanics/energy.py): damping wrenches on each body, slip work
         np.testing.assert_allclose(fast.last["Fd"], ref.last["Fd"], rtol=0, atol=tol.NUMERICAL_REL * fscale)
         np.testing.assert_allclose(fast.last["Td"], ref.last["Td"], rtol=0, atol=tol.NUMERICAL_REL * tscale)
@@ -91,6 +96,7 @@ def test_compiled_forces_equal_numpy_law(seed):
         quat /= np.linalg.norm(quat, axis=1)[:, None]
         vel = vel * 0.97
     assert slipped > 0 and stuck > 0  # both branches of the law were compared
+    assert twisted > tol.NUMERICAL_REL * tscale  # and twisting moments
     assert slip_work[0] > 0 and slip_work[1] == pytest.approx(slip_work[0], rel=tol.NUMERICAL_REL)
 
 

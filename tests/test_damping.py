@@ -47,14 +47,14 @@ def _block_on_base(b, d, h, rho, kn, kt, xi, sticking=True):
 @pytest.mark.parametrize("size", [(0.2, 0.2, 0.4), (0.6, 0.3, 0.2)])
 def test_every_mode_of_a_block_on_its_joint_gets_xi(xi, size):
     """State-space eigenvalues s = -xi w +- i w sqrt(1 - xi^2) for every mode with
-    stiffness (bouncing, two rocking-sliding pairs; twist has none): ratio -Re s/|s| = xi
-    to round-off, and omega_max is the fastest mode."""
+    stiffness (bouncing, two rocking-sliding pairs, and twist: the stuck joint's twist
+    spring K_t J_p): ratio -Re s/|s| = xi to round-off, and omega_max is the fastest mode."""
     M, K, C, om = _block_on_base(*size, 2300.0, 2e8, 1e8, xi)
     Mi = np.linalg.inv(M)
     Asys = np.block([[np.zeros((6, 6)), np.eye(6)], [-Mi @ K, -Mi @ C]])
     s = np.linalg.eigvals(Asys)
-    s = s[np.abs(s) > tol.RIGID_MODE_REL * np.abs(s).max()]  # drop the rigid twist mode
-    assert len(s) == 10  # five modes with stiffness, each a conjugate pair
+    s = s[np.abs(s) > tol.RIGID_MODE_REL * np.abs(s).max()]  # (no rigid mode left to drop)
+    assert len(s) == 12  # six modes with stiffness, each a conjugate pair
     assert np.allclose(-s.real / np.abs(s), xi, rtol=tol.EIGEN_REL, atol=tol.EIGEN_ABS)
     w = np.sqrt(np.linalg.eigvals(Mi @ K).real.max())
     assert om == pytest.approx(w, rel=tol.NUMERICAL_REL)

@@ -68,3 +68,29 @@ def test_toppling_block_at_both_quasi_static_rates(outdir):
     assert angles[0.2, 0.8] == pytest.approx(expected, abs=tol.TILT_ANGLE_DEG)
     assert angles[1.0, 0.08] == pytest.approx(expected, abs=tol.TILT_ANGLE_DEG)
     assert angles[1.0, 0.8] >= max(angles[0.2, 0.8], angles[1.0, 0.08])
+
+
+@pytest.mark.parametrize("mu", [0.8, 1.5, 2.5])
+def test_long_block_tilted_along_its_length_stays_in_its_plane(outdir, mu):
+    """A 0.4 x 0.2 x 0.2 m box tilted towards +x (along its length: b/h = 2) slides at
+    atan(mu) below the Winkler toppling angle (61.7 deg) and topples at it above. The
+    stuck shear force acts at the overlap centroid, offset towards the toe, and with the
+    load it makes a couple that turns a twisted block further: without the joint's twist
+    stiffness (contact.twist_spring) that twist grew from round-off and a mu = 2.5 block
+    walked off sideways and was dated collapsed at 58.6 deg. The block is symmetric about
+    the tilt plane: until its collapse it neither drifts across it nor spins out of it
+    beyond round-off."""
+    size = [0.4, 0.2, 0.2]
+    expected = min(analytic.sliding_tilt_deg(mu), analytic.toppling_tilt_deg(size[0], size[2], size[1], 2300, 2e8))
+    case = tilt_case(size, mu, expected - 1.0)
+    case["stages"][2]["rate_deg_s"] = 0.2  # the paper's rate: the wide block's damped run-away dated 0.1 deg late
+    for stage in case["stages"][1:]:
+        stage["towards"] = "+x"
+    s, h, _ = run_case(case, outdir, name=f"mu_{mu}")
+    assert s["collapse_angle_deg"] == pytest.approx(expected, abs=tol.TILT_ANGLE_DEG)
+    before = h["tilt_deg"] <= s["collapse_angle_deg"]
+    assert before.sum() > 100  # the run up to the collapse is sampled (every 0.01 s)
+    drift_y = abs(h["pos"][before, 0, 1] - h["pos0"][0, 1]).max()
+    spin = abs(h["angvel"][before, 0][:, [0, 2]]).max()  # about x and the vertical: not the tilt axis y
+    assert drift_y < tol.SYMMETRIC_DRIFT_M
+    assert spin < tol.SYMMETRIC_SPIN_RAD_S

@@ -30,6 +30,14 @@ EXACT_ABS = 1e-12
 NUMERICAL_REL = 1e-9
 #: the same, absolute, on quantities of order one
 NUMERICAL_ABS = 1e-9
+#: a motion that is zero by symmetry over a run (a symmetric block tilted along its axis of
+#: symmetry: its drift across the tilt, its spin about the other two axes): round-off
+#: forces of relative size eps = 2.2e-16 of the weight, summed without cancellation over
+#: T = 60 s (the longest tilt run), give at most eps g T = 1.3e-13 m/s, eps g T^2 = 8e-12 m
+#: and, over a 0.1 m half-width, 1.3e-12 rad/s: 1e-11 m and 1e-11 rad/s. (A contact without
+#: twist stiffness let the twist grow from round-off at ~7 /s, to mm and 0.7 rad/s.)
+SYMMETRIC_DRIFT_M = 1e-11
+SYMMETRIC_SPIN_RAD_S = 1e-11
 #: a quantity that is zero by symmetry (a second moment or gradient component across a flat
 #: joint, a record's first sample), computed from coordinates of order 1 m: 1e-15
 ZERO_ABS = 1e-15

@@ -10,6 +10,8 @@ The law
   normal:      F_n = K_n V                  (V overlap volume, m^3; = K_n A_c delta for a
                                               flat joint: YADE's volumetric law, Eq. 5)
   tangential:  F_t += -K_t A_c v_t dt,  |F_t| <= mu F_n          (Eqs. 6-7, incremental)
+  twist:       M_t += -K_t J_p w_n dt,  |M_t| <= (2/3) mu F_n r_eq (reduced by F_t; not in
+               the paper: the same shear springs resisting a rotation about n, ``twist_spring``)
   damping:     a dashpot pressure distributed over the contact patch (Eq. 8, see below)
 
 Damping. Eq. 8 of the paper writes F_d = mu_0 A_c v_rel, but mu_0 = 0.08 or 0.8 as a
@@ -21,7 +23,7 @@ moment (R = int (s x n)(s x n)^T dA): a joint rocking about its middle is damped
 its centre does not move. The same holds tangentially while the contact sticks. The
 coefficients are set so that each mode of the contact gets the fraction ``xi`` of its
 critical damping: with K the contact's 6 x 6 stiffness at p (K_n A along n, K_t A in the
-plane while sticking, K_n R in rocking; ``patch_stiffness``) and M the 6 x 6 effective
+plane while sticking, K_n R in rocking, K_t J_p in twist while sticking; ``patch_stiffness``) and M the 6 x 6 effective
 mass of the two bodies seen at p (the inverse of the mobility W, ``mobility``), the
 damping matrix is C = 2 xi M^1/2 (M^-1/2 K M^-1/2)^1/2 M^1/2 = sum over the contact's modes
 of 2 xi omega_k (M phi_k)(M phi_k)^T (``damping_matrix``). For one block on a rigid base
@@ -164,6 +166,51 @@ def shear_spring(n, v_rel, fs_prev, area, kt, mu, fn_el, dt):
     return fs * scale[:, None], slipping
 
 
+#: the torsional friction capacity of a patch over mu F_n r_eq, r_eq = sqrt(2 J_p / A)
+#: (``twist_spring``): a uniformly pressed disc of radius a slips in torsion at
+#: int mu p r dA = (2/3) mu F_n a, and its 2 J_p / A is a^2 (a square: 0.385 b against
+#: the exact 0.383 b)
+TWIST_CAPACITY = 2.0 / 3.0
+
+
+@njit(cache=True)
+def polar_moment(n, J) -> float:
+    """J_p = int |s|^2 dA (m^4) of a patch about its centroid, from its second moment J
+    (3, 3) and unit normal n (3,): trace(J) - n.J.n."""
+    jn = 0.0
+    for a in range(3):
+        for b in range(3):
+            jn += n[a] * J[a, b] * n[b]
+    return J[0, 0] + J[1, 1] + J[2, 2] - jn
+
+
+@njit(cache=True)
+def twist_spring(mt0, wn, jp, area, kt, mu, fn_el, fs_mag, dt):
+    """The twisting moment about n on B (N m) of one contact after one step: the patch's
+    shear springs K_t resist a relative rotation about n with K_t J_p (J_p: ``polar_moment``,
+    m^4; a twist psi moves the patch point s by psi |s|), incremental like the shear
+    force, M_t = M_t0 - K_t J_p wn dt (wn: (w_B - w_A).n, rad/s), capped at
+    TWIST_CAPACITY mu F_n r_eq sqrt(1 - (|F_t| / mu F_n)^2), r_eq = sqrt(2 J_p / A): the
+    torsional friction of a uniformly pressed patch, reduced by the shear force the
+    friction already carries (fs_mag, N; the elliptic limit surface of combined sliding
+    and spinning, zero while the shear slips). Returns (M_t, the plastic work of the
+    cap over the step, J: (M_t0 + M_t)(M* - M_t) / (2 K_t J_p) as ``energy.slip_work``).
+    Without this spring a stuck patch had no twist stiffness, and the couple of the
+    shear force at the overlap centroid (offset towards the toe) with the load made the
+    twist of a steeply tilted block grow exponentially (docs/physics.md)."""
+    k = kt * jp
+    if k <= 0.0 or area <= 0.0:
+        return 0.0, 0.0
+    trial = mt0 - k * wn * dt
+    fmax = mu * fn_el
+    u = fs_mag / fmax if fmax > 0.0 else 1.0
+    cap = TWIST_CAPACITY * fmax * np.sqrt(2.0 * jp / area) * np.sqrt(max(1.0 - u * u, 0.0))
+    if abs(trial) <= cap:
+        return trial, 0.0
+    mt = cap if trial > 0.0 else -cap
+    return mt, (mt0 + mt) * (trial - mt) / (2.0 * k)
+
+
 def skew(r) -> np.ndarray:
     """(m,3,3) matrices [r]x with [r]x u = r x u."""
     r = np.asarray(r, float)
@@ -195,7 +242,8 @@ def patch_stiffness(n, area, patch_inertia, kn, kt, sticking) -> np.ndarray:
     """Stiffness K (m,6,6) of m contacts at their patch centroids, twist (dv, dw) -> wrench:
     K_n A n n^T + K_t A (1 - n n^T) in translation (K_t only where ``sticking``), K_n R in
     rotation with R = [n]x J [n]x^T = int (s x n)(s x n)^T dA (J the patch second moment,
-    m^4, (m,3,3)). No twist stiffness about n: the elastic law has none."""
+    m^4, (m,3,3)), plus the twist spring K_t J_p n n^T about n (``twist_spring``, J_p the
+    polar moment, where ``sticking``)."""
     n = np.asarray(n, float)
     nn = n[:, :, None] * n[:, None, :]
     K = np.zeros((len(n), 6, 6))
@@ -203,6 +251,8 @@ def patch_stiffness(n, area, patch_inertia, kn, kt, sticking) -> np.ndarray:
     K[:, :3, :3] = (kn * area)[:, None, None] * nn + kta[:, None, None] * (np.eye(3) - nn)
     S = skew(n)
     K[:, 3:, 3:] = kn[:, None, None] * np.matmul(np.matmul(S, patch_inertia), S.transpose(0, 2, 1))
+    jp = np.trace(patch_inertia, axis1=1, axis2=2) - np.einsum("ma,mab,mb->m", n, patch_inertia, n)
+    K[:, 3:, 3:] += np.where(sticking, kt * jp, 0.0)[:, None, None] * nn
     return K
 
 
@@ -461,8 +511,9 @@ def damping_wrenches_warm(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, 
     ``basis`` (m,6,6) holds on entry, where ``warm``, the contact's eigenvectors of the
     previous step (of B = L^T K L, the scaled stiffness), and on exit this step's, for every
     contact damped here (``_jacobi_sqrt``). A basis that is not one (zeros, NaN) gives a cold
-    solve. The result is the cold solve's to ~1e-9 of the largest wrench (the twist about n
-    has no stiffness: the square root of B's zero eigenvalue amplifies round-off)."""
+    solve. The result is the cold solve's to ~1e-9 of the largest wrench (while a contact
+    slips the twist about n has no stiffness: the square root of B's zero eigenvalue
+    amplifies round-off)."""
     m = len(parea)
     fd = np.zeros((m, 3))
     md = np.zeros((m, 3))
@@ -492,6 +543,7 @@ def damping_wrenches_warm(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, 
         kta = kt[c] * parea[c] if sticking[c] else 0.0
         kna = kn[c] * parea[c]
         J = pj[c]
+        ktj = kt[c] * polar_moment(nc, J) if sticking[c] else 0.0  # the twist spring
         # [n]x J [n]x^T
         S[0, 1], S[0, 2], S[1, 0], S[1, 2], S[2, 0], S[2, 1] = -n2, n1, n2, -n0, -n1, n0
         for a in range(3):
@@ -505,7 +557,7 @@ def damping_wrenches_warm(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, 
             for b in range(3):
                 nn = nc[a] * nc[b]
                 K[a, b] = kna * nn + kta * ((1.0 if a == b else 0.0) - nn)
-                K[3 + a, 3 + b] = kn[c] * Rr[a, b]
+                K[3 + a, 3 + b] = kn[c] * Rr[a, b] + ktj * nn
         # Cholesky W = L L^T
         L[:, :] = 0.0
         ok = True

@@ -201,13 +201,23 @@ class NumpyStep:
         rb = c - pos[ib]
         v_rel = (vel[ib] + law.cross(angvel[ib], rb)) - (vel[ia] + law.cross(angvel[ia], ra))
         fn = kn * vol
-        fs_prev = np.array([self._shear.get(k, (0.0, 0.0, 0.0)) for k in keys], float).reshape(-1, 3)
+        # each contact's history: its shear force (N) and twisting moment about n (N m)
+        hist = np.array([self._shear.get(k, (0.0, 0.0, 0.0, 0.0)) for k in keys], float).reshape(-1, 4)
+        fs_prev = hist[:, :3]
         fs_new, slipping = law.shear_spring(n, v_rel, fs_prev, area, kt, mu, fn, dt)
-        self._shear = dict(zip(keys, fs_new))
         # the slip's plastic work: the elastic trial of shear_spring against its capped force
         f0 = law.rotate_into_plane(fs_prev, n)
         f_trial = f0 - (kt * area)[:, None] * (v_rel - law.dot(v_rel, n)[:, None] * n) * dt
         slip = float(np.sum(energy.slip_work(f0, f_trial, fs_new, kt, area)))
+        # the twist spring on the patch (contact.twist_spring)
+        jp = np.array([law.polar_moment(n[k], pj[k]) for k in range(len(ia))])
+        wn = law.dot(angvel[ib] - angvel[ia], n)
+        fs_mag = np.linalg.norm(fs_new, axis=1)
+        tw = [law.twist_spring(hist[k, 3], wn[k], jp[k], parea[k], kt[k], mu[k], fn[k], fs_mag[k], dt)
+              for k in range(len(ia))]
+        mt = np.array([t[0] for t in tw])
+        slip += float(sum(t[1] for t in tw))
+        self._shear = dict(zip(keys, np.concatenate([fs_new, mt[:, None]], axis=1)))
 
         # damping distributed over the patch, at its centroid p
         pa_, pb_ = pc - pos[ia], pc - pos[ib]
@@ -229,7 +239,8 @@ class NumpyStep:
         e_el = float(np.sum(energy.normal_energies(kn[ok], vol[ok], c[ok], n[ok], sh.normals[sa], sh.offsets[sa],
                                                    sh.normals[sb], sh.offsets[sb], rot[ia[ok]], rot[ib[ok]],
                                                    pos[ia[ok]], pos[ib[ok]]))
-                     + np.sum(np.sum(fs_new[ok] ** 2, axis=1) / (2.0 * kt[ok] * area[ok])))
+                     + np.sum(np.sum(fs_new[ok] ** 2, axis=1) / (2.0 * kt[ok] * area[ok]))
+                     + np.sum(np.divide(mt ** 2, 2.0 * kt * jp, out=np.zeros_like(mt), where=kt * jp > 0)[ok]))
         self.elastic = (self.elastic[1], e_el)
 
         # the forces applied here: shear spring at c, damping at p (+ its moment), and with
@@ -237,7 +248,9 @@ class NumpyStep:
         f_c = fs_new + fn[:, None] * n if self.native else fs_new
         idx = np.concatenate([ib, ia])
         F = np.concatenate([f_c + fd, -(f_c + fd)])
-        T = np.concatenate([law.cross(rb, f_c) + law.cross(pb_, fd) + md, -law.cross(ra, f_c) - law.cross(pa_, fd) - md])
+        m_t = mt[:, None] * n  # the twisting moment on B
+        T = np.concatenate([law.cross(rb, f_c) + law.cross(pb_, fd) + md + m_t,
+                            -law.cross(ra, f_c) - law.cross(pa_, fd) - md - m_t])
         Fs = np.stack([np.bincount(idx, F[:, k], nb) for k in range(3)], 1)
         Ts = np.stack([np.bincount(idx, T[:, k], nb) for k in range(3)], 1)
 
@@ -315,10 +328,11 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
     xi = P[:, 3].copy()
     if shared:  # a body of several shapes: its joints' contacts share the damping ratio
         xi *= law.joint_share(oa, ob, nb, area)
-    # each contact's history: its shear force and its damping's modal basis (zeros for a new
-    # contact: no basis, a cold solve, also at the next step if it is not damped now)
+    # each contact's history: its shear force (columns 0-2) and twisting moment about n (3),
+    # and its damping's modal basis (zeros for a new contact: no basis, a cold solve, also at
+    # the next step if it is not damped now)
     prev = _previous(keys, prev_keys)
-    fs_prev = np.zeros((m, 3))
+    fs_prev = np.zeros((m, 4))
     basis = np.zeros((m, 6, 6))
     warm = prev >= 0
     for k in range(m):
@@ -326,7 +340,8 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
             fs_prev[k] = prev_shear[prev[k]]
             basis[k] = prev_basis[prev[k]]
     fn = kn * vol
-    fs = np.empty((m, 3))
+    fs = np.empty((m, 4))
+    jp = np.empty(m)
     slipping = np.zeros(m, np.bool_)
     ra = np.empty((m, 3))
     rb = np.empty((m, 3))
@@ -386,6 +401,13 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
                 slip += (1.0 - s) * (f0t + s * fm * fm) / (2.0 * kta)
             for q in range(3):
                 fs[k, q] *= s
+        # the twist spring on the patch (contact.twist_spring)
+        jp[k] = law.polar_moment(nk, pj[k])
+        wn = (angvel[b, 0] - angvel[a, 0]) * nk[0] + (angvel[b, 1] - angvel[a, 1]) * nk[1] \
+            + (angvel[b, 2] - angvel[a, 2]) * nk[2]
+        fs[k, 3], w_twist = law.twist_spring(f0[3], wn, jp[k], area[k], kt[k], mu[k], fn[k],
+                                             np.sqrt(fs[k, 0] ** 2 + fs[k, 1] ** 2 + fs[k, 2] ** 2), dt)
+        slip += w_twist
         # relative twist at the patch centroid
         twist[k, 0] = (vel[b, 0] + (angvel[b, 1] * pb[k, 2] - angvel[b, 2] * pb[k, 1])) \
             - (vel[a, 0] + (angvel[a, 1] * pa[k, 2] - angvel[a, 2] * pa[k, 1]))
@@ -416,12 +438,12 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
         fc1 = fs[k, 1] + fn[k] * n[k, 1]
         fc2 = fs[k, 2] + fn[k] * n[k, 2]
         d0, d1, d2 = fd[k, 0], fd[k, 1], fd[k, 2]
-        T[b, 0] += (rb[k, 1] * fc2 - rb[k, 2] * fc1) + (pb[k, 1] * d2 - pb[k, 2] * d1) + md[k, 0]
-        T[b, 1] += (rb[k, 2] * fc0 - rb[k, 0] * fc2) + (pb[k, 2] * d0 - pb[k, 0] * d2) + md[k, 1]
-        T[b, 2] += (rb[k, 0] * fc1 - rb[k, 1] * fc0) + (pb[k, 0] * d1 - pb[k, 1] * d0) + md[k, 2]
-        T[a, 0] -= (ra[k, 1] * fc2 - ra[k, 2] * fc1) + (pa[k, 1] * d2 - pa[k, 2] * d1) + md[k, 0]
-        T[a, 1] -= (ra[k, 2] * fc0 - ra[k, 0] * fc2) + (pa[k, 2] * d0 - pa[k, 0] * d2) + md[k, 1]
-        T[a, 2] -= (ra[k, 0] * fc1 - ra[k, 1] * fc0) + (pa[k, 0] * d1 - pa[k, 1] * d0) + md[k, 2]
+        T[b, 0] += (rb[k, 1] * fc2 - rb[k, 2] * fc1) + (pb[k, 1] * d2 - pb[k, 2] * d1) + md[k, 0] + fs[k, 3] * n[k, 0]
+        T[b, 1] += (rb[k, 2] * fc0 - rb[k, 0] * fc2) + (pb[k, 2] * d0 - pb[k, 0] * d2) + md[k, 1] + fs[k, 3] * n[k, 1]
+        T[b, 2] += (rb[k, 0] * fc1 - rb[k, 1] * fc0) + (pb[k, 0] * d1 - pb[k, 1] * d0) + md[k, 2] + fs[k, 3] * n[k, 2]
+        T[a, 0] -= (ra[k, 1] * fc2 - ra[k, 2] * fc1) + (pa[k, 1] * d2 - pa[k, 2] * d1) + md[k, 0] + fs[k, 3] * n[k, 0]
+        T[a, 1] -= (ra[k, 2] * fc0 - ra[k, 0] * fc2) + (pa[k, 2] * d0 - pa[k, 0] * d2) + md[k, 1] + fs[k, 3] * n[k, 1]
+        T[a, 2] -= (ra[k, 0] * fc1 - ra[k, 1] * fc0) + (pa[k, 0] * d1 - pa[k, 1] * d0) + md[k, 2] + fs[k, 3] * n[k, 2]
         for q in range(3):
             Fd[b, q] += fd[k, q]
             Fd[a, q] -= fd[k, q]
@@ -434,6 +456,8 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
         if area[k] > 0.0:
             e_el += energy.normal_energy(kn[k], vol[k], c, n, k, normals, offsets, nf, rot, pos, ia[k], a, ib[k], b) + (
                 fs[k, 0] ** 2 + fs[k, 1] ** 2 + fs[k, 2] ** 2) / (2.0 * kt[k] * area[k])
+            if kt[k] * jp[k] > 0.0:  # the twist spring's
+                e_el += fs[k, 3] ** 2 / (2.0 * kt[k] * jp[k])
             r = vol[k] / area[k] / min(size[ia[k]], size[ib[k]])
             if r > depth_ratio:
                 depth_ratio = r
@@ -475,7 +499,7 @@ class CompiledStep:
         self.jkeys = np.array([k for k, _ in keys], np.int64)
         self.jvals = np.array([v for _, v in keys], float).reshape(-1, 4)
         self.keys = np.zeros(0, np.int64)
-        self.shear_store = np.zeros((0, 3))
+        self.shear_store = np.zeros((0, 4))  # shear force (N) and twisting moment (N m) per contact
         self.basis_store = np.zeros((0, 6, 6))  # each contact's damping modes (contact.damping_wrenches_warm)
         self.size = np.full(ns, np.inf) if size is None else np.asarray(size, float)
         self.depth_ratio = 0.0
@@ -574,8 +598,8 @@ class CompiledStep:
                 ia, ib, vol, c, n, area, fn, fs, fd, slipping = self._raw
                 st.id1, st.id2, st.normal, st.point, st.volume, st.area, st.fn = (self.owner[ia], self.owner[ib], n, c,
                                                                                   vol, area, fn)
-                st.f_extra = fs + fd
-                st.shear = fs + fd - law.dot(fd, n)[:, None] * n
+                st.f_extra = fs[:, :3] + fd
+                st.shear = fs[:, :3] + fd - law.dot(fd, n)[:, None] * n
                 st.slipping = slipping
             self._state = st
         return self._state
