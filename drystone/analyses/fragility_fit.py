@@ -316,12 +316,8 @@ def bootstrap_runs(im, exceeded, n_boot: int = 1000, seed: int = 0, level: float
             continue
         thetas.append(f.theta)
         betas.append(f.beta)
-    lo, hi = 50 * (1 - level), 50 * (1 + level)
-    out = {"n_boot": n_boot, "seed": seed, "level": level, "failed": failed, "method": "runs resampled"}
-    if not thetas:
-        return dict(out, theta_ci=None, beta_ci=None)
-    return dict(out, theta_ci=[float(np.percentile(thetas, lo)), float(np.percentile(thetas, hi))],
-                beta_ci=[float(np.percentile(betas, lo)), float(np.percentile(betas, hi))])
+    return _intervals(thetas, betas, level, {"n_boot": n_boot, "seed": seed, "level": level, "failed": failed,
+                                             "method": "runs resampled"})
 
 
 # --- incremental dynamic analysis: one interval- or right-censored intensity per record -----------------------
@@ -444,12 +440,8 @@ def bootstrap_ida(brackets, censored=(), n_boot: int = 1000, seed: int = 0, leve
             continue
         thetas.append(f.theta)
         betas.append(f.beta)
-    lo_q, hi_q = 50 * (1 - level), 50 * (1 + level)
-    out = {"n_boot": n_boot, "seed": seed, "level": level, "failed": failed, "method": "records resampled"}
-    if not thetas:
-        return dict(out, theta_ci=None, beta_ci=None)
-    return dict(out, theta_ci=[float(np.percentile(thetas, lo_q)), float(np.percentile(thetas, hi_q))],
-                beta_ci=[float(np.percentile(betas, lo_q)), float(np.percentile(betas, hi_q))])
+    return _intervals(thetas, betas, level, {"n_boot": n_boot, "seed": seed, "level": level, "failed": failed,
+                                             "method": "records resampled"})
 
 
 def brackets_of_runs(runs, exceeded) -> tuple[list, float | None]:
@@ -464,3 +456,13 @@ def brackets_of_runs(runs, exceeded) -> tuple[list, float | None]:
     hi = min(hit)
     below = [x for x, e in pts if not e and x < hi]
     return [max(below) if below else 0.0, hi], None
+
+
+def _intervals(thetas, betas, level: float, out: dict) -> dict:
+    """``out`` with the bootstrap's percentile intervals of theta and beta at ``level``
+    (None when no resample could be fitted)."""
+    if not thetas:
+        return dict(out, theta_ci=None, beta_ci=None)
+    lo, hi = 50 * (1 - level), 50 * (1 + level)
+    return dict(out, theta_ci=[float(np.percentile(thetas, lo)), float(np.percentile(thetas, hi))],
+                beta_ci=[float(np.percentile(betas, lo)), float(np.percentile(betas, hi))])
