@@ -148,17 +148,13 @@ modal: setup
 	$(RUN) modal "$(CASE)" --workers $(JOBS) $(ARGS)
 
 tilt: setup
-	$(RUN) sweep cases/sweeps/tilt_seeds.toml --workers $(JOBS)
-	$(RUN) sweep cases/sweeps/tilt_seeds_extruded.toml --workers $(JOBS)
-	$(PY) -m drystone.studies.tilt
+	$(PY) -m drystone.studies.tilt --run seeds extruded --workers $(JOBS) $(if $(DASK),--dask $(DASK))
 
 tilt-rate: setup
-	$(RUN) sweep cases/sweeps/tilt_rate.toml --workers $(JOBS)
-	$(PY) -m drystone.studies.tilt
+	$(PY) -m drystone.studies.tilt --run rate --workers $(JOBS) $(if $(DASK),--dask $(DASK))
 
 tilt-sensitivity: setup
-	$(RUN) sweep cases/sweeps/tilt_sensitivity.toml --workers $(JOBS)
-	$(PY) -m drystone.studies.tilt
+	$(PY) -m drystone.studies.tilt --run sensitivity --workers $(JOBS) $(if $(DASK),--dask $(DASK))
 
 sacsayhuaman: setup
 	$(PY) -m drystone.studies.sacsayhuaman all --workers $(JOBS) $(if $(DASK),--dask $(DASK))

@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tomllib
 from dataclasses import replace
 from pathlib import Path
 
@@ -154,8 +152,8 @@ def test_malformed_input_is_a_value_error():
 @pytest.fixture(scope="module")
 def full_plan(tmp_path_factory):
     d = tmp_path_factory.mktemp("plan")
-    path = P.write("full", out_dir=d / "out", records_dir=d / "records")
-    return path, json.loads((path.parent / "plan.json").read_text()), d
+    path = P.write("full", out_dir=d / "out")
+    return path, json.loads(path.read_text()), d
 
 
 def test_plan_covers_the_far_field_set_and_stripes(full_plan):
@@ -168,17 +166,16 @@ def test_plan_covers_the_far_field_set_and_stripes(full_plan):
     assert P.CONFIGS["full"].stripes_g == (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0)
     assert len(plan["runs"]) == 22 * 10
     assert {(r["record_id"], r["pga_g"]) for r in plan["runs"]} == {(i, s) for i in ids for s in STRIPES}
-    # the sweep file: name, relative paths, one run per planned run, no record cut
-    raw = tomllib.loads(path.read_text())
-    assert raw["sweep"]["name"] == "fragility_runs" and not Path(raw["sweep"]["case"]).is_absolute()
-    assert (path.parent / raw["sweep"]["case"]).resolve() == P.CASE.resolve()
-    assert raw["sweep"]["set"] == []
-    name, jobs = sweep.load(path, results=d / "results")
-    assert len(jobs) == 220
-    for j in jobs:
-        rec = next(o for o in j.overrides if o.startswith("stages.1.record="))
-        rel = tomllib.loads(f"v = {rec.split('=', 1)[1]}")["v"]
-        assert not os.path.isabs(rel) and (P.CASE.parent / rel).is_file()
+    # what the analysis is given: the records as FEMA ids, the stripes, no record cut, one draw per run in
+    # the analysis's order (record by record, stripes increasing), named as the analysis names its runs
+    a = plan["analysis"]
+    assert a["method"] == "stripes" and a["levels_g"] == STRIPES.tolist() and plan["common_overrides"] == []
+    assert a["records"] == [f"fema:farfield:{i}a" for i in ids]
+    assert [(r["record_id"], r["pga_g"]) for r in plan["runs"]] == [(i, s) for i in ids for s in STRIPES]
+    assert len(P.draws(plan)) == 220 and len({r["name"] for r in plan["runs"]}) == 220
+    for r in plan["runs"]:
+        assert r["name"] == f"{Path(r['record_file']).stem}-pga_{r['pga_g']:g}"
+        assert Path(r["record_file"]).is_file() and Path(r["record_file"]).parent == P.analysis_dir(d / "out") / "records"
 
 
 def test_records_are_the_packages_samples(full_plan):
@@ -212,25 +209,40 @@ def test_draws_are_seeded_and_within_their_distributions(full_plan):
     u = (np.log(kn) - math.log(k["low"])) / (math.log(k["high"]) - math.log(k["low"]))
     assert stats.kstest(np.clip(u, 0, 1), "uniform").pvalue > tol.KS_P_MIN
     # reproducible: rebuilding gives the same draws; each run's draw depends on its key only
-    again = P.build(P.CONFIGS["full"], d / "records")
+    again = P.build(P.CONFIGS["full"], d / "out")
     assert [(r["mu"], r["kn"]) for r in again["runs"]] == [(r["mu"], r["kn"]) for r in plan["runs"]]
-    small = P.build(P.CONFIGS["small"], d / "records")
+    small = P.build(P.CONFIGS["small"], d / "out")
     full_by = {(r["record_id"], r["pga_g"]): r for r in plan["runs"]}
     assert len(small["runs"]) == 4
     for r in small["runs"]:
         assert (r["mu"], r["kn"]) == (full_by[(r["record_id"], r["pga_g"])]["mu"],
                                       full_by[(r["record_id"], r["pga_g"])]["kn"])
     # a different seed gives different draws
-    other = P.build(replace(P.CONFIGS["small"], seed=1), d / "records")
+    other = P.build(replace(P.CONFIGS["small"], seed=1), d / "out")
     assert [r["mu"] for r in other["runs"]] != [r["mu"] for r in small["runs"]]
 
 
-def test_small_plan_validates(tmp_path):
-    """The small plan's 4 runs are valid cases (keys, records, time step), records cut."""
-    path = P.write("small", out_dir=tmp_path / "out", records_dir=tmp_path / "records")
-    name, jobs = sweep.load(path, results=tmp_path / "results")
-    assert name == "fragility_small_runs" and len(jobs) == 4
+def test_small_plan_validates(tmp_path, monkeypatch):
+    """The small plan as the fragility analysis runs it (its run_jobs captured, nothing run):
+    4 valid runs (keys, records, time step), records cut, each with its own draw."""
+    from drystone.analyses import common
+
+    seen = []
+
+    def capture(case, runs, root, label, common_=(), *a, **k):
+        seen.append((case, [sweep.Job(n, str(case), list(common_) + list(o), str(Path(root) / "runs" / n))
+                            for n, o in runs]))
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(common, "run_jobs", capture)
+    r = S.run("small", out_dir=tmp_path / "out")
+    assert r["interrupted"] and len(seen) == 1
+    jobs = seen[0][1]
+    plan = P.load_plan(tmp_path / "out")
+    assert [j.name for j in jobs] == [r["name"] for r in plan["runs"]] and len(jobs) == 4
     assert all("stages.1.duration=2.0" in j.overrides and "stages.2.duration=3.0" in j.overrides for j in jobs)
+    for j, r in zip(jobs, plan["runs"]):
+        assert f"contact.mu={r['mu']!r}" in j.overrides and f"stages.1.pga_g={r['pga_g']!r}" in j.overrides
     prints = sweep.validate(jobs)
     assert len(set(prints.values())) == 4
 
@@ -288,42 +300,48 @@ def test_lpt_makespan():
 @pytest.mark.yade
 @pytest.mark.slow
 def test_tiny_study_end_to_end(outdir):
-    """One record (1a, cut to 1 s) at one stripe, rest capped at 1.5 s (4.5 s simulated,
-    about 30-60 s here): plan -> sweep -> residuals -> damage states -> report. One stripe
-    cannot be fitted: the report must say why; a second sweep run skips the finished run."""
-    cfg = replace(P.CONFIGS["small"], name="tiny", sweep_name="fragility_tiny_runs", record_ids=(1,),
-                  stripes_g=(0.8,), record_duration_s=1.0, rest_max_s=1.5, n_boot=50)
-    path = P.write(cfg, out_dir=outdir / "out", records_dir=outdir / "records")
-    r = sweep.run(path, workers=1, results=outdir / "results", heartbeat_s=600)
-    assert not r["failed"], r
-    rep = S.report(cfg, out_dir=outdir / "out", results=outdir / "results")
+    """One record (1a, cut to 1 s) at two stripes (the analysis needs two), rest capped at
+    1.5 s (4.5 s simulated each, about 30-60 s here): plan -> the fragility analysis
+    (stripes, the study's draws) -> residuals -> damage states -> report. One run per stripe
+    cannot be fitted whatever it gives (none, both, or a jump between the stripes: complete
+    separation; the report must say why); running the study again reuses the finished runs."""
+    cfg = replace(P.CONFIGS["small"], name="tiny", record_ids=(1,), stripes_g=(0.4, 0.8), record_duration_s=1.0,
+                  rest_max_s=1.5, n_boot=50)
+    r = S.run(cfg, workers=1, out_dir=outdir / "out")
+    assert not r["failed"] and not r["interrupted"], r
+    assert r["analysis"]["method"] == "stripes" and r["analysis"]["draws_given"] == P.draws(P.load_plan(outdir / "out"))
+    rep = S.report(cfg, out_dir=outdir / "out")
     data = json.loads((outdir / "out" / "fragility.json").read_text())
-    assert data["runs"]["done"] == 1 and data["planned_runs"] == 1
+    assert data["runs"]["done"] == 2 and data["planned_runs"] == 2
     from drystone.studies.sacsayhuaman import analysis as an
-    res = an.residuals(outdir / "results" / "fragility_tiny_runs" / "rec01a-pga_0.80")
+    run_dir = P.analysis_dir(outdir / "out") / "runs" / "farfield_01a_MUL009-pga_0.8"
+    res = an.residuals(run_dir)
     rows = list(__import__("csv").DictReader(open(outdir / "out" / "runs.csv")))
-    assert len(rows) == 1 and rows[0]["status"] == "done"
+    assert len(rows) == 2 and rows[1]["status"] == "done" and rows[1]["name"] == run_dir.name
+    rows = rows[1:]
     assert float(rows[0]["max_out_of_plane_mm"]) == pytest.approx(1e3 * res["max_out_of_plane_m"],
                                                                   rel=tol.CSV_READBACK_REL)
     assert rows[0]["DS1"] == str(S.damage_states(res)["DS1"])
-    spec = json.loads((outdir / "results" / "fragility_tiny_runs" / "rec01a-pga_0.80" / "spec.json").read_text())
+    spec = json.loads((run_dir / "spec.json").read_text())
+    assert {m["mu"] for m in spec["materials"].values()} == {P.load_plan(outdir / "out")["runs"][1]["mu"]}  # its draw
     ex = [s for s in spec["stages"] if s.get("type") == "excitation"][0]
     assert ex["end"] - ex["start"] == pytest.approx(1.0, abs=tol.RECORD_CUT_S)  # the record was cut to 1 s
     for e in data["fits"].values():
-        assert e["fit"] is None and "fewer than 2" in e["reason"]
+        assert e["fit"] is None and e["reason"]
     text = rep.read_text()
     assert "no fit" in text and "Projected full study (220 runs" in text
     assert data["cost"]["projection"]["expected"]["core_hours"] > 0
     assert (outdir / "out" / "fragility.png").is_file()  # markers and the reasons only: no curve to check
-    again = sweep.run(path, workers=1, results=outdir / "results", heartbeat_s=600)
-    assert again["runs"]["rec01a-pga_0.80"]["status"].startswith("skipped")
+    again = S.run(cfg, workers=1, out_dir=outdir / "out")  # the finished run is reused, not run again
+    sw = json.loads((run_dir.parent / "sweep.json").read_text())
+    assert [x["status"] for x in sw["runs"]] == ["skipped (finished earlier)"] * 2 and not again["failed"]
 
 
 def test_report_text_with_fitted_curves(tmp_path, monkeypatch):
     """report.md on synthetic fitted data (fit_step replaced): theta, beta and their
     intervals, the observed fractions, the projection and the assumptions are there."""
     cfg = replace(P.CONFIGS["small"], n_boot=50)
-    P.write(cfg, out_dir=tmp_path, records_dir=tmp_path / "records")
+    P.write(cfg, out_dir=tmp_path)
     rng = np.random.default_rng(2)
     rows = [{"name": f"r{k}-{pga}", "status": "done", "pga_g": float(pga), "kn": 1e8, "mu": 0.45, "settled": True,
              **S.damage_states({"collapsed": [], "max_out_of_plane_m": rng.lognormal(math.log(0.03 * pga), 0.7)}),

@@ -25,7 +25,7 @@ end
 
 
 def _tilt_results(results):
-    seeds, ext = results / "tilt_seeds", results / "tilt_seeds_extruded"
+    seeds, ext = results / "tilt" / "seeds", results / "tilt" / "extruded"
     for k, (a, ra, b, rb) in enumerate([(14.0, 14.6, 15.0, 15.3), (13.5, 14.1, 14.9, 15.1)]):
         fake_run(seeds, f"seed_{k}", k, a, drop=ra)
         fake_run(ext, f"seed_{k}", k, b, drop=rb)

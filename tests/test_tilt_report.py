@@ -1,5 +1,6 @@
-"""Tilt-table report (drystone/studies/tilt/study.py) on synthetic sweep folders: statistics, the
-rate check and the tables, without YADE."""
+"""Tilt-table report (drystone/studies/tilt/study.py) on synthetic group folders (one tilt
+analysis per run): statistics, the rate check and the tables, without YADE; the study's runs
+are the tilt analysis's, with the study's protocols."""
 import json
 
 import pytest
@@ -10,7 +11,7 @@ from drystone.studies.tilt import study as tilt
 def fake_run(root, name, seed, angle, rates=(2.0, 1.0), mu=0.4, kn=2e8, drop="absent"):
     """A finished run's summary.json; ``drop`` is its reaction-drop angle ("absent": a
     summary written before that angle was reported)."""
-    d = root / name
+    d = root / name / tilt.RUN
     d.mkdir(parents=True)
     s = {"collapse_angle_deg": angle,
          "collapse": None if angle is None else {"detected_angle_deg": angle + 0.3, "criterion": "reaction_drop",
@@ -26,8 +27,8 @@ def fake_run(root, name, seed, angle, rates=(2.0, 1.0), mu=0.4, kn=2e8, drop="ab
     (d / "summary.json").write_text(json.dumps(s))
 
 
-def sweep_json(root, names):
-    (root / "sweep.json").write_text(json.dumps({"runs": [{"name": n} for n in names]}))
+def runs_json(root, names):
+    (root / "runs.json").write_text(json.dumps({"runs": names}))
 
 
 def test_statistics_rate_check_and_report(tmp_path):
@@ -35,10 +36,10 @@ def test_statistics_rate_check_and_report(tmp_path):
     angles = [14.0, 14.5, 15.0, None]  # the last wall did not collapse: counted, not averaged
     for k, a in enumerate(angles):
         fake_run(seeds, f"seed_{k}", k, a)
-    sweep_json(seeds, [f"seed_{k}" for k in range(5)])  # seed_4 never finished
+    runs_json(seeds, [f"seed_{k}" for k in range(5)])  # seed_4 never finished
     fake_run(rate, "paper_seed_0", 0, 14.15, rates=(1.0, 0.2))
     fake_run(sens, "mu_0.7", 0, 19.0, mu=0.7)
-    sweep_json(sens, ["mu_0.7", "kn_5e8"])
+    runs_json(sens, ["mu_0.7", "kn_5e8"])
     s = tilt.build(seeds, rate, sens, tmp_path / "out", figures=False)
     st = s["seeds"]
     assert s["collapse_angles_deg"] == [14.0, 14.5, 15.0, None]
@@ -75,11 +76,11 @@ def test_extruded_walls_are_paired_by_seed(tmp_path):
     seeds, ext = tmp_path / "seeds", tmp_path / "ext"
     for k, (a, b) in enumerate([(14.0, 15.0), (13.5, 14.9), (14.2, None)]):
         fake_run(seeds, f"seed_{k}", k, a)
-        (seeds / f"seed_{k}" / "geometry.json").write_text(
+        (seeds / f"seed_{k}" / tilt.RUN / "geometry.json").write_text(
             json.dumps({"generator": {"depth_spread": 1 / 3, "thickness": 0.108}}))
         if b is not None:
             fake_run(ext, f"seed_{k}", k, b)
-            (ext / f"seed_{k}" / "geometry.json").write_text(
+            (ext / f"seed_{k}" / tilt.RUN / "geometry.json").write_text(
                 json.dumps({"generator": {"depth_spread": 0.0, "thickness": 0.108}}))
     s = tilt.build(seeds, tmp_path / "r", tmp_path / "n", tmp_path / "o", figures=False, extruded=ext)
     ex = s["extruded"]
@@ -112,3 +113,32 @@ def test_headline_both_angles_constant_section_first(tmp_path):
     assert md.index("**constant section") < md.index("stones of varying depth (our hypothesis")
     assert "15.30, 15.10, 15.50: mean 15.30, sd 0.20" in md
     assert "| 14.3 |" in md  # the paper's model, on the reaction-drop column
+
+
+def test_groups_are_tilt_analyses_with_the_studys_protocols(tmp_path, monkeypatch):
+    """Each run of a group is one tilt analysis of cases/tilt_wall.toml towards +y with the
+    group's protocol and overrides (the analysis's run_jobs captured: nothing runs), and the
+    report reads it from the analysis's run folder."""
+    from drystone.analyses import common
+
+    seen = []
+
+    def capture(case, runs, root, label, common_=(), *a, **k):
+        seen.append((str(case), list(runs), list(common_)))
+        return {n: {"status": "failed", "error": "not run"} for n, _ in runs}
+
+    monkeypatch.setattr(common, "run_jobs", capture)
+    res = tilt.run_group("rate", tmp_path, workers=1, log=lambda m: None)
+    assert res["paper_seed_0"]["status"] == "failed"
+    (case, runs, over), = seen
+    assert case == str(tilt.CASE.resolve()) and over == ["case.geometry.seed=0"]
+    (name, (stages,)), = runs
+    assert name == "towards_+y" and stages.startswith("stages=")
+    import tomllib
+    st = tomllib.loads("v = " + stages.split("=", 1)[1])["v"]
+    assert [x["type"] for x in st] == ["gravity", "tilt", "tilt"]
+    assert (st[1]["rate_deg_s"], st[1]["to_deg"]) == (1.0, 10.0)  # the paper's protocol
+    assert (st[2]["rate_deg_s"], st[2]["max_deg"], st[2]["after_collapse"]) == (0.2, 25.0, 3.0)
+    assert st[2]["until_collapse"] and st[1]["towards"] == st[2]["towards"] == "+y"
+    assert json.loads((tmp_path / "rate" / "runs.json").read_text())["runs"] == ["paper_seed_0"]
+    assert (tmp_path / "rate" / "paper_seed_0" / "tilt.json").is_file()

@@ -269,10 +269,13 @@ def fragility(case, records, method: str = "ida", im: str = "pga", levels=None, 
               factor: float = 2.0, fill: float | None = 0.25, max_runs: int = 30, stage=None, direction: str = "y",
               overrides=(), out=None, workers=None, backend: str = "local", address=None, collapse_result=None,
               uncertain=(), mu_beta: float = UNCERTAIN["mu_beta"], kn_low: float = UNCERTAIN["kn_low"],
-              log=print) -> dict:
+              draws_given=None, log=print) -> dict:
     """Fragility curves of ``case`` (module docstring); returns what it writes to
     fragility.json, with ``out_dir``. ``collapse_result``: a finished collapse analysis (what
-    drystone.analyses.collapse.collapse returned) to fit instead of running one (ida)."""
+    drystone.analyses.collapse.collapse returned) to fit instead of running one (ida).
+    ``draws_given``: the contact values ({"mu", "kn", "kt"}) of every run of the analysis
+    itself (stripes: record by record, each level in increasing order; ida: one per record),
+    a study's own seeded draws (drystone/studies/fragility); written to fragility.json."""
     from drystone.model import case as casemod
 
     t0 = time.time()
@@ -301,10 +304,15 @@ def fragility(case, records, method: str = "ida", im: str = "pga", levels=None, 
         files = [r["record"] for r in collapse_result["records"].values()]
         notes = {}
 
+    if draws_given is not None:
+        need = len(files) * (len(levels) if method == "stripes" else 1)
+        if len(draws_given) != need or collapse_result is not None:
+            raise casemod.CaseError(f"{where}: {len(draws_given)} draws given for {need} run(s)"
+                                    + (" (and a finished collapse analysis)" if collapse_result is not None else ""))
     recs, n_runs, run_root = _run(method, case_path, case_dict, files, levels, stage, direction, overrides, out_dir,
                                   collapse_result, dict(tolerance=tolerance, cap=cap, start=start, factor=factor,
                                                         fill=fill, max_runs=max_runs),
-                                  workers, backend, address, log)
+                                  workers, backend, address, log, draws_given)
     done_runs = [x for r in recs.values() for x in r["runs"] if x.get("status") == "done"]
     thick = None
     for x in done_runs:
@@ -370,7 +378,7 @@ def fragility(case, records, method: str = "ida", im: str = "pga", levels=None, 
             "search": None if method == "stripes" else {"tolerance_g": tolerance, "cap_g": cap, "start_g": start,
                                                         "factor": factor, "fill": fill, "max_runs": max_runs},
             "records_note": ASSUMED_RECORDS if notes else None,
-            "states": states, "records": recs, "uncertain": unc,
+            "states": states, "records": recs, "uncertain": unc, "draws_given": draws_given,
             "cost": {"runs": n_runs, "run_wall_s": wall, "elapsed_s": time.time() - t0}}
     common.write_json(out_dir / "fragility.json", data, case=case_path, overrides=overrides)
     common.write_text(out_dir / "runs.csv", runs_csv(recs, im, damage, thresholds))

@@ -105,7 +105,7 @@ def _directions(towards) -> list[str]:
 
 
 def stages_override(prefix: list[dict], towards: str, rate: float, max_deg: float, fast_to: float | None = None,
-                    fast_rate: float | None = None) -> str:
+                    fast_rate: float | None = None, after_collapse: float = AFTER_COLLAPSE_S) -> str:
     """The ``stages=[...]`` override of one tilt run."""
     from drystone import tomlio
 
@@ -113,7 +113,7 @@ def stages_override(prefix: list[dict], towards: str, rate: float, max_deg: floa
     if fast_to is not None and fast_to > 0:
         tilt.append({"type": "tilt", "rate_deg_s": float(fast_rate), "to_deg": float(fast_to), "towards": towards})
     tilt.append({"type": "tilt", "rate_deg_s": float(rate), "until_collapse": True, "max_deg": float(max_deg),
-                 "towards": towards, "after_collapse": AFTER_COLLAPSE_S})
+                 "towards": towards, "after_collapse": float(after_collapse)})
     return "stages=" + tomlio.value(prefix + tilt)
 
 
@@ -123,9 +123,12 @@ def _run_name(d: str, suffix: str = "") -> str:
 
 def tilt(case, towards=("+y",), out=None, workers=None, backend: str = "local", address=None, rate: float = 1.0,
          max_deg: float = 45.0, rate_check: bool = False, check_rate: float | None = None,
-         rate_band: float = RATE_BAND_DEG, overrides=(), log=print) -> dict:
+         rate_band: float = RATE_BAND_DEG, overrides=(), lead=None, after_collapse: float = AFTER_COLLAPSE_S,
+         log=print) -> dict:
     """The collapse angle of ``case`` tilted towards each direction (module docstring);
-    returns what it writes to tilt.json, with ``out_dir``."""
+    returns what it writes to tilt.json, with ``out_dir``. ``lead``: (to_deg, rate_deg_s), a
+    faster lead-in tilt before the tilt at ``rate`` (the tilt study's protocols: 2 deg/s to
+    10 deg, then 1 deg/s); ``after_collapse``: seconds run after a detected collapse."""
     from drystone.model import case as casemod
 
     t0 = time.time()
@@ -134,12 +137,16 @@ def tilt(case, towards=("+y",), out=None, workers=None, backend: str = "local", 
     dirs = _directions(towards)
     if not rate > 0 or not 0 < max_deg <= 90:
         raise casemod.CaseError(f"{case}: --rate must be > 0 and --max-deg in (0, 90] deg")
+    if lead is not None and not (0 < lead[0] < max_deg and lead[1] > 0):
+        raise casemod.CaseError(f"{case}: the lead-in tilt must reach 0 < to_deg < --max-deg at a rate > 0, got {lead}")
     check_rate = rate / 5.0 if check_rate is None else check_rate
     if rate_check and not check_rate > 0:
         raise casemod.CaseError(f"{case}: --check-rate must be > 0")
     prefix = common.stages_before(case_path, overrides)
     out_dir = common.output_dir(case_path, "tilt", out)
-    runs = [(_run_name(d), [stages_override(prefix, d, rate, max_deg)]) for d in dirs]
+    lead_to, lead_rate = lead if lead is not None else (None, None)
+    runs = [(_run_name(d), [stages_override(prefix, d, rate, max_deg, lead_to, lead_rate, after_collapse)])
+            for d in dirs]
     log(f"[tilt] {len(runs)} direction(s) at {rate:g} deg/s: {', '.join(dirs)}")
     res = common.run_jobs(case_path, runs, out_dir, "tilt", list(overrides), workers, backend, address, log)
     directions = {d: _direction(res[_run_name(d)], _run_name(d)) for d in dirs}
@@ -153,7 +160,8 @@ def tilt(case, towards=("+y",), out=None, workers=None, backend: str = "local", 
                 continue
             fast_to = math.floor(max(0.0, h - RATE_CHECK_LEAD_DEG))
             checks.append((d, fast_to, (_run_name(d, "-slow"),
-                                        [stages_override(prefix, d, check_rate, max_deg, fast_to or None, rate)])))
+                                        [stages_override(prefix, d, check_rate, max_deg, fast_to or None, rate,
+                                                         after_collapse)])))
         log(f"[tilt] rate check: {len(checks)} run(s) at {check_rate:g} deg/s")
         cres = common.run_jobs(case_path, [c for _, _, c in checks], out_dir, "tilt-rate-check", list(overrides),
                                workers, backend, address, log)
@@ -169,7 +177,8 @@ def tilt(case, towards=("+y",), out=None, workers=None, backend: str = "local", 
                 "status": o.get("status")}
     data = {"analysis": "tilt", "case": str(case_path), "overrides": list(overrides),
             "protocol": {"stages_before_tilt": prefix, "rate_deg_s": rate, "max_deg": max_deg,
-                         "after_collapse_s": AFTER_COLLAPSE_S,
+                         "lead": None if lead is None else {"to_deg": lead_to, "rate_deg_s": lead_rate},
+                         "after_collapse_s": after_collapse,
                          "rate_check": ({"rate_deg_s": check_rate, "lead_deg": RATE_CHECK_LEAD_DEG,
                                          "band_deg": rate_band} if rate_check else None)},
             "headline": CRITERION, "collapse_criterion": common.CRITERION,

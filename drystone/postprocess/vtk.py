@@ -23,7 +23,7 @@ Why .pvd and not XDMF: each sample is a self-contained .vtu that ParaView (or me
 alone; VTU holds polygons of any corner count in one cell list, and the collection is a
 dozen lines of XML written here (meshio has no .pvd writer).
 
-    python -m drystone.postprocess.vtk results/tilt_seeds/seed_0 [--every 5] [--out DIR] [--platform-frame]
+    python -m drystone.postprocess.vtk results/tilt/seeds/seed_0/runs/towards_+y [--every 5] [--out DIR] [--platform-frame]
 """
 from __future__ import annotations
 

@@ -22,8 +22,8 @@ engines, with the rigid closed form where there is one.
   the joints being continuous through the thickness and mu = 0.4 > t/H): tan(theta) =
   t / H_free = 0.8 / 3.2, 14.04 deg.
 * ``tilt_wall``: the Santa-Cruz tilt walls (``cases/tilt_wall.toml``, generator
-  ``tilt_wall``, seeds 0-4) with the faster protocol of ``cases/sweeps/tilt_seeds.toml``
-  (2 deg/s to 10 deg, then 1 deg/s). No closed form: the experiment (14.33 +- 0.76 deg,
+  ``tilt_wall``, seeds 0-4) with the tilt study's faster protocol (drystone/studies/tilt/study.py ``FAST``:
+  2 deg/s to 10 deg, then 1 deg/s). No closed form: the experiment (14.33 +- 0.76 deg,
   data/papers/sacsayhuaman.toml) and the paper's model (14.3 deg) are given beside.
   LMGC90's common-plane detection finds no supporting contact between these irregular
   stones (they fall through each other from the first step: checked on seed 0, with and
@@ -180,7 +180,7 @@ def tilt_wall_case(kn: float = KN0, seed: int = 0) -> dict:
     c["case"]["name"] = f"crosscheck_tilt_wall_{seed}"
     c["case"]["geometry"] = dict(c["case"]["geometry"], seed=seed)
     c["contact"] = {"kn": kn, "kt": kn / 2}
-    c["stages"][1]["rate_deg_s"] = 2.0  # cases/sweeps/tilt_seeds.toml's faster protocol
+    c["stages"][1]["rate_deg_s"] = 2.0  # the tilt study's faster protocol (studies/tilt/study.py FAST)
     c["stages"][2]["rate_deg_s"] = 1.0
     return c
 

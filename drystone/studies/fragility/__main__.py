@@ -1,8 +1,9 @@
 """python -m drystone.studies.fragility {plan,run,fit,report,all} [--workers N] [--dask ADDRESS] [--config small|full]
 
 plan     FEMA P695 far-field records (component a out of plane) x PGA stripes 0.1-1.0 g with per-run
-         draws of mu and K_n -> results/fragility/plan.toml (+ plan.json, records/)
-run      plan, then run the sweep (resumable: finished runs are skipped; local pool or Dask)
+         draws of mu and K_n -> results/fragility/plan.json (the records in stripes/records/)
+run      plan, then the fragility analysis of cases/sacsayhuaman/record.toml, --method stripes, with those
+         draws -> results/fragility/stripes/ (resumable: finished runs are reused; local pool or Dask)
 fit      damage states of the finished runs, lognormal fragility curves in PGA (default), PGV and Sa(T1)
          -> fragility.json, runs.csv
 report   fit, then fragility.png and report.md
@@ -32,7 +33,7 @@ def main(argv=None) -> int:
         path = study.plan(cfg)
         p = planmod.load_plan(path.parent)
         print(f"{path}: {len(p['records'])} records x {len(cfg.stripes_g)} stripes = {len(p['runs'])} runs "
-              f"(records in {planmod.RECORDS})")
+              f"(records in {planmod.analysis_dir(path.parent) / 'records'})")
         return 0
     if a.step == "run":
         r = study.run(cfg, **kw)

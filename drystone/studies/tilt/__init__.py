@@ -1,2 +1,2 @@
-"""The tilt-table validation (Sacsayhuaman paper §3.2): ``study`` reads the sweeps of
-generated walls (make tilt, tilt-rate, tilt-sensitivity) and writes results/tilt/."""
+"""The tilt-table validation (Sacsayhuaman paper §3.2): ``study`` runs the ``tilt`` analysis
+of generated walls in groups (make tilt, tilt-rate, tilt-sensitivity) and writes results/tilt/."""

@@ -1,32 +1,40 @@
-"""Tilt-table validation report (Sacsayhuaman paper §3.2; issue 5), plain Python.
+"""Tilt-table validation report (Sacsayhuaman paper §3.2), plain Python, on the ``tilt``
+analysis (drystone/analyses/tilt.py).
 
-Reads the finished runs of three sweeps (drystone/sweep.py; cases/sweeps/):
+Every run is one ``tilt`` analysis of cases/tilt_wall.toml towards +y (``run``: the
+generated Santa-Cruz wall, its gravity stage, then the platform tilted with a lead-in to
+10 deg and on until collapse, at most 25 deg, 3 s run after the detection), in four groups
+(``GROUPS``), each a folder of analyses ``results/tilt/<group>/<run>/`` (tilt.json,
+report.html, the run in runs/towards_+y/):
 
-* ``results/tilt_seeds/<run>/``: generated walls (one per seed), FEM calibration;
-* ``results/tilt_seeds_extruded/<run>/``: the same walls with a constant section (every
-  stone extruded through the mean thickness), to show what the stones' varying depth does;
-* ``results/tilt_rate/<run>/``: the paper's protocol (0.2 deg/s) on seed 0, to check the
-  faster protocol of the seeds (the collapse angle may change by at most 0.2 deg);
-* ``results/tilt_sensitivity/<run>/``: mu, K_n and the DEM calibration of Table 1.
+* ``seeds``: generated walls (seeds 0-4), FEM calibration, the faster protocol ``FAST``;
+* ``extruded``: the same walls with a constant section (every stone extruded through the
+  mean thickness), to show what the stones' varying depth does;
+* ``rate``: the paper's protocol (``PAPER``: 1 deg/s to 10 deg, then 0.2 deg/s) on seed 0,
+  to check the faster protocol of the seeds (the collapse angle may change by at most
+  0.2 deg);
+* ``sensitivity``: mu, K_n and the DEM calibration of Table 1 on seed 0.
 
-and writes ``results/tilt/summary.json`` (``collapse_angles_deg``: one per seed, with the
-parameters), ``results/tilt/report.md`` and figures: the wall at the paper's Figure 12
+``build`` writes ``results/tilt/summary.json`` (``collapse_angles_deg``: one per seed, with
+the parameters), ``results/tilt/report.md`` and figures: the wall at the paper's Figure 12
 angles and the vertical reaction against time and tilt for every seed (Figure 13).
-Missing sweeps are reported as missing, never filled in. Angles in degrees.
+Missing runs are reported as missing, never filled in. Angles in degrees.
 
-Two collapse angles per wall: the *onset* angle (where the motion that led to the collapse
-began, drystone/mechanics/collapse.py ``onset``: ``collapse_angle_deg``) and the paper's
-*reaction-drop* angle (its Figure 13: the tilt at which the vertical reaction of the moving
-stones first falls 5 % below their weight, drystone/mechanics/collapse.py ``reaction_drop``:
-``reaction_drop_angle_deg``). The headline (``headline``) is the constant-section walls
-(every stone extruded through the mean thickness, as the paper's model was built: the
-like-for-like comparison), beside the varying-depth walls (our hypothesis for the real,
-irregular walls).
+Two collapse angles per wall, both as the ``tilt`` analysis reports them (tilt.json, from the
+run's summary.json): the *onset* angle, its headline (where the motion that led to the
+collapse began, drystone/mechanics/collapse.py ``onset``: ``collapse_angle_deg``) and the
+paper's *reaction-drop* angle (its Figure 13: the tilt at which the vertical reaction of the
+moving stones first falls 5 % below their weight, drystone/mechanics/collapse.py
+``reaction_drop``: ``reaction_drop_angle_deg``), the paper's own reading of collapse, named
+as such. The headline (``headline``) is the constant-section walls (every stone extruded
+through the mean thickness, as the paper's model was built: the like-for-like comparison),
+beside the varying-depth walls (our hypothesis for the real, irregular walls).
 """
 from __future__ import annotations
 
 import json
 import math
+import os
 from pathlib import Path
 
 import numpy as np
@@ -37,18 +45,68 @@ from drystone.postprocess import compare, markdown
 from drystone.model.spec import stage_type
 
 OUT = paths.RESULTS / "tilt"
-RATE_TOLERANCE_DEG = 0.2  # issue 5 §2: a faster rate may not move the collapse angle more than this
+CASE = paths.CASES / "tilt_wall.toml"
+RATE_TOLERANCE_DEG = 0.2  # a faster rate may not move the collapse angle more than this (the paper's protocol's step)
+#: tilt protocols: the lead-in (to_deg, rate deg/s), then the rate (deg/s) until collapse
+FAST = {"lead": (10.0, 2.0), "rate": 1.0}   # the seeds' faster quasi-static protocol
+PAPER = {"lead": (10.0, 1.0), "rate": 0.2}  # the paper's (and cases/tilt_wall.toml's own)
+#: every run: at most this tilt (deg), run this long after the detection (s: long enough for the reaction drop)
+MAX_DEG, AFTER_COLLAPSE_S = 25.0, 3.0
+SEEDS = (0, 1, 2, 3, 4)
+#: group -> (protocol, [(run name, overrides of cases/tilt_wall.toml)]); the FEM calibration of
+#: Table 1 is the case's own (its run is seeds/seed_0); the sensitivity runs are one change at a
+#: time around it (K_t = K_n / 2 as the paper's §3.2) and Table 1's DEM calibration column
+GROUPS = {
+    "seeds": (FAST, [(f"seed_{k}", [f"case.geometry.seed={k}"]) for k in SEEDS]),
+    "extruded": (FAST, [(f"seed_{k}", [f"case.geometry.seed={k}", "case.geometry.depth_spread=0.0"]) for k in SEEDS]),
+    "rate": (PAPER, [("paper_seed_0", ["case.geometry.seed=0"])]),
+    "sensitivity": (FAST, [(name, ["case.geometry.seed=0"] + over) for name, over in (
+        ("mu_0.3", ["contact.mu=0.3"]), ("mu_0.5", ["contact.mu=0.5"]), ("mu_0.6", ["contact.mu=0.6"]),
+        ("mu_0.7", ["contact.mu=0.7"]), ("kn_5e7", ["contact.kn=5e7", "contact.kt=2.5e7"]),
+        ("kn_5e8", ["contact.kn=5e8", "contact.kt=2.5e8"]),
+        ("dem_calibration", ["contact.kn=5e7", "contact.kt=2.5e7", "contact.mu=0.7",
+                             "materials.stone.density=2400.0"]))]),
+}
+#: the run folder of one tilt analysis (drystone/analyses/tilt.py: towards +y)
+RUN = Path("runs") / "towards_+y"
+
+
+def run_group(group: str, out: Path = OUT, workers=None, backend="local", address=None, log=print) -> dict:
+    """Run (or reuse) the tilt analyses of one group (``GROUPS``) into ``out``/<group>/<run>/,
+    up to ``workers`` at once (each one run); returns {run name: tilt.json's +y direction}."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from drystone.analyses import tilt as analysis
+
+    proto, todo = GROUPS[group]
+    root = Path(out) / group
+    root.mkdir(parents=True, exist_ok=True)
+    atomic.write_text(root / "runs.json", json.dumps({"group": group, "protocol": proto,
+                                                      "runs": [n for n, _ in todo]}, indent=1) + "\n")
+
+    def one(item):
+        name, over = item
+        res = analysis.tilt(CASE, ("+y",), out=root / name, workers=1, backend=backend, address=address,
+                            rate=proto["rate"], max_deg=MAX_DEG, overrides=over, lead=proto["lead"],
+                            after_collapse=AFTER_COLLAPSE_S, log=log)
+        return name, res["directions"]["+y"]
+
+    n = max(1, min(workers or os.cpu_count() or 1, len(todo)))
+    log(f"[tilt study] {group}: {len(todo)} tilt analyses, {n} at a time")
+    with ThreadPoolExecutor(n) as pool:
+        return dict(pool.map(one, todo))
 
 
 def runs(root: Path) -> list[dict]:
-    """One row per finished run of a sweep folder (runs without summary.json are listed
-    under ``missing``), in the sweep's order."""
+    """One row per run of a group folder (``run_group``; runs without summary.json are
+    listed as not finished), in the group's order (its runs.json, else by name)."""
     root = Path(root)
-    status = json.loads((root / "sweep.json").read_text())["runs"] if (root / "sweep.json").is_file() else []
-    names = [r["name"] for r in status] or sorted(p.name for p in root.iterdir() if p.is_dir())
+    listed = json.loads((root / "runs.json").read_text())["runs"] if (root / "runs.json").is_file() else []
+    names = listed or sorted(p.name for p in root.iterdir() if p.is_dir())
     rows = []
     for name in names:
-        p = root / name / "summary.json"
+        folder = root / name / RUN
+        p = folder / "summary.json"
         if not p.is_file():
             rows.append({"name": name, "finished": False})
             continue
@@ -57,15 +115,15 @@ def runs(root: Path) -> list[dict]:
         mat = next(iter(s["inputs"]["materials"].values()))
         tilts = [st for st in s["inputs"]["stages"] if stage_type(st) == "tilt"]
         rows.append({
-            "name": name, "finished": True, "folder": str(root / name),
+            "name": name, "finished": True, "folder": str(folder),
             "collapse_angle_deg": s.get("collapse_angle_deg"),
-            "reaction_drop_angle_deg": _reaction_drop_angle(root / name, s),
+            "reaction_drop_angle_deg": _reaction_drop_angle(folder, s),
             "detected_angle_deg": col.get("detected_angle_deg"),
             "criterion": col.get("criterion"), "first_blocks": col.get("first_blocks"),
             "onset_block": col.get("onset_block"),
             "seed": s["inputs"]["geometry"].get("generator", {}).get("seed"),
-            "depth_spread": _generated(root / name).get("depth_spread", 0.0),
-            "thickness_m": _generated(root / name).get("thickness"),
+            "depth_spread": _generated(folder).get("depth_spread", 0.0),
+            "thickness_m": _generated(folder).get("thickness"),
             "materials": mat, "rates_deg_s": [st["params"]["rate_deg_s"] for st in tilts],
             "overrides": s["inputs"]["provenance"]["overrides"],
             "wall_time_s": s["run"]["wall_time_s"], "steps": s["run"]["steps"], "dt_s": s["run"]["dt_s"],
@@ -373,10 +431,12 @@ def snapshot_figure(run: dict, path: Path) -> Path:
 
 def build(seeds=None, rate=None, sensitivity=None, out: Path = OUT, figures: bool = True,
           extruded=None) -> dict:
-    seeds = Path(seeds or paths.RESULTS / "tilt_seeds")
-    extruded = Path(extruded or paths.RESULTS / "tilt_seeds_extruded")
-    rate = Path(rate or paths.RESULTS / "tilt_rate")
-    sensitivity = Path(sensitivity or paths.RESULTS / "tilt_sensitivity")
+    """The summary and report of the groups' folders (default ``out``/<group>/)."""
+    out = Path(out)
+    seeds = Path(seeds or out / "seeds")
+    extruded = Path(extruded or out / "extruded")
+    rate = Path(rate or out / "rate")
+    sensitivity = Path(sensitivity or out / "sensitivity")
     if not seeds.is_dir():
         raise FileNotFoundError(f"{seeds}: no tilt runs (run `make tilt` first)")
     seed_rows = runs(seeds)
@@ -461,12 +521,18 @@ def main(argv=None) -> int:
 
     ap = argparse.ArgumentParser(prog="python -m drystone.studies.tilt", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--seeds", help="folder of the seed sweep (results/tilt_seeds)")
-    ap.add_argument("--rate", help="folder of the rate check (results/tilt_rate)")
-    ap.add_argument("--sensitivity", help="folder of the sensitivity sweep (results/tilt_sensitivity)")
-    ap.add_argument("--extruded", help="folder of the constant-section walls (results/tilt_seeds_extruded)")
+    ap.add_argument("--run", nargs="+", choices=tuple(GROUPS), default=[], metavar="GROUP",
+                    help=f"run (or reuse) these groups' tilt analyses first: {', '.join(GROUPS)}")
+    ap.add_argument("--workers", type=int, default=None, help="tilt analyses at once (default: cores)")
+    ap.add_argument("--dask", metavar="ADDRESS", default=None, help="Dask scheduler address, or 'local'")
+    ap.add_argument("--seeds", help="folder of the seeds group (results/tilt/seeds)")
+    ap.add_argument("--rate", help="folder of the rate check (results/tilt/rate)")
+    ap.add_argument("--sensitivity", help="folder of the sensitivity group (results/tilt/sensitivity)")
+    ap.add_argument("--extruded", help="folder of the constant-section walls (results/tilt/extruded)")
     ap.add_argument("--out", default=str(OUT))
     a = ap.parse_args(argv)
+    for g in a.run:
+        run_group(g, Path(a.out), a.workers, "dask" if a.dask else "local", a.dask)
     build(a.seeds, a.rate, a.sensitivity, Path(a.out), extruded=a.extruded)
     print((Path(a.out) / "report.md").read_text())
     print(f"written {Path(a.out) / 'summary.json'}")
