@@ -1,7 +1,7 @@
-"""The shape study (issue 25, item 7; drystone/studies/shape/): the bisection of the PGA at
-collapse against fake walls with a known collapse PGA, the statistics behind "beyond the
-seed-to-seed spread", the walls (same footprint and weight, boundary conditions), the
-records' strong-motion windows, and the small plan end to end (YADE)."""
+"""The shape study (drystone/studies/shape/): the collapse analysis's search on the study's grid
+against fake walls with a known collapse PGA, the statistics behind "beyond the seed-to-seed
+spread", the walls (same footprint and weight, boundary conditions), the records'
+strong-motion windows, and the small plan end to end on the tilt and collapse analyses (YADE)."""
 from __future__ import annotations
 
 import csv
@@ -16,64 +16,66 @@ import tolerances as tol
 from conftest import assert_figure, requires_yade
 from drystone.geometry import blockfile as bf
 from drystone.motions.record import Record
-from drystone.analyses import bisect as B
+from drystone.analyses import ida
+from drystone.studies import rounds as R
 from drystone.studies.shape import plan as P
 from drystone.studies.shape import study as S
 
 
-# --- bisection --------------------------------------------------------------------------------------------
+# --- the collapse analysis's search on the study's grid ------------------------------------------------------
+def _search(threshold, cap=3.2, res=0.1):
+    return ida.search(lambda p: p >= threshold - 1e-12, ida.Params(**R.search_params(cap, res)))
+
+
 @pytest.mark.parametrize("threshold", [0.03, 0.1, 0.1000001, 0.73, 0.8, 1.55, 1.6, 2.41, 3.15, 3.2])
-def test_bisection_brackets_a_fake_collapse_pga(threshold):
-    """A fake wall that collapses at every PGA >= threshold: the search ends with
-    low < threshold <= high, high - low one grid step, in log2(3.2 / 0.1) = 5 runs (6 when
-    it lies in the last step, (3.1, 3.2]: the cap is run last, after 3.1 stood), every PGA on
-    the grid and run once."""
-    b, order = B.search(lambda p: p >= threshold - 1e-12, 0.0, 3.2, 0.1)
-    assert b.done and not b.censored and not b.non_monotonic
-    assert b.low_g < threshold <= b.high_g + 1e-9
-    assert b.high_g - b.low_g == pytest.approx(0.1, abs=B.GRID_TOL)
-    assert b.estimate_g == pytest.approx(0.5 * (b.low_g + b.high_g))
-    n = 6 if threshold > 3.1 + 1e-9 else 5
-    assert len(order) == n == b.runs and len(set(order)) == n
-    assert order[0] == 1.6  # the middle first
-    assert all(abs(p / 0.1 - round(p / 0.1)) < B.GRID_TOL for p in order)
+def test_search_brackets_a_fake_collapse_pga_on_the_grid(threshold):
+    """A fake wall that collapses at every PGA >= threshold: the collapse analysis's search
+    set to the study's grid (rounds.search_params) ends with low < threshold <= high, high -
+    low one grid step, every PGA a point of the 0.1 g grid (the study's bisection grid), run
+    once, the first at half the cap: in 5 runs below 1.6 g, 6 above it (the cap is run second
+    when the wall stood at 1.6 g)."""
+    st, order = _search(threshold)
+    assert st.status == "bracketed" and not st.non_monotonic
+    assert st.low_g < threshold <= st.high_g + 1e-9
+    assert st.high_g - st.low_g == pytest.approx(0.1, abs=1e-9)
+    assert order[0] == 1.6 and len(set(order)) == len(order) == (5 if threshold <= 1.6 else 6)
+    assert all(abs(p / 0.1 - round(p / 0.1)) < 1e-6 for p in order)
 
 
-def test_bisection_censored_when_the_wall_stands_at_the_cap():
-    b, order = B.search(lambda p: False, 0.0, 3.2, 0.1)
-    assert b.done and b.censored and b.high_g is None and b.low_g == 3.2 and b.estimate_g is None
-    assert order == [1.6, 2.4, 2.8, 3.0, 3.1, 3.2]  # the cap is run last: 6 runs
-    b, order = B.search(lambda p: p >= 3.2, 0.0, 3.2, 0.1)
-    assert (b.low_g, b.high_g, len(order)) == (3.1, 3.2, 6)
-
-
-def test_bisection_replays_from_observations():
-    """The state is the observations: any prefix of a search gives the PGA the search ran
-    next, whatever order the observations come in (a resumed study continues the same way)."""
-    threshold = 1.27
-    _, order = B.search(lambda p: p >= threshold, 0.0, 3.2, 0.1)
-    for k in range(len(order)):
-        obs = {p: p >= threshold for p in reversed(order[:k])}
-        assert B.bracket(obs, 0.0, 3.2, 0.1).next_g == order[k]
-
-
-def test_bisection_flags_non_monotonic_and_refuses_off_grid():
-    b = B.bracket({1.6: True, 0.8: False, 2.4: False, 1.2: False, 1.4: True, 1.3: True}, 0.0, 3.2, 0.1)
-    assert b.done and (b.low_g, b.high_g) == (1.2, 1.3) and b.non_monotonic == [2.4]
-    with pytest.raises(ValueError, match="not on the 0.1 g grid"):
-        B.bracket({0.75: True}, 0.0, 3.2, 0.1)
-    with pytest.raises(ValueError, match="outside"):
-        B.bracket({3.3: True}, 0.0, 3.2, 0.1)
-    with pytest.raises(ValueError, match="above the assumed-safe"):
-        B.bracket({}, 1.0, 1.0, 0.1)
+def test_search_censored_when_the_wall_stands_at_the_cap():
+    st, order = _search(99.0)
+    assert st.status == "censored" and st.high_g is None and st.censored_at_g == 3.2
+    assert order == [1.6, 3.2]  # the cap second: a wall standing there is censored after 2 runs
 
 
 def test_small_config_bracket():
     """The small plan: a 1.6 g grid to 3.2 g, 1 or 2 runs per search."""
     c = P.CONFIGS["small"]
     for thr, runs, br in ((1.0, [1.6], (0.0, 1.6)), (2.0, [1.6, 3.2], (1.6, 3.2))):
-        b, order = B.search(lambda p: p >= thr, c.pga_low_g, c.pga_cap_g, c.resolution_g)
-        assert order == runs and (b.low_g, b.high_g) == br
+        st, order = _search(thr, c.pga_cap_g, c.resolution_g)
+        assert order == runs and (st.low_g, st.high_g) == br
+
+
+def test_tilt_protocol_is_the_tilt_cases():
+    """The tilt analysis's keywords read from cases/shape/tilt.toml: its lead-in, rate,
+    largest tilt, time after the collapse and direction."""
+    assert R.tilt_protocol(P.TILT_CASE) == {"towards": ("+y",), "rate": 1.0, "lead": (5.0, 2.0), "max_deg": 30.0,
+                                            "after_collapse": 3.0}
+
+
+def test_search_state_reads_collapse_json(tmp_path):
+    """collapse.json's records as the report reads them: bracketed, censored, pending, failed."""
+    runs = [{"pga_g": 1.6, "name": "a-pga_1.6", "status": "done", "collapsed": True, "largest_out_of_plane_m": 0.5}]
+    st = R.search_state({"record": "a"}, {"status": "bracketed", "pga_at_collapse_g": [1.5, 1.6], "censored_at_g": None,
+                                          "standing_above_collapse_g": [2.4], "runs": runs}, tmp_path)
+    assert st["status"] == "done" and st["bracket"]["estimate_g"] == pytest.approx(1.55)
+    assert st["bracket"]["non_monotonic"] == [2.4] and st["runs"][0]["max_out_of_plane_mm"] == pytest.approx(500.0)
+    st = R.search_state({}, {"status": "censored", "pga_at_collapse_g": None, "censored_at_g": 3.2, "runs": []},
+                        tmp_path)
+    assert st["bracket"]["censored"] and st["bracket"]["low_g"] == 3.2 and st["bracket"]["estimate_g"] is None
+    assert R.search_state({}, None, tmp_path)["status"] == "pending"
+    assert R.search_state({}, {"status": "failed", "runs": [], "error": "x", "pga_at_collapse_g": None,
+                               "censored_at_g": None}, tmp_path)["status"] == "failed"
 
 
 # --- statistics -------------------------------------------------------------------------------------------
@@ -184,13 +186,17 @@ def test_strong_motion_window():
 @pytest.mark.yade
 @pytest.mark.slow
 def test_small_study_end_to_end(outdir):
-    """The small plan (2 variants, 1 seed, ancash1970 cut to 3 s, a 1.6 g grid): plan, tilt
-    sweep, bisection rounds, report, figure (about 1-2 min on 2 cores); run again, every
-    run is reused and the report is the same."""
+    """The small plan (2 variants, 1 seed, ancash1970 cut to 3 s, a 1.6 g grid): plan, per
+    wall the tilt and collapse analyses, report, figure (about 1-2 min on 2 cores); run
+    again, every run is reused and the report is the same."""
     cfg = replace(P.CONFIGS["small"], results_root=str(outdir / "results"))
     r = S.run(cfg, workers=2)
     assert not r["failed"] and not r["interrupted"] and not r["refused"], r
     assert 1 <= r["rounds"] <= 2
+    for v, s in S.walls(cfg):  # each wall's analyses, with their JSON and report
+        for a in ("tilt", "collapse"):
+            assert (P.wall_dir(cfg, v, s) / a / f"{a}.json").is_file()
+            assert (P.wall_dir(cfg, v, s) / a / "report.html").is_file()
     rep = S.report(cfg)
     data = json.loads((cfg.out_dir / "shape.json").read_text())
     assert data["status"]["done"] == 2 and not data["status"]["pending"]
@@ -225,11 +231,12 @@ def test_report_and_readme_block_on_synthetic_runs(tmp_path, monkeypatch):
     for v in cfg.variants:
         for s in cfg.seeds:
             thr = 1.0 + shift[v] + 0.1 * s
-            b, order = B.search(lambda p: p >= thr - 1e-9, cfg.pga_low_g, cfg.pga_cap_g, cfg.resolution_g)
+            b, order = _search(thr - 1e-9, cfg.pga_cap_g, cfg.resolution_g)
             runs = [{"status": "done", "collapsed": p >= thr - 1e-9, "pga_g": p, "name": f"{v}-{s}-{p}",
                      "wall_s": 20.0, "simulated_s": 15.0, "collapsed_stones": [3] if p >= thr else []} for p in order]
-            searches.append({"variant": v, "seed": s, "record": "ancash1970", "status": "done",
-                             "bracket": b.as_dict(), "runs": runs})
+            rec = {"status": b.status, "pga_at_collapse_g": b.bracket, "censored_at_g": b.censored_at_g,
+                   "standing_above_collapse_g": b.non_monotonic, "runs": runs}
+            searches.append(R.search_state({"variant": v, "seed": s, "record": "ancash1970"}, rec, tmp_path))
             tilt.append({"variant": v, "seed": s, "name": f"{v}-s{s}", "status": "done",
                          "collapse_angle_deg": 9.0 + s * 0.2 + (2.0 if v == "interlocking" else 0.0),
                          "reaction_drop_angle_deg": 13.0 + s * 0.1, "first_blocks": [30], "wall_s": 15.0,
@@ -245,7 +252,7 @@ def test_report_and_readme_block_on_synthetic_runs(tmp_path, monkeypatch):
     data = json.loads((cfg.out_dir / "shape.json").read_text())
     m = data["measures"]["pga_ancash1970"]["variants"]["interlocking"]
     # thresholds on the grid (1.8, 1.9, 2.0 g): brackets one step below each, estimates their middles
-    assert m["mean"] == pytest.approx(np.mean([1.8 + 0.1 * s - 0.05 for s in range(3)]), abs=B.GRID_TOL)
+    assert m["mean"] == pytest.approx(np.mean([1.8 + 0.1 * s - 0.05 for s in range(3)]), abs=1e-9)
     assert_figure(cfg.out_dir / "shape.png", (3.3 * 2 + 0.5, 4.2), 120)
     block = rt.shape(cfg.results)
     assert block.startswith("| measure | (a) coursed |") and "**Answer.**" in block and "\nRuns: " in block

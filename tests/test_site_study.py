@@ -1,5 +1,5 @@
-"""The site study (drystone/studies/site/) and the bisection rounds it shares with the shape
-study (drystone/studies/rounds.py): a search replayed against a fake wall, the reversed
+"""The site study (drystone/studies/site/) on the tilt and collapse analyses: the water-level
+search (the collapse analysis's search over static runs) against a fake wall, the reversed
 records, the walls' sides and the retained case's relation to the free-standing one, the
 retained wall's caps against Mononobe-Okabe's limit, the report and its documentation block
 from made-up runs, and the small plan end to end (YADE)."""
@@ -15,59 +15,59 @@ import numpy as np
 import pytest
 
 from conftest import assert_figure, requires_yade
-from drystone import sweep
+from drystone.analyses import common, ida
 from drystone.model import case as casemod
 from drystone.motions import readers
 from drystone.studies import rounds
-from drystone.analyses import bisect as B
 from drystone.studies.site import plan as P
 from drystone.studies.site import report as R
 from drystone.studies.site import run as S
 
 
-# --- the shared bisection rounds --------------------------------------------------------------------------
-def _fake_search(threshold: float, fail_at: float | None = None, cap: float = 4.0, res: float = 0.25):
-    """A search over a water level (m) whose wall fails at every level >= threshold; the run
-    at ``fail_at`` fails (as a crashed run)."""
-    def job(x):
-        return sweep.Job(f"level_{x:.2f}", "case.toml", [], f"/nonexistent/level_{x:.2f}")
-
-    def outcome(j):
-        x = float(j.name.split("_")[1])
-        if fail_at is not None and abs(x - fail_at) < 1e-9:
-            return {"status": "failed", "error": "boom"}
-        return {"status": "done", "collapsed": x >= threshold - 1e-9}
-
-    s = rounds.Search({"search": "water"}, 0.0, cap, res, job, lambda x: [f"loads.soil.water_level={x}"],
-                      lambda out: {}, value_key="level_m")
-    return s, outcome
+def _state(observed: dict, cap: float, res: float, key: dict) -> dict:
+    """A search's state as the report reads it, from observations {value: collapsed}."""
+    st = ida.step(observed, ida.Params(**rounds.search_params(cap, res)))
+    rec = {"status": st.status, "pga_at_collapse_g": st.bracket, "censored_at_g": st.censored_at_g,
+           "standing_above_collapse_g": st.non_monotonic, "runs": []}
+    return rounds.search_state(key, rec, Path("/nonexistent"))
 
 
-@pytest.mark.parametrize("threshold", [0.1, 1.3, 2.0, 3.9, 4.0])
-def test_follow_replays_a_bisection(threshold):
-    """rounds.follow through a fake wall's outcomes ends with the bracket and the runs of
-    bisect.search (the shape study's bisection) for the same wall, each run named by its
-    value (level_m)."""
-    s, outcome = _fake_search(threshold)
-    st = rounds.follow(s, outcome)
-    b, order = B.search(lambda x: x >= threshold - 1e-9, 0.0, 4.0, 0.25)
-    assert st["status"] == "done" and st["search"] == "water"
-    assert st["bracket"] == b.as_dict()
-    assert [r["level_m"] for r in st["runs"]] == order
-    assert st["bracket"]["low_g"] < threshold <= st["bracket"]["high_g"] + 1e-9
+def _search(threshold, cap, res):
+    return ida.search(lambda x: x >= threshold - 1e-9, ida.Params(**rounds.search_params(cap, res)))
 
 
-def test_follow_pending_and_failed():
-    """No outcome: pending with the next job (the middle of the grid first); a failed run
-    ends the search as failed, the run listed."""
-    s, outcome = _fake_search(1.3)
-    st = rounds.follow(s, lambda j: None)
-    assert st["status"] == "pending" and st["next_value"] == 2.0 and st["next"].name == "level_2.00"
-    assert s.own(st["next_value"]) == ["loads.soil.water_level=2.0"]
-    s, outcome = _fake_search(1.3, fail_at=1.0)
-    st = rounds.follow(s, outcome)
-    assert st["status"] == "failed" and st["error"] == "boom"
-    assert [r["level_m"] for r in st["runs"]] == [2.0, 1.0]
+# --- the water-level search -------------------------------------------------------------------------------
+@pytest.mark.parametrize("threshold", [0.1, 1.3, 2.0, 3.9, 4.0, 9.0])
+def test_water_search_on_fake_static_runs(tmp_path, monkeypatch, threshold):
+    """The retained wall dry, then the water level at failure (run.static_runs) on a fake wall
+    that fails at every level >= threshold (the analyses' run_jobs replaced): the bracket is
+    the grid step holding the threshold (censored at the top of the soil when it never fails),
+    each static run named by its level and given its water level."""
+    seen = []
+
+    def fake(case, runs, root, label, common=(), *a, **k):
+        seen.append((label, runs))
+        out = {}
+        for n, over in runs:
+            z = float(over[0].split("=")[1]) if over else 0.0
+            out[n] = {"status": "done", "collapsed": bool(over) and z >= threshold - 1e-9, "largest_out_of_plane_m": 0.0}
+        return out
+
+    monkeypatch.setattr(common, "run_jobs", fake)
+    cfg = replace(P.CONFIGS["small"], results_root=str(tmp_path), level_resolution_m=0.25)
+    d = S.static_runs(cfg, log=lambda m: None)
+    assert d["dry"]["status"] == "done" and not d["dry"]["collapsed"] and seen[0][0] == "static-dry"
+    w = d["water"]
+    _, order = _search(threshold, 4.0, 0.25)
+    assert [r["level_m"] for r in w["runs"]] == order and order[0] == 2.0
+    for r, (label, ((name, over),)) in zip(w["runs"], seen[1:]):
+        assert name == r["name"] == f"static-water_{r['level_m']:g}m" and over == [f"loads.soil.water_level={r['level_m']!r}"]
+    b = w["bracket"]
+    if threshold > 4.0:
+        assert b["censored"] and b["low_g"] == 4.0
+    else:
+        assert b["low_g"] < threshold <= b["high_g"] + 1e-9 and b["high_g"] - b["low_g"] == pytest.approx(0.25)
+    assert json.loads((P.static_dir(cfg) / "water.json").read_text())["water"]["bracket"] == b
 
 
 # --- plan: records, sides, caps ---------------------------------------------------------------------------
@@ -118,22 +118,34 @@ def test_walls_sides_and_cases():
         {k: v for k, v in soil.items() if k != "water_level"}
 
 
-def test_overrides_site_only_at_the_surface(small_plan):
-    """A surface run names the example profile (resolved from the base case's folder), a rock
-    run no site; both name the record file and the PGA at rock; the run names differ."""
-    cfg, _ = small_plan
+def test_searches_are_collapse_analyses_site_only_at_the_surface(small_plan, monkeypatch):
+    """Each search is one collapse analysis of its wall's record case under its record file
+    (reversed where the polarity is -), the example profile on the excitation stage at the
+    surface only, its search on the study's grid up to the search's cap (the analyses' run_jobs
+    captured: nothing runs); the search folders differ."""
+    cfg, plan = small_plan
+    seen = []
+
+    def capture(case, runs, root, label, common_=(), *a, **k):
+        seen.append((str(case), runs, list(common_)))
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(common, "run_jobs", capture)
     for wall in ("free", "retained"):
-        rock = P.seismic_overrides(cfg, wall, "rock", "ancash1970", "+", 0.3)
-        surf = P.seismic_overrides(cfg, wall, "surface", "ancash1970", "-", 0.3)
-        assert not any(".site=" in o for o in rock) and "stages.1.pga_g=0.3" in rock
-        site = [o for o in surf if ".site=" in o]
-        assert len(site) == 1
-        path = (P.record_case(wall).parent / json.loads(site[0].split("=", 1)[1])).resolve()
-        assert path == P.PROFILE.resolve()
-        rec = (P.record_case(wall).parent / json.loads(surf[0].split("=", 1)[1])).resolve()
-        assert rec == P.record_file(cfg, "ancash1970", "-").resolve()
-    names = {P.seismic_run_name(w, s, "ancash1970", p, 0.3) for w in P.WALLS for s in P.SITES for p in P.POLARITIES}
-    assert len(names) == 8
+        for site, pol in (("rock", "+"), ("surface", "-" if wall == "retained" else "+")):
+            with pytest.raises(KeyboardInterrupt):
+                S.collapse_search(cfg, plan, wall, site, "ancash1970", pol, log=lambda m: None)
+            case, ((name, own),), over = seen[-1]
+            assert case == str(P.record_case(wall).resolve())
+            cap = plan["caps"][P.search_id(wall, site, "ancash1970", pol)]["cap_g"]
+            assert own[-1] == f"stages.1.pga_g={round(cap / 2, 4)!r}"  # the first run at half the cap
+            st = casemod.load(case, over + own)["stages"][1]
+            assert Path(st["record"]).resolve() == P.record_file(cfg, "ancash1970", pol).resolve()
+            assert (st.get("site") is not None) == (site == "surface")
+            if site == "surface":
+                assert Path(st["site"]).resolve() == P.PROFILE.resolve()
+    dirs = {P.search_dir(cfg, w, s, "ancash1970", p) for w in P.WALLS for s in P.SITES for p in P.POLARITIES}
+    assert len(dirs) == 8
 
 
 def test_retained_caps_keep_mononobe_okabe_solvable(small_plan):
@@ -173,13 +185,16 @@ def test_report_and_docs_block_from_synthetic_runs(small_plan, monkeypatch):
             for pol in cfg.polarities[w]:
                 cap, res = plan["caps"][P.search_id(w, s, "ancash1970", pol)]["cap_g"], cfg.resolution_g[w]
                 thr = thresholds[(w, s)]
-                b, order = B.search(lambda p: p >= thr - 1e-9, 0.0, cap, res)
+                _, order = _search(thr, cap, res)
                 runs = [{"status": "done", "collapsed": p >= thr - 1e-9, "pga_g": p, "name": f"{w}-{s}-{pol}-{p}",
                          "wall_s": 30.0, "simulated_s": 10.0, "max_out_of_plane_mm": 12.0,
                          "pga_surface_g": 1.1 * p if s == "surface" else None} for p in order]
-                searches.append({"wall": w, "site": s, "record": "ancash1970", "polarity": pol, "status": "done",
-                                 "bracket": b.as_dict(), "runs": runs, "cap_g": cap, "resolution_g": res})
-    water_b, water_order = B.search(lambda z: z >= 2.6, 0.0, cfg.level_cap_m, cfg.level_resolution_m)
+                st = _state({p: p >= thr - 1e-9 for p in order}, cap, res,
+                            {"wall": w, "site": s, "record": "ancash1970", "polarity": pol, "cap_g": cap,
+                             "resolution_g": res})
+                searches.append(dict(st, runs=runs))
+    _, water_order = _search(2.6, cfg.level_cap_m, cfg.level_resolution_m)
+    water_b = _state({z: z >= 2.6 for z in water_order}, cfg.level_cap_m, cfg.level_resolution_m, {})["bracket"]
     data = {"plan": plan, "refused": {}, "searches": searches,
             "tilt": [{"wall": "free", "name": "tilt-free", "status": "done", "collapse_angle_deg": 9.5,
                       "reaction_drop_angle_deg": 13.3, "wall_s": 20.0, "simulated_s": 10.0},
@@ -187,7 +202,7 @@ def test_report_and_docs_block_from_synthetic_runs(small_plan, monkeypatch):
                       "reaction_drop_angle_deg": 4.1, "wall_s": 10.0, "simulated_s": 8.0}],
             "static": {"status": "done", "collapsed": False, "max_out_of_plane_mm": 0.8, "settled": True,
                        "name": "static-dry", "wall_s": 10.0, "simulated_s": 9.0},
-            "water": {"status": "done", "bracket": water_b.as_dict(),
+            "water": {"status": "done", "bracket": water_b,
                       "runs": [{"status": "done", "collapsed": z >= 2.6, "level_m": z, "wall_s": 10.0,
                                 "simulated_s": 9.0, "max_out_of_plane_mm": 1.0} for z in water_order]}}
     monkeypatch.setattr(R, "collect", lambda c: data)
@@ -233,34 +248,27 @@ def _as_site(cfg) -> Path:
 @pytest.mark.yade
 @pytest.mark.slow
 def test_small_study_end_to_end(outdir):
-    """The small plan (ancash1970 cut to 1.5 s, coarse brackets and the retained wall's finer
-    ones, both walls, rock and surface, tilt, dry and water static runs): every search ends, the report's tables carry what the
-    runs on disk say (brackets replayed from the runs; surface PGAs from each run's
-    spec.json), every run is in runs.csv; run again, every run is reused (about 2 min on 2
-    cores)."""
+    """The small plan (ancash1970 cut to 1.5 s, coarse brackets, both walls, rock and surface,
+    tilt, dry and water static runs), every search a collapse analysis: every search ends, the
+    report's tables carry what the analyses say (brackets from collapse.json; each run's
+    collapse as its folder says, surface PGAs from each run's spec.json), every run is in
+    runs.csv; run again, every run is reused (about 2 min on 2 cores)."""
     cfg = replace(P.CONFIGS["small"], results_root=str(outdir / "results"))
     r = S.run(cfg, workers=2)
     assert not r["failed"] and not r["interrupted"] and not r["refused"], r
     text = R.write(cfg).read_text()
     data = json.loads((cfg.out_dir / "site.json").read_text())
     assert data["status"]["pending"] == data["status"]["failed"] == 0
-    assert data["status"]["done"] == len(data["searches"]) >= 4  # 4 coarse, and the retained wall's finer ones
-    for st in data["searches"]:
-        if st.get("stage") == "refine":  # inside its coarse bracket, on the finer grid
-            coarse = next(c for c in data["searches"] if c.get("stage") == "coarse" and all(
-                c[k] == st[k] for k in ("wall", "site", "record", "polarity")))
-            assert coarse["bracket"]["low_g"] <= st["bracket"]["low_g"] < st["bracket"]["high_g"] \
-                <= coarse["bracket"]["high_g"] and st["resolution_g"] == cfg.refine_g[st["wall"]]
+    assert data["status"]["done"] == len(data["searches"]) == 4
     for st in data["searches"]:
         b = st["bracket"]
-        assert b["done"] and (b["censored"] or b["high_g"] - b["low_g"] == pytest.approx(st["resolution_g"]))
+        assert b["done"] and (b["censored"] or b["high_g"] - b["low_g"] <= st["resolution_g"] + 1e-9)
         for run in st["runs"]:  # each run's collapse and surface PGA as its folder says
-            out = cfg.results / cfg.runs / run["name"]
-            again = S.seismic_outcome(out)
-            assert again["collapsed"] == run["collapsed"]
+            out = P.search_dir(cfg, st["wall"], st["site"], st["record"], st["polarity"]) / "runs" / run["name"]
+            assert common.outcome(out)["collapsed"] == run["collapsed"]
             spec = json.loads((out / "spec.json").read_text())
             sites = [e["site"]["pga_surface_g"] for e in spec["excitations"] if e.get("site")]
-            assert (sites[0] if sites else None) == run["pga_surface_g"] == again["pga_surface_g"]
+            assert (sites[0] if sites else None) == run["pga_surface_g"] == S.surface_pga(out)
             assert (st["site"] == "surface") == bool(sites)
     table = text.split("## Retained vs free-standing")[1].split("##")[0]
     for w, label in (("free", "free-standing"), ("retained", "retained (soil behind, ASSUMED)")):
@@ -341,7 +349,7 @@ def test_free_standing_wall_against_the_shape_study(tmp_path):
     """The consistency line compares the free-standing wall's brackets at rock with the shape
     study's coursed wall, seed 0 (results/shape/shape.json), record by record."""
     cfg = replace(P.CONFIGS["full"], results_root=str(tmp_path), records=("ancash1970",))
-    b = B.bracket({1.6: False, 2.4: False, 2.8: False, 3.0: False, 3.1: True}).as_dict()
+    b = _state({1.6: False, 3.2: True, 2.4: False, 2.8: False, 3.0: False, 3.1: True}, 3.2, 0.1, {})["bracket"]
     data = {"plan": {"walls": ["free"]}, "searches": [
         {"wall": "free", "site": "rock", "record": "ancash1970", "polarity": "+", "stage": "coarse",
          "status": "done", "bracket": b, "runs": []}]}
@@ -350,6 +358,7 @@ def test_free_standing_wall_against_the_shape_study(tmp_path):
     shape = {"searches": [{"variant": "coursed", "seed": 0, "record": "ancash1970", "status": "done", "bracket": b}]}
     (tmp_path / "shape" / "shape.json").write_text(json.dumps(shape))
     assert R.shape_check(data, cfg).endswith("ancash1970 (3, 3.1] here, (3, 3.1] there: the same brackets.")
-    shape["searches"][0]["bracket"] = B.bracket({1.6: False, 2.4: True, 2.0: False, 2.2: True, 2.1: False}).as_dict()
+    shape["searches"][0]["bracket"] = _state({1.6: False, 2.4: True, 2.0: False, 2.2: True, 2.1: False}, 3.2, 0.1,
+                                             {})["bracket"]
     (tmp_path / "shape" / "shape.json").write_text(json.dumps(shape))
     assert R.shape_check(data, cfg).endswith("(2.1, 2.2] there: **they differ**.")

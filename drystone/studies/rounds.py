@@ -1,21 +1,10 @@
-"""Bisection searches run as rounds of sweeps, resumable: the machinery the shape study
-(drystone/studies/shape/) and the site study (drystone/studies/site/) share.
-
-A search (``Search``) is one bisection over one quantity, a PGA in g or a water level in
-m, on its own grid (drystone/analyses/bisect.py: ``low`` assumed safe and not run,
-``cap`` the highest value run, ``resolution`` the final bracket's width). ``job(x)`` gives
-the sweep job of the run at x (as drystone.sweep.load builds it from a round file: the
-common overrides, the run's own ``own(x)``, then ``case.name=<sweep>/<run>``), ``read(out)``
-the outcome of a finished run folder ({"status": "done", "collapsed": bool, ...} or a
-failure).
-
-``follow`` replays a search through outcomes: the bracket, the runs so far and the next
-job. ``run_rounds`` writes one sweep file per round (``<rounds_dir>/<prefix>NN.toml``)
-holding the next run of every open search and runs it with drystone.sweep (finished runs
-with the same fingerprint are skipped, so an interrupted study continues where it stopped).
-Only outcomes confirmed by this invocation's sweeps (run, or skipped as finished with the
-same inputs) steer the bisection. ``on_disk`` reads a job's outcome from its folder (for a
-report, which replays every search from the runs on disk).
+"""What the shape study (drystone/studies/shape/) and the site study (drystone/studies/site/)
+share: where a configuration writes (``StudyFolders``), the ``collapse`` analysis's search
+set to their grid (``search_params``), the ``tilt`` analysis set to their tilt cases
+(``tilt_protocol``), reading the analyses' JSON into the rows their reports use
+(``search_state``, ``tilt_row``), the runs made and reused (``count_runs``), the timing log
+(``finish``) and their command line (``main``). Every run is made by drystone/analyses/ (tilt, collapse): resumable, finished
+runs with the same fingerprint reused, local pool or Dask.
 """
 from __future__ import annotations
 
@@ -23,22 +12,16 @@ import json
 import os
 import sys
 import time
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 
 from drystone import atomic
-from drystone import paths, sweep, tomlio
-from drystone.analyses import bisect
-
-#: most bisection rounds of one invocation (a search needs at most log2(cap / resolution) + 1)
-MAX_ROUNDS = 30
+from drystone import paths
 
 
 class StudyFolders:
     """Where a study configuration writes (a mixin of the studies' ``Config`` dataclasses,
     which give ``out`` and ``results_root``): ``results`` (results/ or the tests' folder),
-    ``out_dir`` = results/<out>/ (plan, rounds, report) and ``records_dir`` within it."""
+    ``out_dir`` = results/<out>/ (plan, the analyses, report) and ``records_dir`` within it."""
 
     @property
     def results(self) -> Path:
@@ -53,52 +36,95 @@ class StudyFolders:
         return self.out_dir / "records"
 
 
-@dataclass(frozen=True)
-class Search:
-    """One bisection search (module docstring); ``key`` identifies it in the results,
-    ``value_key`` names the searched quantity in each run's row (e.g. "pga_g", "level_m")."""
-
-    key: dict
-    low: float
-    cap: float
-    resolution: float
-    job: Callable[[float], sweep.Job]
-    own: Callable[[float], list]
-    read: Callable[[Path], dict]
-    value_key: str = "pga_g"
+#: most runs of one search (collapse's ``max_runs``): a grid of 2^n steps needs about n + 2
+MAX_RUNS = 30
 
 
-def follow(search: Search, outcome) -> dict:
-    """Follow one search's bisection through ``outcome(job) -> dict | None``; returns its
-    state: ``status`` done (bracket final), pending (``next`` job to run at ``next_value``),
-    failed (a run failed or is unreadable); the bracket and the runs so far, with the
-    search's ``key`` entries."""
-    observed, runs = {}, []
-    for _ in range(MAX_ROUNDS):
-        b = bisect.bracket(observed, search.low, search.cap, search.resolution)
-        base = {**search.key, "bracket": b.as_dict(), "runs": runs}
-        if b.done:
-            return dict(base, status="done", next=None)
-        job = search.job(b.next_g)
-        o = outcome(job)
-        if o is None:
-            return dict(base, status="pending", next=job, next_value=b.next_g)
-        runs.append(dict(o, name=job.name, **{search.value_key: b.next_g}))
-        if o["status"] != "done":
-            return dict(base, status="failed", next=None, error=o.get("error"))
-        observed[b.next_g] = o["collapsed"]
-    raise RuntimeError(f"{search.key}: no bracket after {MAX_ROUNDS} runs")
+def search_params(cap_g: float, resolution_g: float) -> dict:
+    """The ``collapse`` analysis's search (drystone/analyses/ida.py) set to the studies'
+    bisection grid: the first run at half the cap, the cap next when the wall stood there,
+    then the middles of the bracket until it is ``resolution_g`` wide, no fill-in. For a cap of
+    2^n grid steps every PGA it runs is a point of the old grid (drystone/analyses/bisect.py)."""
+    return {"start": cap_g / 2, "factor": 2.0, "cap": cap_g, "tolerance": resolution_g, "fill": None,
+            "max_runs": MAX_RUNS}
 
 
-def on_disk(job: sweep.Job, read) -> dict | None:
-    """The outcome of a job from its folder (finished with the same overrides; the inputs'
-    fingerprint is not checked here), a failure, or None (not run)."""
-    d = Path(job.out_dir)
-    if sweep.finished(job):
-        return read(d)
-    if (d / "FAILED.txt").is_file():
-        return {"status": "failed", "error": (d / "FAILED.txt").read_text(errors="replace").splitlines()[0][:300]}
-    return None
+def tilt_protocol(case) -> dict:
+    """The keywords of drystone.analyses.tilt.tilt that make the tilt of a study's tilt case
+    (its stages after gravity: a lead-in tilt ``to_deg``, then a tilt ``until_collapse``): the
+    same run as the case itself (towards, rates, largest tilt, time after the collapse)."""
+    from drystone.model import case as casemod
+
+    st = [x for x in casemod.load(case)["stages"] if x.get("type") == "tilt"]
+    last = st[-1]
+    if not last.get("until_collapse") or len(st) > 2 or (len(st) == 2 and "to_deg" not in st[0]):
+        raise ValueError(f"{case}: a study's tilt case has a lead-in tilt (to_deg) and a tilt until_collapse")
+    lead = (float(st[0]["to_deg"]), float(st[0]["rate_deg_s"])) if len(st) == 2 else None
+    return {"towards": (last["towards"],), "rate": float(last["rate_deg_s"]), "lead": lead,
+            "max_deg": float(last["max_deg"]), "after_collapse": float(last["after_collapse"])}
+
+
+def _run_cost(run_dir: Path) -> dict:
+    info = read_json(Path(run_dir) / "run_info.json") or {}
+    return {"simulated_s": info.get("simulated_time_s"), "yade_wall_s": info.get("wall_time_s"),
+            "steps": info.get("steps")}
+
+
+def search_state(key: dict, rec: dict | None, out_dir: Path) -> dict:
+    """One record's search of a collapse analysis (collapse.json ``records.<stem>``, the
+    analysis in ``out_dir``) as the studies' reports read it: ``status`` done (bracketed or
+    censored), pending (no result yet), failed or budget; ``bracket`` {low_g, high_g, done,
+    censored, estimate_g, non_monotonic}; ``runs`` (PGA order) with the run's simulated time
+    and its largest out-of-plane residual in mm."""
+    if rec is None:
+        return dict(key, status="pending", bracket=None, runs=[])
+    runs = []
+    for r in rec["runs"]:
+        row = {**_run_cost(Path(out_dir) / "runs" / r["name"]), **r}
+        if r.get("largest_out_of_plane_m") is not None:
+            row["max_out_of_plane_mm"] = 1e3 * r["largest_out_of_plane_m"]
+        runs.append(row)
+    st = rec["status"]
+    b = None
+    if st in ("bracketed", "censored"):
+        lo, hi = rec["pga_at_collapse_g"] or (rec["censored_at_g"], None)
+        b = {"low_g": lo, "high_g": hi, "done": True, "censored": st == "censored",
+             "estimate_g": None if hi is None else 0.5 * (lo + hi),
+             "non_monotonic": rec.get("standing_above_collapse_g") or [], "runs": len(runs)}
+    out = dict(key, status="done" if b else st, bracket=b, runs=runs)
+    if rec.get("error"):
+        out["error"] = rec["error"]
+    return out
+
+
+def tilt_row(key: dict, res: dict | None, out_dir: Path) -> dict:
+    """One tilt analysis's direction (tilt.json ``directions.<d>``, the analysis in
+    ``out_dir``) as the studies' reports read it: the onset (``collapse_angle_deg``, the
+    analysis's headline) and the reaction-drop angle, the first stone, the run's cost."""
+    if res is None:
+        return dict(key, status="pending")
+    if res.get("status") != "done":
+        return dict(key, status="failed", error=res.get("error"))
+    return dict(key, status="done", collapse_angle_deg=res.get("onset_deg"),
+                reaction_drop_angle_deg=res.get("reaction_drop_deg"),
+                first_blocks=[res["first_stone"]] if res.get("first_stone") is not None else None,
+                wall_s=res.get("wall_s"), **_run_cost(Path(out_dir) / res["run"]))
+
+
+def count_runs(folders, t0: float) -> tuple[int, int, int]:
+    """(runs made since ``t0``, runs reused, rounds) over the analyses' folders: a run folder
+    whose run_info.json is newer than ``t0`` was run by this invocation; rounds: the most
+    round sweep files of one analysis."""
+    run = reused = rounds = 0
+    for f in folders:
+        f = Path(f)
+        for d in (f / "runs").glob("*/run_info.json"):
+            if d.stat().st_mtime >= t0:
+                run += 1
+            else:
+                reused += 1
+        rounds = max(rounds, len(list((f / "sweeps").glob("round-*.toml"))))
+    return run, reused, rounds
 
 
 def write_if_changed(path: Path, text: str) -> Path:
@@ -111,64 +137,6 @@ def write_if_changed(path: Path, text: str) -> Path:
     else:
         atomic.record(path)  # the package's, for make clean, even if written before it kept lists
     return path
-
-
-def write_sweep(path: Path, name: str, case: Path, runs: list, common: list, header: str) -> Path:
-    """A sweep file (drystone.tomlio.sweep_file) with the base case relative to the file's
-    folder, rewritten only when different (so a finished run is recognised)."""
-    return write_if_changed(path, tomlio.sweep_file(name, os.path.relpath(case, path.parent), runs, common, header))
-
-
-def count(summary: dict, res: dict) -> None:
-    """Add a sweep's result (drystone.sweep.run) to a study's running ``summary``: runs run,
-    reused, failed, interrupted. A run that several sweeps of one invocation list (a bracket's
-    end that a finer search reuses) counts once (``runs_seen``: the names counted so far)."""
-    seen = summary.setdefault("runs_seen", [])
-    for name, st in res["runs"].items():
-        if name in seen:
-            continue
-        if st["status"] == "done":
-            summary["runs_run"] += 1
-            seen.append(name)
-        elif str(st["status"]).startswith("skipped"):
-            summary["runs_reused"] += 1
-            seen.append(name)
-    summary["failed"] += res["failed"]
-    summary["interrupted"] = res["interrupted"]
-
-
-def run_rounds(searches: list[Search], *, rounds_dir: Path, prefix: str, sweep_name: str, case: Path,
-               common: list, label: str, summary: dict, workers=None, backend="local", address=None,
-               results: Path | None = None, order=None, log=print) -> int:
-    """Bisection rounds until every search is done or failed, or the sweep is interrupted
-    (module docstring); ``order(state)`` sorts each round's runs (e.g. longest first).
-    Updates ``summary`` (``count``); returns the number of rounds run."""
-    verified: dict[str, dict] = {}
-    k = 0
-    for k in range(1, MAX_ROUNDS + 1):
-        states = [(s, follow(s, lambda job: verified.get(job.name))) for s in searches]
-        todo = [(s, st) for s, st in states if st["status"] == "pending"]
-        if not todo:
-            return k - 1
-        if order is not None:
-            todo.sort(key=lambda p: order(p[1]))
-        runs = [(st["next"].name, s.own(st["next_value"])) for s, st in todo]
-        path = write_sweep(rounds_dir / f"{prefix}{k:02d}.toml", sweep_name, case, runs, common,
-                           f"generated by {label}, bisection round {k}: the next run of {len(runs)} open "
-                           "search(es); do not edit")
-        log(f"[{label}] round {k}: {len(runs)} run(s) ({path})")
-        res = sweep.run(path, workers, backend, address, results=results)
-        count(summary, res)
-        for s, st in todo:
-            job = st["next"]
-            r = res["runs"].get(job.name, {})
-            if r.get("status") == "done" or str(r.get("status")).startswith("skipped"):
-                verified[job.name] = s.read(Path(job.out_dir))
-            elif r.get("status") == "failed":
-                verified[job.name] = {"status": "failed", "error": r.get("error", "")[:300]}
-        if summary["interrupted"]:
-            break
-    return k
 
 
 def read_json(p: Path):

@@ -1,10 +1,10 @@
 """python -m drystone.studies.shape {plan,run,report,all} [--config full|small] [--workers N] [--dask ADDRESS]
 
-plan     the four walls x seeds (results/<out>/geometry/), the records' strong-motion windows
-         (results/shape/records/) and the tilt sweep file -> results/<out>/plan.json
-run      plan, the tilt sweep, then bisection rounds of the PGA at collapse (one sweep file per round,
-         results/<out>/rounds/; resumable: finished runs are skipped; local pool or Dask)
-report   every search replayed from the runs on disk -> shape.json, runs.csv, shape.png, report.md
+plan     the four walls x seeds (results/<out>/geometry/) and the records' strong-motion windows
+         (results/<out>/records/) -> results/<out>/plan.json
+run      plan, then per wall the tilt analysis and the collapse analysis (PGA at collapse on the study's grid),
+         results/<out>/walls/<wall>/{tilt,collapse}/ (resumable: finished runs are reused; local pool or Dask)
+report   the analyses' results read back -> shape.json, runs.csv, shape.png, report.md
 all      run, then report
 --config small: 2 variants, 1 seed, 1 record cut to 3 s, a 1.6 g bracket (results/shape_small/): a
 pipeline check, not a result."""

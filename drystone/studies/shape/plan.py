@@ -42,15 +42,14 @@ written as plain text in g (``results/<out>/records/<name>_window.txt``: rewritt
 when different, so a finished run is recognised by its fingerprint).
 
 Where things go: ``results/<out>/`` (``results/shape/`` for the full config) holds
-``plan.json``, ``geometry/<variant>_s<seed>.json``, the tilt sweep ``tilt.toml`` and the
-bisection rounds ``rounds/round_NN.toml``; runs go to ``results/<runs>/<run>/`` (one
-sweep name for every round: ``shape_runs``) and ``results/<tilt_runs>/<run>/``.
+``plan.json``, ``geometry/<variant>_s<seed>.json``, ``records/`` and, per wall, the folders
+of its analyses ``walls/<variant>_s<seed>/tilt/`` and ``.../collapse/`` (drystone/analyses/:
+their JSON, report and runs).
 """
 from __future__ import annotations
 
 import hashlib
 import json
-import os
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -58,7 +57,7 @@ import numpy as np
 
 from drystone import atomic
 from drystone import paths, tomlio
-from drystone.studies.rounds import StudyFolders, write_if_changed, write_sweep
+from drystone.studies.rounds import StudyFolders, write_if_changed
 
 RECORD_CASE = paths.CASES / "shape" / "record.toml"
 TILT_CASE = paths.CASES / "shape" / "tilt.toml"
@@ -92,15 +91,12 @@ class Config(StudyFolders):
     """One configuration of the study (``CONFIGS``). PGAs in g."""
 
     name: str
-    out: str                                   # results/<out>/: plan, geometries, rounds, report
-    runs: str                                  # sweep name of the seismic runs (results/<runs>/<run>/)
-    tilt_runs: str                             # sweep name of the tilt runs
+    out: str                                   # results/<out>/: plan, geometries, the walls' analyses, report
     variants: tuple = ("coursed", "polygonal", "interlocking", "interlocking_split")
     seeds: tuple = (0, 1, 2)
     records: tuple = RECORDS
-    pga_low_g: float = 0.0                     # assumed safe (not run): gravity alone
     pga_cap_g: float = 3.2                     # the highest PGA run; a wall standing there: "> cap"
-    resolution_g: float = 0.1                  # the bracket's final width
+    resolution_g: float = 0.1                  # the bracket's final width (0 g, gravity alone, assumed standing)
     tilt: bool = True
     record_duration_s: float | None = None     # cut the window further (small config only)
     rest_max_s: float | None = None            # cap the rest stage below the case's (small config only)
@@ -109,9 +105,8 @@ class Config(StudyFolders):
 
 
 CONFIGS = {
-    "full": Config(name="full", out="shape", runs="shape_runs", tilt_runs="shape_tilt_runs"),
-    "small": Config(name="small", out="shape_small", runs="shape_small_runs", tilt_runs="shape_small_tilt_runs",
-                    variants=("coursed", "polygonal"), seeds=(0,), records=("ancash1970",), resolution_g=1.6,
+    "full": Config(name="full", out="shape"),
+    "small": Config(name="small", out="shape_small", variants=("coursed", "polygonal"), seeds=(0,), records=("ancash1970",), resolution_g=1.6,
                     record_duration_s=3.0, rest_max_s=1.5,
                     notes=("1 seed, 1 record cut to 3 s, 2 variants, a 1.6 g bracket, rest at most 1.5 s: a pipeline "
                            "check, not a result",)),
@@ -332,46 +327,19 @@ def write_records(names, folder: Path) -> dict:
 
 
 # --- runs -------------------------------------------------------------------------------------------------
-def pga_name(pga_g: float) -> str:
-    return f"{pga_g:.2f}"
-
-
-def seismic_run_name(variant: str, seed: int, record: str, pga_g: float) -> str:
-    return f"{variant}-s{seed}-{record}-pga_{pga_name(pga_g)}"
-
-
-def tilt_run_name(variant: str, seed: int) -> str:
-    return f"{variant}-s{seed}"
-
-
-def _rel(path, start: Path) -> str:
-    return os.path.relpath(path, start)
+def wall_dir(cfg: Config, variant: str, seed: int) -> Path:
+    """The folder of one wall's analyses (tilt/, collapse/)."""
+    return cfg.out_dir / "walls" / f"{variant}_s{seed}"
 
 
 def common_overrides(cfg: Config) -> list[str]:
-    """Every run's overrides: the record and the rest cut to the config's durations."""
+    """Every seismic run's overrides: the record and the rest cut to the config's durations."""
     return tomlio.stage_durations({EXCITATION_STAGE: cfg.record_duration_s, REST_STAGE: cfg.rest_max_s})
 
 
-def seismic_overrides(cfg: Config, variant: str, seed: int, record: str, pga_g: float) -> list[str]:
-    """A seismic run's own overrides: the geometry and record files (relative to the base
-    case's folder, as a case file's paths) and the PGA."""
-    return [f"case.geometry={tomlio.value(_rel(geometry_file(cfg, variant, seed), RECORD_CASE.parent))}",
-            f"stages.{EXCITATION_STAGE}.record={tomlio.value(_rel(record_file(record, cfg.records_dir), RECORD_CASE.parent))}",
-            f"stages.{EXCITATION_STAGE}.pga_g={tomlio.value(float(pga_g))}"]
-
-
-def tilt_overrides(cfg: Config, variant: str, seed: int) -> list[str]:
-    """A tilt run's own override: the geometry file (relative to the base case's folder)."""
-    return [f"case.geometry={tomlio.value(_rel(geometry_file(cfg, variant, seed), TILT_CASE.parent))}"]
-
-
-def tilt_sweep(cfg: Config, variants=None) -> Path:
-    """``results/<out>/tilt.toml``: one tilt run per variant (default: the config's) and seed."""
-    runs = [(tilt_run_name(v, s), tilt_overrides(cfg, v, s)) for s in cfg.seeds for v in (variants or cfg.variants)]
-    return write_sweep(cfg.out_dir / "tilt.toml", cfg.tilt_runs, TILT_CASE, runs, [],
-                       f"generated by drystone/studies/shape (config {cfg.name!r}): do not edit; tilt collapse "
-                       f"angle of every variant x seed ({len(runs)} runs)")
+def wall_overrides(cfg: Config, variant: str, seed: int) -> list[str]:
+    """The override giving a case one wall's geometry (its block file)."""
+    return [f"case.geometry={tomlio.value(str(geometry_file(cfg, variant, seed).resolve()))}"]
 
 
 def build(cfg: Config) -> dict:
@@ -385,8 +353,6 @@ def build(cfg: Config) -> dict:
                           "typology": "sacsayhuaman", "end_dofs": END_DOFS},
             "geometries": geometries(cfg), "records": write_records(cfg.records, cfg.records_dir),
             "common_overrides": common_overrides(cfg)}
-    if cfg.tilt:
-        plan["tilt_sweep"] = str(tilt_sweep(cfg))
     atomic.write_text(cfg.out_dir / "plan.json", json.dumps(plan, indent=1) + "\n")
     return plan
 

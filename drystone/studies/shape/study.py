@@ -1,27 +1,31 @@
-"""What stone shape does to a wall's collapse (issue 25, item 7): tilt collapse angle and
-PGA at collapse of walls of one footprint, height and weight built of coursed, polygonal
-convex, polygonal interlocking (multi-part) and split interlocking stones (plan.py).
+"""What stone shape does to a wall's collapse: tilt collapse angle and PGA at collapse of
+walls of one footprint, height and weight built of coursed, polygonal convex, polygonal
+interlocking (multi-part) and split interlocking stones (plan.py), by the package's
+analyses (drystone/analyses/: ``tilt`` and ``collapse``).
 
 Steps (``python -m drystone.studies.shape``):
 
-1. ``plan``: geometries, record windows, the tilt sweep file (plan.py);
-2. ``run``: the tilt sweep, then the bisection rounds: each round is a sweep file
-   (``results/<out>/rounds/round_NN.toml``, sweep name ``<runs>``) holding the next PGA of
-   every open search (a wall, seed and record; bisect.py), run by drystone.sweep (local
-   process pool or Dask; finished runs with the same fingerprint are skipped, so an
-   interrupted study continues where it stopped). Only outcomes confirmed by this
-   invocation's sweeps (run, or skipped as finished with the same inputs) steer the
-   bisection. A variant the engines refuse (``runner.resolve``: e.g. multi-part stones
-   before they were simulated) is left out and reported with the refusal;
-3. ``report``: replays every search from the runs on disk (``collect``), the statistics
-   and tests (``compare``), ``shape.json``, ``runs.csv``, ``shape.png`` and ``report.md``.
+1. ``plan``: geometries and record windows (plan.py);
+2. ``run``: per wall (variant and seed), the ``tilt`` analysis of cases/shape/tilt.toml with
+   the wall's geometry (its protocol, ``rounds.tilt_protocol``) and the ``collapse``
+   analysis of cases/shape/record.toml with the wall's geometry under the records' windows,
+   its search set to the study's grid (``rounds.search_params``: the first run at half the
+   cap, then the middles of the bracket down to ``resolution_g``, censored at the cap), into
+   ``results/<out>/walls/<variant>_s<seed>/{tilt,collapse}/``; several walls at once (each
+   analysis resumable: finished runs with the same fingerprint are reused, local process
+   pool or Dask). A variant the package refuses (a CaseError before any run) is left out and
+   reported with the refusal;
+3. ``report``: the analyses' JSON read back (``collect``), the statistics and tests
+   (``compare``), ``shape.json``, ``runs.csv``, ``shape.png`` and ``report.md``.
 
-Collapse of a seismic run: at least one stone collapsed as the Sacsayhuaman and fragility
-studies read it (studies/sacsayhuaman/analysis.py ``residuals``: its centroid moved out of
-plane by more than half its depth, or down by more than its height, or it left the model),
-at the end of the run (the record, then a rest of at most the case's 2.5 s). Collapse
-angle of a tilt run: summary.json's ``collapse_angle_deg`` (the onset, as the tilt study),
-with ``reaction_drop_angle_deg`` beside it.
+Collapse of a seismic run: the package's one criterion (drystone/analyses/common.py
+``outcome``: a stone fell, overturned or left the model), at the end of the run (the record,
+then a rest of at most the case's 2.5 s). Before the study ran on the analyses it read
+collapse as the Sacsayhuaman paper does (studies/sacsayhuaman/analysis.py ``residuals``:
+a centroid out of plane by more than half the stone's depth, or down by more than its
+height, or off the model) and bisected its own grid; docs/beyond-the-papers.md says which
+numbers came from which. Collapse angle of a tilt run: the tilt analysis's headline (the
+onset, as the tilt study), with the reaction-drop angle beside it.
 """
 from __future__ import annotations
 
@@ -35,10 +39,8 @@ from pathlib import Path
 import numpy as np
 
 from drystone import atomic
-from drystone import sweep
 from drystone.postprocess import markdown
 from drystone.studies import rounds
-from drystone.analyses import bisect
 from drystone.studies.shape import plan as planmod
 
 #: two variants differ "beyond the seed-to-seed spread" when an exact two-sided permutation
@@ -50,95 +52,38 @@ CSV_FIELDS = ("kind", "variant", "seed", "record", "pga_g", "name", "status", "c
 
 
 # --- runs -------------------------------------------------------------------------------------------------
-
-
-def seismic_job(cfg, variant: str, seed: int, record: str, pga_g: float) -> sweep.Job:
-    """The sweep job of one seismic run, as drystone.sweep.load builds it from a round file
-    (common overrides, the run's own, then ``case.name=<sweep>/<run>``)."""
-    name = planmod.seismic_run_name(variant, seed, record, pga_g)
-    over = (planmod.common_overrides(cfg) + planmod.seismic_overrides(cfg, variant, seed, record, pga_g)
-            + [f"case.name={cfg.runs}/{name}"])
-    return sweep.Job(name, str(planmod.RECORD_CASE), over, str(cfg.results / cfg.runs / name))
-
-
-def tilt_job(cfg, variant: str, seed: int) -> sweep.Job:
-    name = planmod.tilt_run_name(variant, seed)
-    return sweep.Job(name, str(planmod.TILT_CASE),
-                     planmod.tilt_overrides(cfg, variant, seed) + [f"case.name={cfg.tilt_runs}/{name}"],
-                     str(cfg.results / cfg.tilt_runs / name))
-
-
-def _cost(out: Path) -> dict:
-    s = rounds.read_json(out / "summary.json") or {}
-    info = rounds.read_json(out / "run_info.json") or {}
-    return {"simulated_s": info.get("simulated_time_s"), "wall_s": s.get("wall_time_total_s", info.get("wall_time_s")),
-            "yade_wall_s": info.get("wall_time_s"), "steps": info.get("steps")}
-
-
-def seismic_outcome(out: Path) -> dict:
-    """Collapse and cost of a finished seismic run (module docstring)."""
-    from drystone.studies.sacsayhuaman import analysis as an
-
-    out = Path(out)
-    try:
-        res = an.residuals(out)
-    except Exception as exc:  # noqa: BLE001 - an unreadable run is reported, not fatal
-        return {"status": "unreadable", "error": f"{type(exc).__name__}: {exc}"}
-    return {"status": "done", "collapsed": bool(res["collapsed"]), "collapsed_stones": res["collapsed"],
-            "collapsed_summary": res["collapsed_summary"], "left_model": res["left_model"],
-            "settled": res["settled"], "max_out_of_plane_mm": 1e3 * res["max_out_of_plane_m"], **_cost(out)}
-
-
-def tilt_outcome(out: Path) -> dict:
-    out = Path(out)
-    s = rounds.read_json(out / "summary.json")
-    if s is None:
-        return {"status": "unreadable", "error": f"{out / 'summary.json'} unreadable"}
-    col = s.get("collapse") or {}
-    return {"status": "done", "collapse_angle_deg": s.get("collapse_angle_deg"),
-            "reaction_drop_angle_deg": s.get("reaction_drop_angle_deg", col.get("reaction_drop_angle_deg")),
-            "first_blocks": col.get("first_blocks"), **_cost(out)}
-
-
 def searches(cfg, variants=None) -> list[tuple[str, int, str]]:
     cfg = planmod.get(cfg)
     return [(v, s, r) for v in (cfg.variants if variants is None else variants) for s in cfg.seeds
             for r in cfg.records]
 
 
-def search(cfg, variant: str, seed: int, record: str) -> rounds.Search:
-    """The bisection search of the PGA at collapse of one wall, seed and record."""
+def walls(cfg, variants=None) -> list[tuple[str, int]]:
     cfg = planmod.get(cfg)
-    return rounds.Search({"variant": variant, "seed": seed, "record": record}, cfg.pga_low_g, cfg.pga_cap_g,
-                         cfg.resolution_g, lambda pga: seismic_job(cfg, variant, seed, record, pga),
-                         lambda pga: planmod.seismic_overrides(cfg, variant, seed, record, pga), seismic_outcome)
+    return [(v, s) for v in (cfg.variants if variants is None else variants) for s in cfg.seeds]
 
 
-def replay(cfg, variant: str, seed: int, record: str, outcome) -> dict:
-    """Follow one search's bisection through the outcomes ``outcome(job) -> dict | None``
-    (drystone.studies.rounds.follow): ``status`` done, pending or failed, the bracket and
-    the runs so far."""
-    return rounds.follow(search(cfg, variant, seed, record), outcome)
-
-
-def refused_variants(cfg, plan: dict) -> dict[str, str]:
-    """Variants with multi-part stones whose first run the package refuses before YADE
-    (``sweep.validate``: case, geometry, engines), with the refusal (the engines before they
-    simulated multi-part stones). A refusal of a variant without multi-part stones is a
-    fault of the study, raised."""
-    from drystone.model.case import CaseError
+def tilt_wall(cfg, variant: str, seed: int, workers=1, backend="local", address=None, log=print) -> dict:
+    """The tilt analysis of one wall (tilt.json's dict)."""
+    from drystone.analyses import tilt
 
     cfg = planmod.get(cfg)
-    out = {}
-    mid = bisect.bracket({}, cfg.pga_low_g, cfg.pga_cap_g, cfg.resolution_g).next_g
-    for v in cfg.variants:
-        try:
-            sweep.validate([seismic_job(cfg, v, cfg.seeds[0], cfg.records[0], mid)])
-        except CaseError as exc:
-            if not any(g["multi_part"] for g in plan["geometries"].values() if g["variant"] == v):
-                raise
-            out[v] = str(exc)
-    return out
+    return tilt.tilt(planmod.TILT_CASE, out=planmod.wall_dir(cfg, variant, seed) / "tilt", workers=workers,
+                     backend=backend, address=address, overrides=planmod.wall_overrides(cfg, variant, seed), log=log,
+                     **rounds.tilt_protocol(planmod.TILT_CASE))
+
+
+def collapse_wall(cfg, plan: dict, variant: str, seed: int, workers=None, backend="local", address=None,
+                  log=print) -> dict:
+    """The collapse analysis of one wall under the records' windows (collapse.json's dict)."""
+    from drystone.analyses import collapse
+
+    cfg = planmod.get(cfg)
+    files = [plan["records"][r]["file"] for r in cfg.records]
+    return collapse.collapse(planmod.RECORD_CASE, files, out=planmod.wall_dir(cfg, variant, seed) / "collapse",
+                             workers=workers or len(files), backend=backend, address=address,
+                             overrides=planmod.common_overrides(cfg) + planmod.wall_overrides(cfg, variant, seed),
+                             log=log, **rounds.search_params(cfg.pga_cap_g, cfg.resolution_g))
 
 
 def _duration(cfg, plan: dict, record: str) -> float:
@@ -146,61 +91,94 @@ def _duration(cfg, plan: dict, record: str) -> float:
     return min(d, cfg.record_duration_s) if cfg.record_duration_s else d
 
 
+def _refusal(cfg, plan: dict, variant: str, exc: Exception) -> str:
+    """A refusal of a variant with multi-part stones (before any run), as text; a refusal of
+    one without is a fault of the study, raised."""
+    if not any(g["multi_part"] for g in plan["geometries"].values() if g["variant"] == variant):
+        raise exc
+    return str(exc)
+
+
+def _log(m: str) -> None:
+    print(m, flush=True)
+
+
+def wall_task(cfg, plan: dict, variant: str, seed: int, each: int, backend="local", address=None) -> dict:
+    """One wall's tilt and collapse analyses; returns {"failed": [runs], "refused": text or
+    None} (a module-level function: ``drystone.studies.in_parallel`` runs several at once)."""
+    from drystone.model.case import CaseError
+
+    failed = []
+    try:
+        if cfg.tilt:
+            t = tilt_wall(cfg, variant, seed, 1, backend, address, _log)
+            failed += [f"{variant}_s{seed}/tilt/{d['run']}" for d in t["directions"].values()
+                       if d.get("status") == "failed"]
+        c = collapse_wall(cfg, plan, variant, seed, each, backend, address, _log)
+        failed += [f"{variant}_s{seed}/collapse/runs/{x['name']}" for r in c["records"].values() for x in r["runs"]
+                   if x.get("status") != "done"]
+    except CaseError as exc:
+        return {"failed": failed, "refused": _refusal(cfg, plan, variant, exc)}
+    return {"failed": failed, "refused": None}
+
+
 def run(config="full", workers=None, backend="local", address=None) -> dict:
-    """Plan, the tilt sweep, then bisection rounds until every search is done or failed
-    (module docstring). Returns {"rounds", "runs_run", "interrupted", "refused", "elapsed_s"}."""
+    """Plan, then per wall its tilt and collapse analyses, several walls at once (module
+    docstring). Returns {"rounds", "runs_run", "runs_reused", "interrupted", "refused",
+    "failed", "elapsed_s"}."""
+    from drystone.studies import in_parallel
+
     cfg = planmod.get(config)
     t0 = time.time()
     load0 = rounds.load_average()
     plan = planmod.build(cfg)
-    refused = refused_variants(cfg, plan)
+    cores = workers or os.cpu_count() or 1
+    each = min(cores, len(cfg.records))  # one collapse analysis runs its records' searches at once
+    refused, failed = {}, []
+    summary = {"rounds": 0, "runs_run": 0, "runs_reused": 0, "interrupted": False, "refused": refused,
+               "failed": failed, "workers": workers, "backend": backend, "cores": os.cpu_count(),
+               "load_average_start": load0}
+    try:
+        for (v, _), res in zip(walls(cfg), in_parallel(wall_task, [(cfg, plan, v, s, each, backend, address)
+                                                                   for v, s in walls(cfg)], max(1, cores // each))):
+            failed += res["failed"]
+            if res["refused"]:
+                refused.setdefault(v, res["refused"])
+    except KeyboardInterrupt:
+        summary["interrupted"] = True
     atomic.write_text(cfg.out_dir / "refused.json", json.dumps(refused, indent=1) + "\n")
     for v, why in refused.items():
         print(f"[shape] variant {v} left out: {why}", flush=True)
-    variants = [v for v in cfg.variants if v not in refused]
-    summary = {"rounds": 0, "runs_run": 0, "runs_reused": 0, "interrupted": False, "refused": refused,
-               "failed": [], "workers": workers, "backend": backend, "cores": os.cpu_count(),
-               "load_average_start": load0}
-    if cfg.tilt and variants:
-        path = planmod.tilt_sweep(cfg, variants)
-        rounds.count(summary, sweep.run(path, workers, backend, address, results=cfg.results))
-        if summary["interrupted"]:
-            return rounds.finish(cfg.out_dir, summary, t0)
-    summary["rounds"] = rounds.run_rounds(
-        [search(cfg, v, s, r) for v, s, r in searches(cfg, variants)], rounds_dir=cfg.out_dir / "rounds",
-        prefix="round_", sweep_name=cfg.runs, case=planmod.RECORD_CASE, common=planmod.common_overrides(cfg),
-        label=f"drystone/studies/shape (config {cfg.name!r})", summary=summary, workers=workers, backend=backend,
-        address=address, results=cfg.results,
-        order=lambda st: -_duration(cfg, plan, st["record"]),  # longest first: a shorter tail
-        log=lambda m: print(m, flush=True))
+    folders = [planmod.wall_dir(cfg, v, s) / k for v, s in walls(cfg) for k in ("tilt", "collapse")]
+    summary["runs_run"], summary["runs_reused"], summary["rounds"] = rounds.count_runs(folders, t0)
     return rounds.finish(cfg.out_dir, summary, t0)
 
 
 # --- collect and compare ----------------------------------------------------------------------------------
 def collect(config="full") -> dict:
-    """Every search replayed from the runs on disk, and every tilt run."""
+    """Every search and tilt of the walls' analyses on disk (collapse.json, tilt.json)."""
     cfg = planmod.get(config)
     plan = planmod.load_plan(cfg)
     refused = rounds.read_json(cfg.out_dir / "refused.json") or {}
     out = {"searches": [], "tilt": []}
     for v, s, r in searches(cfg):
+        key = {"variant": v, "seed": s, "record": r}
         if v in refused:
-            out["searches"].append({"variant": v, "seed": s, "record": r, "status": "refused", "runs": [],
-                                    "bracket": None, "error": refused[v]})
+            out["searches"].append(dict(key, status="refused", runs=[], bracket=None, error=refused[v]))
             continue
-        out["searches"].append(replay(cfg, v, s, r, lambda j: rounds.on_disk(j, seismic_outcome)))
+        d = planmod.wall_dir(cfg, v, s) / "collapse"
+        res = rounds.read_json(d / "collapse.json") or {"records": {}}
+        stem = Path(plan["records"][r]["file"]).stem
+        out["searches"].append(rounds.search_state(key, res["records"].get(stem), d))
     if cfg.tilt:
-        for v in cfg.variants:
-            for s in cfg.seeds:
-                row = {"variant": v, "seed": s, "name": planmod.tilt_run_name(v, s)}
-                if v in refused:
-                    row.update(status="refused", error=refused[v])
-                else:
-                    o = rounds.on_disk(tilt_job(cfg, v, s), tilt_outcome)
-                    row.update(o if o is not None else {"status": "pending"})
-                out["tilt"].append(row)
-    for st in out["searches"]:
-        st.pop("next", None)
+        for v, s in walls(cfg):
+            key = {"variant": v, "seed": s, "name": f"{v}-s{s}"}
+            if v in refused:
+                out["tilt"].append(dict(key, status="refused", error=refused[v]))
+                continue
+            d = planmod.wall_dir(cfg, v, s) / "tilt"
+            res = rounds.read_json(d / "tilt.json") or {"directions": {}}
+            out["tilt"].append(rounds.tilt_row(key, next(iter(res["directions"].values()), None), d))
     out["plan"] = plan
     return out
 
@@ -541,14 +519,16 @@ def report(config="full") -> Path:
           "(drystone/motions/catalogue.py): FEMA P695 far-field analogues unless your files are in "
           "data/records/user/.", "",
           "## Method", "",
-          "* Tilt: cases/shape/tilt.toml (gravity, 2 deg/s to 5 deg, then 1 deg/s out of plane until collapse): the "
-          "collapse angle as the tilt study measures it (onset of the motion that led to collapse, "
+          "* Tilt: the `tilt` analysis with cases/shape/tilt.toml's protocol (gravity, 2 deg/s to 5 deg, then 1 deg/s "
+          "out of plane until collapse): the collapse angle as the tilt study measures it (onset of the motion that led to collapse, "
           "drystone/mechanics/collapse.py), the reaction-drop angle beside it.",
-          f"* PGA at collapse: bisection on a {cfg.resolution_g:g} g grid between {cfg.pga_low_g:g} g (assumed "
-          f"standing) and {cfg.pga_cap_g:g} g (drystone/analyses/bisect.py), each step a run; collapse = at least "
-          "one stone collapsed as the fragility study's DS3 reads it (centroid out of plane by more than half the "
-          "stone's depth, or down by more than its height, or off the model). Result: the bracket (highest PGA "
-          "standing, lowest collapsing]; its middle is the estimate. A wall standing at the cap is censored (counted "
+          f"* PGA at collapse: the `collapse` analysis (drystone/analyses/collapse.py), its search set to a "
+          f"{cfg.resolution_g:g} g grid: the first run at {cfg.pga_cap_g / 2:g} g, the cap {cfg.pga_cap_g:g} g next "
+          "when the wall stood there, then the middle of the bracket until it is "
+          f"{cfg.resolution_g:g} g wide (0 g, gravity alone, assumed standing), each step a run; collapse = the "
+          "package's one criterion (a stone fell, overturned or left the model: drystone/analyses/common.py "
+          "`outcome`). Result: the bracket (highest PGA standing, lowest collapsing]; its middle is the estimate. A "
+          "wall standing at the cap is censored (counted "
           f"as {cfg.pga_cap_g + cfg.resolution_g:g} g in the means and flagged). ASSUMED: collapse is monotonic in "
           "PGA (one record scaled up); a standing run above a collapsing one is flagged in shape.json.",
           f"* Beyond the seed-to-seed spread: the exact two-sided permutation test of the difference of the "
@@ -610,7 +590,8 @@ def report(config="full") -> Path:
     elapsed = sum(t.get("elapsed_s", 0.0) for t in timing)
     loads = [t for t in timing if t.get("load_average_start")]
     L.append(f"Runs: {n_runs} ({c['tilt']['runs']} tilt, {c['seismic']['runs']} seismic in "
-             f"{max([t.get('rounds', 0) for t in timing] or [0])} bisection round(s)); {core / 60:.1f} core-minutes of "
+             f"{max([t.get('rounds', 0) for t in timing] or [0])} round(s) of the collapse analyses); "
+             f"{core / 60:.1f} core-minutes of "
              f"run time (each run's wall time from start to summary, one thread)"
              + (f", {c['seismic']['mean_wall_s']:.0f} s per seismic run on average (longest "
                 f"{c['seismic']['max_wall_s']:.0f} s), {c['seismic']['wall_per_simulated_s']:.2f} s of wall time per "
@@ -624,7 +605,7 @@ def report(config="full") -> Path:
           "(drystone/motions/catalogue.py), cut to their strong-motion windows.",
           "* **ASSUMED**: generated stone outlines (seeded), not surveyed ones; the polygonal walls' end and base "
           "conditions follow the coursed section's rule (stones at the ends held, stones on the platform fixed).",
-          "* **ASSUMED**: collapse is monotonic in PGA (the bisection's premise); the seeds are the only source of "
+          "* **ASSUMED**: collapse is monotonic in PGA (the bracket's premise); the seeds are the only source of "
           "spread (one friction coefficient and stiffness, Table 1's).",
           "* **ASSUMED**: the tilt rate (1 deg/s near collapse, the tilt study's faster protocol) is slow enough for "
           "these 4 m walls; the tilt study checked it (0.2 deg/s) on the 1.5 m Santa-Cruz wall only.", ""]

@@ -1,12 +1,12 @@
 """python -m drystone.studies.site {plan,run,report,all} [--config full|small] [--workers N] [--dask ADDRESS]
 
-plan     the records' strong-motion windows (and reversed copies), the retained wall's caps, the tilt
-         sweep files -> results/<out>/plan.json
-run      plan, the tilt runs, the retained wall's static runs (dry, then the water level at failure by
-         bisection), then the PGA at collapse of every wall, site (rock, surface), record and polarity by
-         bisection (one sweep file per round, results/<out>/rounds/; resumable: finished runs are skipped)
-report   every search replayed from the runs on disk -> site.json, runs.csv, site.png, spectra.png,
-         report.md, report.html
+plan     the records' strong-motion windows (and reversed copies), the retained wall's caps
+         -> results/<out>/plan.json
+run      plan, the tilt analyses, the retained wall's static runs (dry, then the water level at failure),
+         then the PGA at collapse of every wall, site (rock, surface), record and polarity by the collapse
+         analysis (results/<out>/tilt/, static/, searches/; resumable: finished runs are reused)
+report   the analyses' results read back -> site.json, runs.csv, site.png, spectra.png, report.md,
+         report.html
 all      run, then report
 --config small: 1 record cut to 1.5 s, coarse brackets (results/site_small/): a pipeline check, not a result."""
 from __future__ import annotations

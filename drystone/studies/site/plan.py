@@ -18,25 +18,26 @@ Polarity (``POLARITIES``): ``+`` as recorded, ``-`` the window with its sign rev
 peaks changes with it (a sample a > 0 accelerates the ground towards the soil: the stones'
 inertia and Mononobe-Okabe's k_h point outwards).
 
-Searches: the PGA at collapse at rock (g) of each wall, site, record and polarity by
-bisection (drystone/analyses/bisect.py, drystone/studies/rounds.py) between 0 (assumed
-standing) and a cap, then, where ``refine_g`` names the wall, a second bisection on that finer
-grid inside the first one's final bracket (its ends are runs already made, reused); the water level (m above the platform) at which the retained wall fails
-statically, by bisection over static runs (cases/site/retained_static.toml: the load type
-has a fixed ``water_level``, so each level is its own run). For the retained wall the cap is
-lowered, per search, below the first grid PGA whose motion would leave Mononobe-Okabe
-without a solution (k_h > tan(phi - beta) at some sample: such a run is refused before it
-starts; ``admissible_cap``): a wall standing there is reported as standing at that cap.
+Searches: the PGA at collapse at rock (g) of each wall, site, record and polarity, one
+``collapse`` analysis each (drystone/analyses/collapse.py, its search set to the study's grid:
+drystone/studies/rounds.py ``search_params``) between 0 (assumed standing) and a cap, to
+the wall's ``resolution_g`` (its ``refine_g`` where given); the water level (m above the
+platform) at which the retained wall fails statically, by the same search over static runs
+(cases/site/retained_static.toml: the load type has a fixed ``water_level``, so each level is
+its own run). For the retained wall the cap is lowered, per search, below the first grid PGA
+whose motion would leave Mononobe-Okabe without a solution (k_h > tan(phi - beta) at some
+sample: such a run is refused before it starts; ``admissible_cap``): a wall standing there
+is reported as standing at that cap.
 
 Where things go: ``results/<out>/`` (``results/site/`` for the full config) holds
-``plan.json``, ``records/``, the tilt sweep ``tilt.toml`` and the rounds
-``rounds/<group>_NN.toml``; runs go to ``results/<runs>/<run>/``.
+``plan.json``, ``records/`` and the analyses' folders: ``tilt/<wall>/``,
+``searches/<wall>-<site>-<record>[-reversed]/`` (collapse analyses) and ``static/`` (the
+static runs, ``water.json``).
 """
 from __future__ import annotations
 
 import hashlib
 import json
-import os
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -44,8 +45,7 @@ import numpy as np
 
 from drystone import atomic
 from drystone import paths, tomlio
-from drystone.studies.rounds import StudyFolders, write_if_changed, write_sweep
-from drystone.analyses import bisect
+from drystone.studies.rounds import StudyFolders, write_if_changed
 from drystone.studies.shape import plan as shape_plan
 
 CASES = paths.CASES / "site"
@@ -71,15 +71,14 @@ class Config(StudyFolders):
     """One configuration of the study (``CONFIGS``). PGAs in g, levels in m."""
 
     name: str
-    out: str                                   # results/<out>/: plan, records, rounds, report
-    runs: str                                  # sweep name of every run (results/<runs>/<run>/)
+    out: str                                   # results/<out>/: plan, records, the analyses, report
     walls: tuple = ("free", "retained")
     sites: tuple = ("rock", "surface")
     records: tuple = shape_plan.RECORDS
     polarities: dict = field(default_factory=lambda: {"free": ("+",), "retained": ("+", "-")})
     pga_cap_g: dict = field(default_factory=lambda: {"free": 3.2, "retained": 0.8})
     resolution_g: dict = field(default_factory=lambda: {"free": 0.1, "retained": 0.05})
-    refine_g: dict = field(default_factory=lambda: {"retained": 0.01})  # a second, finer bisection in the bracket
+    refine_g: dict = field(default_factory=lambda: {"retained": 0.01})  # the final bracket's width, if finer
     level_cap_m: float = 4.0                   # the water table at the top of the soil
     level_resolution_m: float = 0.25
     water: bool = True
@@ -91,8 +90,8 @@ class Config(StudyFolders):
 
 
 CONFIGS = {
-    "full": Config(name="full", out="site", runs="site_runs"),
-    "small": Config(name="small", out="site_small", runs="site_small_runs", records=("ancash1970",),
+    "full": Config(name="full", out="site"),
+    "small": Config(name="small", out="site_small", records=("ancash1970",),
                     polarities={"free": ("+",), "retained": ("+",)}, pga_cap_g={"free": 3.2, "retained": 0.6},
                     resolution_g={"free": 1.6, "retained": 0.3}, refine_g={"retained": 0.15}, level_resolution_m=2.0, record_duration_s=1.5,
                     rest_max_s=1.5,
@@ -132,16 +131,8 @@ def write_records(cfg: Config) -> dict:
 
 
 # --- runs -------------------------------------------------------------------------------------------------
-def _rel(path, case: Path) -> str:
-    return os.path.relpath(path, case.parent)
-
-
 def record_case(wall: str) -> Path:
     return WALLS[wall][1]
-
-
-def seismic_run_name(wall: str, site: str, record: str, polarity: str, pga_g: float) -> str:
-    return f"{wall}-{site}-{record}{'' if polarity == '+' else '-reversed'}-pga_{shape_plan.pga_name(pga_g)}"
 
 
 def common_overrides(cfg: Config) -> list[str]:
@@ -149,19 +140,35 @@ def common_overrides(cfg: Config) -> list[str]:
     return tomlio.stage_durations({EXCITATION_STAGE: cfg.record_duration_s, REST_STAGE: cfg.rest_max_s})
 
 
-def seismic_overrides(cfg: Config, wall: str, site: str, record: str, polarity: str, pga_g: float) -> list[str]:
-    """A seismic run's own overrides: the record file (relative to the base case's folder),
-    the PGA at rock and, at the surface, the site profile."""
-    case = record_case(wall)
-    out = [f"stages.{EXCITATION_STAGE}.record={tomlio.value(_rel(record_file(cfg, record, polarity), case))}",
-           f"stages.{EXCITATION_STAGE}.pga_g={tomlio.value(float(pga_g))}"]
-    if site == "surface":
-        out.append(f"stages.{EXCITATION_STAGE}.site={tomlio.value(_rel(PROFILE, case))}")
-    return out
+def site_overrides(site: str) -> list[str]:
+    """At the surface, the example profile on the excitation stage (``site``); at rock none."""
+    return [f"stages.{EXCITATION_STAGE}.site={tomlio.value(str(PROFILE.resolve()))}"] if site == "surface" else []
+
+
+def search_name(wall: str, site: str, record: str, polarity: str) -> str:
+    return f"{wall}-{site}-{record}{'' if polarity == '+' else '-reversed'}"
+
+
+def search_dir(cfg: Config, wall: str, site: str, record: str, polarity: str) -> Path:
+    """The folder of one search's collapse analysis."""
+    return cfg.out_dir / "searches" / search_name(wall, site, record, polarity)
+
+
+def tilt_dir(cfg: Config, wall: str) -> Path:
+    return cfg.out_dir / "tilt" / wall
+
+
+def static_dir(cfg: Config) -> Path:
+    return cfg.out_dir / "static"
+
+
+def tolerance(cfg: Config, wall: str) -> float:
+    """The width (g) of a wall's final bracket."""
+    return cfg.refine_g.get(wall) or cfg.resolution_g[wall]
 
 
 def static_run_name(level_m: float | None) -> str:
-    return "static-dry" if level_m is None else f"static-water_{level_m:.2f}m"
+    return "static-dry" if level_m is None else f"static-water_{level_m:g}m"
 
 
 def static_common(cfg: Config) -> list[str]:
@@ -171,21 +178,6 @@ def static_common(cfg: Config) -> list[str]:
 def static_overrides(level_m: float | None) -> list[str]:
     """A static run's own override: the water level (m above the platform); none: dry."""
     return [] if level_m is None else [f"loads.soil.water_level={tomlio.value(float(level_m))}"]
-
-
-def tilt_run_name(wall: str) -> str:
-    return f"tilt-{wall}"
-
-
-def tilt_sweep(cfg: Config, walls) -> list[Path]:
-    """One sweep file per wall's tilt case (``results/<out>/tilt_<wall>.toml``), one run each."""
-    out = []
-    for w in walls:
-        case = WALLS[w][2]
-        out.append(write_sweep(cfg.out_dir / f"tilt_{w}.toml", cfg.runs, case, [(tilt_run_name(w), [])], [],
-                               f"generated by drystone/studies/site (config {cfg.name!r}): the {w} wall's tilt "
-                               "run; do not edit"))
-    return out
 
 
 # --- caps -------------------------------------------------------------------------------------------------
@@ -199,12 +191,16 @@ def soil(cfg: Config | None = None) -> dict:
 def max_k_h(cfg: Config, wall: str, site: str, record: str, polarity: str, pga_g: float) -> float:
     """The largest k_h = a.e / g towards the soil (+y) of a run's motion, as the runner makes
     it (drystone.motions.excitation.motion_for_stage: trimmed, scaled at rock, propagated)."""
+    from drystone.analyses import common
     from drystone.model import case as casemod
     from drystone.motions import excitation as mex
     from drystone.units import G_STANDARD
 
-    over = common_overrides(cfg) + seismic_overrides(cfg, wall, site, record, polarity, pga_g)
-    st = casemod.load(record_case(wall), over)["stages"][EXCITATION_STAGE]
+    case = record_case(wall)
+    over = common_overrides(cfg) + site_overrides(site)
+    d = casemod.load(case, over)  # as the collapse analysis scales its run: the record, then the PGA
+    over += common.record_override(d, record_file(cfg, record, polarity)) + common.pga_override(d, pga_g)
+    st = casemod.load(case, over)["stages"][EXCITATION_STAGE]
     m = mex.motion_for_stage(st)
     return float(np.max(m.applied.acc) / G_STANDARD)
 
@@ -218,10 +214,10 @@ def admissible_cap(cfg: Config, wall: str, site: str, record: str, polarity: str
         return {"cap_g": cap, "limited_by_mo": False}
     t = soil(cfg)
     limit = MO_MARGIN * float(np.tan(np.radians(t["phi_deg"] - t["beta_deg"])))
-    k = bisect.grid(cap, res)
+    k = int(round(cap / res))
     first = None
     while k > 0:
-        p = bisect.value(k, res)
+        p = round(k * res, 6)
         kh = max_k_h(cfg, wall, site, record, polarity, p)
         if kh < limit:
             return {"cap_g": p, "limited_by_mo": first is not None, "k_h_at_cap": kh, "k_h_limit": limit,
@@ -232,8 +228,7 @@ def admissible_cap(cfg: Config, wall: str, site: str, record: str, polarity: str
 
 
 def build(cfg: Config, walls=None) -> dict:
-    """Write the records and tilt sweep files, find the caps; returns the plan (also
-    written to plan.json)."""
+    """Write the records, find the caps; returns the plan (also written to plan.json)."""
     cfg = get(cfg)
     walls = list(cfg.walls if walls is None else walls)
     cfg.out_dir.mkdir(parents=True, exist_ok=True)
@@ -250,8 +245,6 @@ def build(cfg: Config, walls=None) -> dict:
             "profile_sha256": hashlib.sha256(PROFILE.read_bytes()).hexdigest(),
             "soil": soil(cfg) if "retained" in walls else None,
             "records": records, "caps": caps, "common_overrides": common_overrides(cfg)}
-    if cfg.tilt:
-        plan["tilt_sweeps"] = [str(p) for p in tilt_sweep(cfg, walls)]
     atomic.write_text(cfg.out_dir / "plan.json", json.dumps(plan, indent=1, default=str) + "\n")
     return plan
 

@@ -1,5 +1,5 @@
-"""The site study's report from the runs on disk: ``collect`` replays every search
-(drystone/studies/rounds.py ``follow`` over ``on_disk``), then ``site.json``, ``runs.csv``,
+"""The site study's report from the analyses on disk: ``collect`` reads every search's
+collapse.json, the tilt analyses' tilt.json and the static runs' water.json, then ``site.json``, ``runs.csv``,
 ``site.png`` (PGA at collapse brackets), ``spectra.png`` (the records at rock and at the
 surface: 5 %-damped pseudo-acceleration spectra, and the profile's transfer functions),
 ``report.md`` and ``report.html`` (drystone.postprocess.markdown).
@@ -18,7 +18,6 @@ import numpy as np
 from drystone import atomic
 from drystone.postprocess import markdown
 from drystone.studies import rounds
-from drystone.studies.shape import study as shape_study
 from drystone.studies.site import hand
 from drystone.studies.site import plan as planmod
 from drystone.studies.site import run as runmod
@@ -35,29 +34,47 @@ CSV_FIELDS = ("kind", "wall", "site", "record", "polarity", "pga_g", "level_m", 
 
 
 def collect(config="full") -> dict:
-    """Every search replayed from the runs on disk, the tilt and static runs."""
+    """Every search, the tilt and static runs, from the analyses' JSON (run.py)."""
     cfg = planmod.get(config)
     plan = planmod.load_plan(cfg)
     refused = rounds.read_json(cfg.out_dir / "refused.json") or {}
-    walls = plan["walls"]
+    walls = [w for w in plan["walls"]]
     out = {"plan": plan, "refused": refused, "searches": [], "tilt": [], "static": None, "water": None}
-    for w in walls:
-        for st in runmod.seismic_searches(cfg, plan, w):
-            state = rounds.follow(st, lambda j, st=st: rounds.on_disk(j, st.read))
-            out["searches"].append(dict(state, stage="coarse", cap_g=st.cap, resolution_g=st.resolution, next=None))
-            fine = runmod.refine_search(cfg, st, state)
-            if fine is not None:
-                fs = rounds.follow(fine, lambda j, f=fine: rounds.on_disk(j, f.read))
-                out["searches"].append(dict(fs, cap_g=fine.cap, resolution_g=fine.resolution, next=None))
-        if cfg.tilt:
-            o = rounds.on_disk(runmod.tilt_job(cfg, w), runmod.tilt_outcome)
-            out["tilt"].append({"wall": w, "name": planmod.tilt_run_name(w), **(o or {"status": "pending"})})
-    if "retained" in walls and cfg.water:
-        o = rounds.on_disk(runmod.static_job(cfg, None), shape_study.seismic_outcome)
-        out["static"] = dict(o or {"status": "pending"}, name=planmod.static_run_name(None))
-        state = rounds.follow(runmod.water_search(cfg), lambda j: rounds.on_disk(j, shape_study.seismic_outcome))
-        state.pop("next", None)
-        out["water"] = state
+    for w, site, r, pol in runmod.searches(cfg, walls):
+        key = {"wall": w, "site": site, "record": r, "polarity": pol, "stage": "coarse",
+               "cap_g": plan["caps"][planmod.search_id(w, site, r, pol)]["cap_g"],
+               "resolution_g": planmod.tolerance(cfg, w)}
+        if w in refused:
+            out["searches"].append(dict(key, status="refused", bracket=None, runs=[], error=refused[w]))
+            continue
+        d = planmod.search_dir(cfg, w, site, r, pol)
+        res = rounds.read_json(d / "collapse.json") or {"records": {}}
+        st = rounds.search_state(key, next(iter(res["records"].values()), None), d)
+        for x in st["runs"]:
+            x["pga_surface_g"] = runmod.surface_pga(d / "runs" / x["name"])
+        out["searches"].append(st)
+    if cfg.tilt:
+        for w in walls:
+            key = {"wall": w, "name": f"tilt-{w}"}
+            if w in refused:
+                out["tilt"].append(dict(key, status="refused", error=refused[w]))
+                continue
+            d = planmod.tilt_dir(cfg, w)
+            res = rounds.read_json(d / "tilt.json") or {"directions": {}}
+            direction = next(iter(res["directions"].values()), None)
+            row = rounds.tilt_row(key, direction, d)
+            if row["status"] == "done":  # the onset's time and the tilt's start (``early``)
+                run_dir = d / direction["run"]
+                s_ = rounds.read_json(run_dir / "summary.json") or {}
+                spec = rounds.read_json(run_dir / "spec.json") or {}
+                row.update(onset_time_s=(s_.get("collapse") or {}).get("time_s"),
+                           tilt_start_s=next((st["start"] for st in spec.get("stages", []) if st.get("type") == "tilt"),
+                                             None))
+            out["tilt"].append(row)
+    if "retained" in walls and cfg.water and "retained" not in refused:
+        data = rounds.read_json(planmod.static_dir(cfg) / "water.json") or {}
+        out["static"] = data.get("dry") or {"status": "pending", "name": planmod.static_run_name(None)}
+        out["water"] = data.get("water") or {"search": "water", "status": "pending", "bracket": None, "runs": []}
     return out
 
 
@@ -254,8 +271,13 @@ def spectra(cfg, pga_g: float = SPECTRA_PGA_G) -> dict:
 
     out = {"pga_rock_g": pga_g, "damping": SPECTRA_DAMPING, "periods_s": PERIODS_S.tolist(), "records": {}}
     for r in cfg.records:
-        over = planmod.common_overrides(cfg) + planmod.seismic_overrides(cfg, "free", "surface", r, "+", pga_g)
-        m = mex.motion_for_stage(casemod.load(planmod.record_case("free"), over)["stages"][planmod.EXCITATION_STAGE])
+        from drystone.analyses import common
+
+        case = planmod.record_case("free")
+        over = planmod.common_overrides(cfg) + planmod.site_overrides("surface")
+        d = casemod.load(case, over)
+        over += common.record_override(d, planmod.record_file(cfg, r, "+")) + common.pga_override(d, pga_g)
+        m = mex.motion_for_stage(casemod.load(case, over)["stages"][planmod.EXCITATION_STAGE])
         row = {}
         for key, rec in (("rock", m.bedrock), ("surface", m.applied)):
             sa = msp.response_spectrum(rec.acc, rec.dt, PERIODS_S, SPECTRA_DAMPING) / G_STANDARD
@@ -417,24 +439,24 @@ def write(config="full") -> Path:
           "represent the soil holding a wall that leans into it. Where the onset of motion came before the tilt began "
           "(\"before the tilt\": the retained wall's stones creep as its soil's load comes on with gravity, and the "
           "onset rule dates the motion there), the reaction drop is the angle to compare.",
-          "* PGA at collapse (at rock): bisection (drystone/analyses/bisect.py, drystone/studies/rounds.py) "
-          "between 0 g (assumed standing) and a cap, on a grid of "
-          + ", ".join(f"{cfg.resolution_g[w]:g} g ({w})" for w in walls)
-          + "; collapse = at least one stone collapsed as the Sacsayhuaman study reads it (centroid out of plane by "
-          "more than half the stone's depth, or down by more than its height, or off the model). Cap: "
+          "* PGA at collapse (at rock): the `collapse` analysis (drystone/analyses/collapse.py) per search, its search "
+          "set to the study's grid (drystone/studies/rounds.py `search_params`: the first run at half the cap, the "
+          "cap next when the wall stood there, then the middle of the bracket) between 0 g (assumed standing) and a "
+          "cap, to a final bracket of "
+          + ", ".join(f"{planmod.tolerance(cfg, w):g} g ({w})" for w in walls)
+          + "; collapse = the package's one criterion (a stone fell, overturned or left the model: "
+          "drystone/analyses/common.py `outcome`). Cap: "
           + ", ".join(f"{cfg.pga_cap_g[w]:g} g ({w})" for w in walls)
           + "; for the retained wall lowered per search below the first grid PGA whose motion would give k_h > "
           "tan(φ − β) at some sample (Mononobe-Okabe has no solution there, and the run is refused): "
           + (", ".join(f"{k} {v['cap_g']:g} g" for k, v in plan["caps"].items() if v.get("limited_by_mo")) or "none "
              "lowered") + "."
-          + ("".join(f" Then a second bisection on a {g:g} g grid inside each {w} bracket (its ends reused)."
-                     for w, g in cfg.refine_g.items() if w in walls))
           + " ASSUMED: collapse is monotonic in PGA.",
           "* Water table (the 2010 scenario): the load type takes a fixed `water_level`, so the level at which the "
-          "retained wall fails statically is found by bisection over static runs (cases/site/retained_static.toml: "
+          "retained wall fails statically is found by the same search over static runs (cases/site/retained_static.toml: "
           "gravity and the load ramped over 1 s, then rest up to 8 s until settled), between the dry wall (run "
           f"first, as a check that it stands) and the top of the soil ({cfg.level_cap_m:g} m) on a "
-          f"{cfg.level_resolution_m:g} m grid; failure = a stone collapsed (the same reading).",
+          f"{cfg.level_resolution_m:g} m bracket; failure = a stone collapsed (the same criterion).",
           "* Residuals: each standing run's largest residual out of plane (mm) is listed with the searches; it is "
           "the Table 3 quantity read at the end of the run (after a rest of at most 2.5 s: not always settled).", "",
           "## Retained vs free-standing", "", *_table(["measure"] + [planmod.WALLS[w][0] for w in walls],
@@ -508,6 +530,6 @@ def write(config="full") -> Path:
           "a plane Coulomb / Mononobe-Okabe wedge whose k_h follows the base acceleration (no amplification in the "
           "backfill, no passive side, no pore-water inertia or hydrodynamic pressure: docs/earth-pressure.md, "
           "Left out).",
-          "* **ASSUMED**: collapse is monotonic in PGA and in the water level (the bisections' premise); one "
+          "* **ASSUMED**: collapse is monotonic in PGA and in the water level (the searches' premise); one "
           "geometry (seed 0), one friction coefficient and stiffness (Table 1's).", ""]
     return markdown.write(cfg.out_dir / "report.md", "\n".join(L) + "\n")

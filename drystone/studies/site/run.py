@@ -1,23 +1,26 @@
-"""Running the site study: resumable sweeps (drystone.sweep) and bisection rounds
-(drystone/studies/rounds.py), in this order:
+"""Running the site study on the package's analyses (drystone/analyses/), in this order:
 
-1. ``plan`` (plan.py): records, caps, tilt sweep files;
-2. the tilt runs (one sweep file per wall: each wall has its own base case);
-3. the retained wall's static runs: dry (the bisection's premise: it stands without water),
-   then the water level at failure by bisection (``rounds/water_NN.toml``);
-4. the PGA at collapse of every wall, site, record and polarity by bisection, the retained
-   wall first (``rounds/<wall>_NN.toml``; one base case per wall), then, for a wall with a
-   finer grid (``refine_g``), a second bisection inside each bracket
-   (``rounds/<wall>_refine_NN.toml``).
+1. ``plan`` (plan.py): records, caps;
+2. per wall the ``tilt`` analysis of its tilt case (towards the open side, -y; the case's
+   own protocol: drystone/studies/rounds.py ``tilt_protocol``) into ``tilt/<wall>/``;
+3. the retained wall's static runs (``static/``): dry (the search's premise: it stands without
+   water), then the water level at failure, the ``collapse`` analysis's search
+   (drystone/analyses/ida.py, set to the study's grid: ``rounds.search_params``) over the
+   level, one static run per step (``water.json``);
+4. the PGA at collapse of every wall, site, record and polarity: one ``collapse`` analysis each
+   (``searches/<name>/``), its search set to the study's grid up to the search's cap,
+   bracketed to the wall's ``plan.tolerance``; several at once.
 
-A wall whose runs the package refuses before YADE (``sweep.validate``) is left out and its
-refusal reported. Finished runs with the same inputs are skipped, so an interrupted study
-continues where it stopped; ``timing.json`` logs every invocation (elapsed time, runs run and
-reused, the machine's load average).
+A wall the package refuses before any run (a CaseError) is left out and its refusal
+reported. Finished runs with the same inputs are reused (every analysis is resumable), so an
+interrupted study continues where it stopped; ``timing.json`` logs every invocation (elapsed
+time, runs run and reused, the machine's load average).
 
-Collapse of a seismic run: shape.study's ``seismic_outcome`` (at least one stone collapsed as
-the Sacsayhuaman study reads it, at the end of the run). Failure of a static run: the same
-reading, from the end of the gravity ramp (t = 1 s, when the soil's load is fully on).
+Collapse of a seismic or static run: the package's one criterion (drystone/analyses/common.py
+``outcome``: a stone fell, overturned or left the model; measured from the end of the gravity
+stage, when the soil's load is fully on). Before the study ran on the analyses it read
+collapse as the Sacsayhuaman paper does (studies/sacsayhuaman/analysis.py ``residuals``) and
+bisected its own grids; docs/beyond-the-papers.md says which numbers came from which.
 """
 from __future__ import annotations
 
@@ -27,32 +30,10 @@ import time
 from pathlib import Path
 
 from drystone import atomic
-from drystone import sweep
 from drystone.studies import rounds
-from drystone.studies.shape import study as shape_study
 from drystone.studies.site import plan as planmod
 
 LABEL = "drystone/studies/site"
-
-
-def seismic_job(cfg, wall: str, site: str, record: str, polarity: str, pga_g: float) -> sweep.Job:
-    """The sweep job of one seismic run, as drystone.sweep.load builds it from a round file."""
-    name = planmod.seismic_run_name(wall, site, record, polarity, pga_g)
-    over = (planmod.common_overrides(cfg) + planmod.seismic_overrides(cfg, wall, site, record, polarity, pga_g)
-            + [f"case.name={cfg.runs}/{name}"])
-    return sweep.Job(name, str(planmod.record_case(wall)), over, str(cfg.results / cfg.runs / name))
-
-
-def static_job(cfg, level_m: float | None) -> sweep.Job:
-    name = planmod.static_run_name(level_m)
-    over = planmod.static_common(cfg) + planmod.static_overrides(level_m) + [f"case.name={cfg.runs}/{name}"]
-    return sweep.Job(name, str(planmod.STATIC_CASE), over, str(cfg.results / cfg.runs / name))
-
-
-def tilt_job(cfg, wall: str) -> sweep.Job:
-    name = planmod.tilt_run_name(wall)
-    return sweep.Job(name, str(planmod.WALLS[wall][2]), [f"case.name={cfg.runs}/{name}"],
-                     str(cfg.results / cfg.runs / name))
 
 
 def surface_pga(out: Path) -> float | None:
@@ -64,140 +45,128 @@ def surface_pga(out: Path) -> float | None:
     return None
 
 
-def seismic_outcome(out: Path) -> dict:
-    """shape.study's ``seismic_outcome`` with the surface PGA of a run with a site."""
-    o = shape_study.seismic_outcome(out)
-    return dict(o, pga_surface_g=surface_pga(out)) if o.get("status") == "done" else o
+def searches(cfg, walls=None) -> list[tuple[str, str, str, str]]:
+    """(wall, site, record, polarity) of every search."""
+    cfg = planmod.get(cfg)
+    return [(w, s, r, pol) for w in (cfg.walls if walls is None else walls) for s in cfg.sites for r in cfg.records
+            for pol in cfg.polarities[w]]
 
 
-def tilt_outcome(out: Path) -> dict:
-    """shape.study's ``tilt_outcome`` with the onset's time (s) and the time the tilt began
-    (the end of the gravity stage): a wall whose stones creep from the gravity stage on (the
-    retained wall, as its soil's load comes on) has an onset before any tilt."""
-    o = shape_study.tilt_outcome(out)
-    if o.get("status") != "done":
-        return o
-    s = rounds.read_json(Path(out) / "summary.json") or {}
-    spec = rounds.read_json(Path(out) / "spec.json") or {}
-    tilt0 = next((st["start"] for st in spec.get("stages", []) if st.get("type") == "tilt"), None)
-    return dict(o, onset_time_s=(s.get("collapse") or {}).get("time_s"), tilt_start_s=tilt0)
+def tilt_wall(cfg, wall: str, backend="local", address=None, log=print) -> dict:
+    from drystone.analyses import tilt
+
+    case = planmod.WALLS[wall][2]
+    return tilt.tilt(case, out=planmod.tilt_dir(cfg, wall), workers=1, backend=backend, address=address, log=log,
+                     **rounds.tilt_protocol(case))
 
 
-def seismic_search(cfg, plan: dict, wall: str, site: str, record: str, polarity: str) -> rounds.Search:
+def collapse_search(cfg, plan: dict, wall: str, site: str, record: str, polarity: str, backend="local",
+                    address=None, log=print) -> dict:
+    """One search's collapse analysis (collapse.json's dict)."""
+    from drystone.analyses import collapse
+
     cap = plan["caps"][planmod.search_id(wall, site, record, polarity)]["cap_g"]
-    return rounds.Search({"wall": wall, "site": site, "record": record, "polarity": polarity}, 0.0, cap,
-                         cfg.resolution_g[wall],
-                         lambda p: seismic_job(cfg, wall, site, record, polarity, p),
-                         lambda p: planmod.seismic_overrides(cfg, wall, site, record, polarity, p),
-                         seismic_outcome)
+    return collapse.collapse(planmod.record_case(wall), [planmod.record_file(cfg, record, polarity)],
+                             out=planmod.search_dir(cfg, wall, site, record, polarity), workers=1, backend=backend,
+                             address=address, overrides=planmod.common_overrides(cfg) + planmod.site_overrides(site),
+                             log=log, **rounds.search_params(cap, planmod.tolerance(cfg, wall)))
 
 
-def refine_search(cfg, coarse: rounds.Search, state: dict) -> rounds.Search | None:
-    """The finer bisection (``cfg.refine_g``) inside a finished coarse search's bracket (its
-    ends were run: the standing low end is not run again, the collapsing high end is the
-    cap, run last, i.e. reused); None where the wall has no finer grid, the coarse search is
-    not done or it stood at its cap."""
-    res = cfg.refine_g.get(coarse.key["wall"])
-    b = state.get("bracket") or {}
-    if not res or state["status"] != "done" or b.get("censored"):
-        return None
-    return rounds.Search(dict(coarse.key, stage="refine"), b["low_g"], b["high_g"], res, coarse.job, coarse.own,
-                         coarse.read)
+def static_runs(cfg, backend="local", address=None, log=print) -> dict:
+    """The retained wall dry, then the water level at which it fails (module docstring);
+    writes and returns ``static/water.json``: {"dry": outcome, "water": search state or None}."""
+    from drystone.analyses import common, ida
+
+    root = planmod.static_dir(cfg)
+    common.output_dir(planmod.STATIC_CASE, "static", root)
+    kw = dict(common=planmod.static_common(cfg), workers=1, backend=backend, address=address, log=log)
+    name = planmod.static_run_name(None)
+    dry = dict(common.run_jobs(planmod.STATIC_CASE, [(name, [])], root, "static-dry", **kw)[name], name=name)
+    water = None
+    if dry["status"] == "done" and not dry["collapsed"]:
+        p = ida.Params(**rounds.search_params(cfg.level_cap_m, cfg.level_resolution_m))
+        observed, runs, status = {}, [], None
+        for k in range(1, p.max_runs + 1):
+            s = ida.step(observed, p)
+            if s.done:
+                break
+            name = planmod.static_run_name(s.next_g)
+            o = common.run_jobs(planmod.STATIC_CASE, [(name, planmod.static_overrides(s.next_g))], root,
+                                f"water-{k:02d}", **kw)[name]
+            runs.append(dict(o, name=name, level_m=s.next_g))
+            if o["status"] != "done":
+                status = "failed"
+                break
+            observed[s.next_g] = o["collapsed"]
+        s = ida.step(observed, p)
+        rec = {"status": status or s.status, "pga_at_collapse_g": s.bracket, "censored_at_g": s.censored_at_g,
+               "standing_above_collapse_g": s.non_monotonic, "runs": runs}
+        water = rounds.search_state({"search": "water"}, rec, root)
+    data = {"dry": dry, "water": water}
+    atomic.write_text(root / "water.json", json.dumps(data, indent=1, default=str) + "\n")
+    return data
 
 
-def refine_searches(cfg, plan: dict, wall: str) -> list[rounds.Search]:
-    """The finer searches of a wall whose coarse searches are done (from the runs on disk)."""
-    out = []
-    for s in seismic_searches(cfg, plan, wall):
-        r = refine_search(cfg, s, rounds.follow(s, lambda j, s=s: rounds.on_disk(j, s.read)))
-        if r is not None:
-            out.append(r)
-    return out
+def _log(m: str) -> None:
+    print(m, flush=True)
 
 
-def water_search(cfg) -> rounds.Search:
-    return rounds.Search({"search": "water"}, 0.0, cfg.level_cap_m, cfg.level_resolution_m,
-                         lambda z: static_job(cfg, z), planmod.static_overrides, shape_study.seismic_outcome,
-                         value_key="level_m")
-
-
-def seismic_searches(cfg, plan: dict, wall: str) -> list[rounds.Search]:
-    return [seismic_search(cfg, plan, wall, s, r, pol) for s in cfg.sites for r in cfg.records
-            for pol in cfg.polarities[wall]]
-
-
-def refused_walls(cfg) -> dict[str, str]:
-    """Walls whose first run the package refuses before YADE, with the refusal (the retained
-    wall before the engines took [[loads]])."""
+def task(cfg, plan: dict, kind: str, key: tuple, backend="local", address=None) -> dict:
+    """One piece of the study (``kind``: tilt of wall ``key[0]``, static of the retained wall,
+    or search ``key`` = (wall, site, record, polarity)); returns {"failed": [runs], "refused":
+    (wall, text) or None} (a module-level function: ``drystone.studies.in_parallel`` runs
+    several at once)."""
     from drystone.model.case import CaseError
 
-    out = {}
-    for w in cfg.walls:
-        try:
-            sweep.validate([seismic_job(cfg, w, "rock", cfg.records[0], "+", cfg.resolution_g[w])])
-        except CaseError as exc:
-            if w == "free":
-                raise
-            out[w] = str(exc)
-    return out
+    wall = key[0]
+    try:
+        if kind == "tilt":
+            t = tilt_wall(cfg, wall, backend, address, _log)
+            failed = [f"tilt/{wall}/{d['run']}" for d in t["directions"].values() if d.get("status") == "failed"]
+        elif kind == "static":
+            d = static_runs(cfg, backend, address, _log)
+            failed = [f"static/runs/{x['name']}" for x in [d["dry"]] + ((d["water"] or {}).get("runs") or [])
+                      if x.get("status") != "done"]
+        else:
+            c = collapse_search(cfg, plan, *key, backend, address, _log)
+            failed = [f"{planmod.search_name(*key)}/runs/{x['name']}" for rec in c["records"].values()
+                      for x in rec["runs"] if x.get("status") != "done"]
+    except CaseError as exc:
+        if wall == "free":
+            raise
+        return {"failed": [], "refused": (wall, str(exc))}
+    return {"failed": failed, "refused": None}
 
 
 def run(config="full", workers=None, backend="local", address=None) -> dict:
-    """Plan, tilt, static and water, then the seismic rounds (module docstring). Returns
-    {"rounds", "runs_run", "runs_reused", "failed", "interrupted", "refused", "elapsed_s", ...}."""
+    """Plan, tilt, static and water, and the seismic searches, several at once (module
+    docstring). Returns {"rounds", "runs_run", "runs_reused", "failed", "interrupted",
+    "refused", "elapsed_s", ...}."""
+    from drystone.studies import in_parallel
+
     cfg = planmod.get(config)
     t0 = time.time()
-    planmod.write_records(cfg)  # the runs validated next read them
-    refused = refused_walls(cfg)
+    plan = planmod.build(cfg)
+    refused, failed = {}, []
+    summary = {"rounds": 0, "runs_run": 0, "runs_reused": 0, "interrupted": False, "refused": refused,
+               "failed": failed, "workers": workers, "backend": backend, "cores": os.cpu_count(),
+               "load_average_start": rounds.load_average()}
+    todo = [("tilt", (w,)) for w in cfg.walls if cfg.tilt]
+    if "retained" in cfg.walls and cfg.water:
+        todo.append(("static", ("retained",)))
+    todo += [("search", k) for k in searches(cfg)]
+    try:
+        for res in in_parallel(task, [(cfg, plan, kind, key, backend, address) for kind, key in todo],
+                               workers or os.cpu_count() or 1):
+            failed += res["failed"]
+            if res["refused"]:
+                refused.setdefault(*res["refused"])
+    except KeyboardInterrupt:
+        summary["interrupted"] = True
     atomic.write_text(cfg.out_dir / "refused.json", json.dumps(refused, indent=1) + "\n")
     for w, why in refused.items():
         print(f"[site] wall {w} left out: {why}", flush=True)
-    walls = [w for w in cfg.walls if w not in refused]
-    plan = planmod.build(cfg, walls)
-    summary = {"rounds": {}, "runs_run": 0, "runs_reused": 0, "interrupted": False, "refused": refused,
-               "failed": [], "workers": workers, "backend": backend, "cores": os.cpu_count(),
-               "load_average_start": rounds.load_average()}
-    kw = {"workers": workers, "backend": backend, "address": address, "results": cfg.results}
-    log = lambda m: print(m, flush=True)  # noqa: E731
-
-    def sweep_once(path):
-        rounds.count(summary, sweep.run(path, kw["workers"], kw["backend"], kw["address"], results=cfg.results))
-        return not summary["interrupted"]
-
-    if cfg.tilt:
-        for path in planmod.tilt_sweep(cfg, walls):
-            if not sweep_once(path):
-                return rounds.finish(cfg.out_dir, summary, t0)
-    if "retained" in walls and cfg.water:
-        path = rounds.write_sweep(cfg.out_dir / "static.toml", cfg.runs, planmod.STATIC_CASE,
-                                  [(planmod.static_run_name(None), planmod.static_overrides(None))],
-                                  planmod.static_common(cfg),
-                                  f"generated by {LABEL} (config {cfg.name!r}): the retained wall, dry, static")
-        if not sweep_once(path):
-            return rounds.finish(cfg.out_dir, summary, t0)
-        dry = rounds.on_disk(static_job(cfg, None), shape_study.seismic_outcome)
-        if dry and dry.get("status") == "done" and not dry["collapsed"]:
-            summary["rounds"]["water"] = rounds.run_rounds(
-                [water_search(cfg)], rounds_dir=cfg.out_dir / "rounds", prefix="water_", sweep_name=cfg.runs,
-                case=planmod.STATIC_CASE, common=planmod.static_common(cfg), label=f"{LABEL} water", summary=summary,
-                log=log, **kw)
-        else:
-            log("[site] the retained wall does not stand dry: no water-level search")
-        if summary["interrupted"]:
-            return rounds.finish(cfg.out_dir, summary, t0)
-    for w in sorted(walls, key=lambda w: w != "retained"):
-        summary["rounds"][w] = rounds.run_rounds(
-            seismic_searches(cfg, plan, w), rounds_dir=cfg.out_dir / "rounds", prefix=f"{w}_", sweep_name=cfg.runs,
-            case=planmod.record_case(w), common=planmod.common_overrides(cfg), label=f"{LABEL} {w}",
-            summary=summary, log=log, order=lambda st: -plan["records"][st["record"]]["duration_s"], **kw)
-        if summary["interrupted"]:
-            break
-        fine = refine_searches(cfg, plan, w)
-        if fine:
-            summary["rounds"][f"{w} refine"] = rounds.run_rounds(
-                fine, rounds_dir=cfg.out_dir / "rounds", prefix=f"{w}_refine_", sweep_name=cfg.runs,
-                case=planmod.record_case(w), common=planmod.common_overrides(cfg), label=f"{LABEL} {w} refine",
-                summary=summary, log=log, order=lambda st: -plan["records"][st["record"]]["duration_s"], **kw)
-        if summary["interrupted"]:
-            break
+    folders = ([planmod.tilt_dir(cfg, w) for w in cfg.walls] + [planmod.static_dir(cfg)]
+               + [planmod.search_dir(cfg, *k) for k in searches(cfg)])
+    summary["runs_run"], summary["runs_reused"], summary["rounds"] = rounds.count_runs(folders, t0)
     return rounds.finish(cfg.out_dir, summary, t0)

@@ -71,30 +71,32 @@ GROUPS = {
 RUN = Path("runs") / "towards_+y"
 
 
+def tilt_run(group: str, name: str, overrides: list, root: Path, backend="local", address=None) -> dict:
+    """One run of a group: the tilt analysis of cases/tilt_wall.toml towards +y with the
+    group's protocol, into ``root``/<name>/; tilt.json's +y direction."""
+    from drystone.analyses import tilt as analysis
+
+    proto = GROUPS[group][0]
+    res = analysis.tilt(CASE, ("+y",), out=Path(root) / name, workers=1, backend=backend, address=address,
+                        rate=proto["rate"], max_deg=MAX_DEG, overrides=overrides, lead=proto["lead"],
+                        after_collapse=AFTER_COLLAPSE_S)
+    return res["directions"]["+y"]
+
+
 def run_group(group: str, out: Path = OUT, workers=None, backend="local", address=None, log=print) -> dict:
     """Run (or reuse) the tilt analyses of one group (``GROUPS``) into ``out``/<group>/<run>/,
     up to ``workers`` at once (each one run); returns {run name: tilt.json's +y direction}."""
-    from concurrent.futures import ThreadPoolExecutor
-
-    from drystone.analyses import tilt as analysis
+    from drystone.studies import in_parallel
 
     proto, todo = GROUPS[group]
     root = Path(out) / group
     root.mkdir(parents=True, exist_ok=True)
     atomic.write_text(root / "runs.json", json.dumps({"group": group, "protocol": proto,
                                                       "runs": [n for n, _ in todo]}, indent=1) + "\n")
-
-    def one(item):
-        name, over = item
-        res = analysis.tilt(CASE, ("+y",), out=root / name, workers=1, backend=backend, address=address,
-                            rate=proto["rate"], max_deg=MAX_DEG, overrides=over, lead=proto["lead"],
-                            after_collapse=AFTER_COLLAPSE_S, log=log)
-        return name, res["directions"]["+y"]
-
     n = max(1, min(workers or os.cpu_count() or 1, len(todo)))
     log(f"[tilt study] {group}: {len(todo)} tilt analyses, {n} at a time")
-    with ThreadPoolExecutor(n) as pool:
-        return dict(pool.map(one, todo))
+    res = in_parallel(tilt_run, [(group, name, over, root, backend, address) for name, over in todo], n)
+    return {name: r for (name, _), r in zip(todo, res)}
 
 
 def runs(root: Path) -> list[dict]:
