@@ -61,7 +61,8 @@ LAYERS = (
           "collapse, fragility, ...: one command each, the one collapse criterion `analyses/common.py` outcome)"),
     Layer(6, "studies", (), ("drystone.studies",), "`drystone/studies/`",
           "the papers and beyond, one package each: `tilt/`, `ogawa/`, `sacsayhuaman/`, `fragility/`, `shape/`, "
-          "`site/`, `crosscheck/` (LMGC90); `rounds.py` (bisection searches as resumable rounds of sweeps), "
+          "`site/`, `crosscheck/` (LMGC90), all built on the analyses; `common.py` (what the shape and site studies "
+          "share: the collapse analysis's search on their grid, reading the analyses' JSON, their command line), "
           "`readme_tables.py`"),
 )
 

@@ -1,8 +1,8 @@
 """A study whose runs failed does not look finished: two study processes at once both exited 0
 while each printed "2/3 failed", and a report showed an "open (pending)" search as a result.
 Now every failed sweep run is recorded (drystone.sweep.FAILED_RUNS), a study that had one
-exits 1 with one line naming them (drystone.studies.exit_status), a bisection study exits 1
-when its report is incomplete (drystone/studies/rounds.py ``main``) and the report's cells
+exits 1 with one line naming them (drystone.studies.exit_status), a shape or site study exits 1
+when its report is incomplete (drystone/studies/common.py ``main``) and the report's cells
 say MISSING. No YADE: the run fails on the lock another process holds, before YADE."""
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ import pytest
 
 from drystone import runner, studies, sweep
 from drystone.simulate import FolderLock
-from drystone.studies import rounds
+from drystone.studies import common as sc
 from drystone.studies.site import report as site_report
 
 BOX = {"case": {"name": "cube", "geometry": {"generator": "boxes_on_platform", "damping": 0.5,
@@ -47,7 +47,7 @@ def test_exit_status_of_a_study_without_failures_is_its_own(no_failures_yet):
 
 
 def _study(tmp_path: Path, failed: list, status: dict):
-    """rounds.main's arguments for a fake study whose run step had ``failed`` runs and whose
+    """sc.main's arguments for a fake study whose run step had ``failed`` runs and whose
     report counts its searches by ``status``."""
     cfg = SimpleNamespace(out_dir=tmp_path)
 
@@ -56,7 +56,7 @@ def _study(tmp_path: Path, failed: list, status: dict):
 
     def report(cfg):
         (tmp_path / "fake.json").write_text(json.dumps({"status": status, "refused": []}))
-        return rounds.write_if_changed(tmp_path / "report.md", "# fake\n")
+        return sc.write_if_changed(tmp_path / "report.md", "# fake\n")
 
     return ("prog", "doc", {"full": cfg}, lambda c: "plan", run, report, "fake")
 
@@ -64,14 +64,14 @@ def _study(tmp_path: Path, failed: list, status: dict):
 @pytest.mark.parametrize("step", ["all", "report"])
 def test_an_incomplete_bisection_study_exits_1_naming_what_is_missing(tmp_path, capsys, step):
     args = _study(tmp_path, ["rx/level_2.00"], {"done": 1, "pending": 1, "failed": 1})
-    assert rounds.main([step], *args) == 1
+    assert sc.main([step], *args) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "1 search(es) pending; 1 search(es) failed" in err and "report.md" in err
     assert ("rx/level_2.00" in err) == (step == "all")
 
 
 def test_a_complete_bisection_study_exits_0(tmp_path, capsys):
-    assert rounds.main(["all"], *_study(tmp_path, [], {"done": 3, "pending": 0, "failed": 0})) == 0
+    assert sc.main(["all"], *_study(tmp_path, [], {"done": 3, "pending": 0, "failed": 0})) == 0
     assert capsys.readouterr().err == ""
 
 

@@ -17,7 +17,7 @@ from conftest import assert_figure, requires_yade
 from drystone.geometry import blockfile as bf
 from drystone.motions.record import Record
 from drystone.analyses import ida
-from drystone.studies import rounds as R
+from drystone.studies import common as R
 from drystone.studies.shape import plan as P
 from drystone.studies.shape import study as S
 
@@ -30,7 +30,7 @@ def _search(threshold, cap=3.2, res=0.1):
 @pytest.mark.parametrize("threshold", [0.03, 0.1, 0.1000001, 0.73, 0.8, 1.55, 1.6, 2.41, 3.15, 3.2])
 def test_search_brackets_a_fake_collapse_pga_on_the_grid(threshold):
     """A fake wall that collapses at every PGA >= threshold: the collapse analysis's search
-    set to the study's grid (rounds.search_params) ends with low < threshold <= high, high -
+    set to the study's grid (drystone/studies/common.py search_params) ends with low < threshold <= high, high -
     low one grid step, every PGA a point of the 0.1 g grid (the study's bisection grid), run
     once, the first at half the cap: in 5 runs below 1.6 g, 6 above it (the cap is run second
     when the wall stood at 1.6 g)."""

@@ -18,7 +18,7 @@ from conftest import assert_figure, requires_yade
 from drystone.analyses import common, ida
 from drystone.model import case as casemod
 from drystone.motions import readers
-from drystone.studies import rounds
+from drystone.studies import common as sc
 from drystone.studies.site import plan as P
 from drystone.studies.site import report as R
 from drystone.studies.site import run as S
@@ -26,14 +26,14 @@ from drystone.studies.site import run as S
 
 def _state(observed: dict, cap: float, res: float, key: dict) -> dict:
     """A search's state as the report reads it, from observations {value: collapsed}."""
-    st = ida.step(observed, ida.Params(**rounds.search_params(cap, res)))
+    st = ida.step(observed, ida.Params(**sc.search_params(cap, res)))
     rec = {"status": st.status, "pga_at_collapse_g": st.bracket, "censored_at_g": st.censored_at_g,
            "standing_above_collapse_g": st.non_monotonic, "runs": []}
-    return rounds.search_state(key, rec, Path("/nonexistent"))
+    return sc.search_state(key, rec, Path("/nonexistent"))
 
 
 def _search(threshold, cap, res):
-    return ida.search(lambda x: x >= threshold - 1e-9, ida.Params(**rounds.search_params(cap, res)))
+    return ida.search(lambda x: x >= threshold - 1e-9, ida.Params(**sc.search_params(cap, res)))
 
 
 # --- the water-level search -------------------------------------------------------------------------------

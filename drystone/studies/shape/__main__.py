@@ -11,7 +11,7 @@ pipeline check, not a result."""
 from __future__ import annotations
 
 from drystone.studies import exit_status
-from drystone.studies import rounds
+from drystone.studies import common as sc
 from drystone.studies.shape import plan as planmod
 from drystone.studies.shape import study
 
@@ -22,7 +22,7 @@ def _plan(cfg) -> str:
 
 
 def main(argv=None) -> int:
-    return rounds.main(argv, "python -m drystone.studies.shape", __doc__, planmod.CONFIGS, _plan, study.run,
+    return sc.main(argv, "python -m drystone.studies.shape", __doc__, planmod.CONFIGS, _plan, study.run,
                        study.report, "shape")
 
 

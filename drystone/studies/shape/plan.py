@@ -57,7 +57,7 @@ import numpy as np
 
 from drystone import atomic
 from drystone import paths, tomlio
-from drystone.studies.rounds import StudyFolders, write_if_changed
+from drystone.studies.common import StudyFolders, write_if_changed
 
 RECORD_CASE = paths.CASES / "shape" / "record.toml"
 TILT_CASE = paths.CASES / "shape" / "tilt.toml"

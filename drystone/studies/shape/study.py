@@ -7,9 +7,9 @@ Steps (``python -m drystone.studies.shape``):
 
 1. ``plan``: geometries and record windows (plan.py);
 2. ``run``: per wall (variant and seed), the ``tilt`` analysis of cases/shape/tilt.toml with
-   the wall's geometry (its protocol, ``rounds.tilt_protocol``) and the ``collapse``
+   the wall's geometry (its protocol, drystone/studies/common.py ``tilt_protocol``) and the ``collapse``
    analysis of cases/shape/record.toml with the wall's geometry under the records' windows,
-   its search set to the study's grid (``rounds.search_params``: the first run at half the
+   its search set to the study's grid (common.py ``search_params``: the first run at half the
    cap, then the middles of the bracket down to ``resolution_g``, censored at the cap), into
    ``results/<out>/walls/<variant>_s<seed>/{tilt,collapse}/``; several walls at once (each
    analysis resumable: finished runs with the same fingerprint are reused, local process
@@ -40,7 +40,7 @@ import numpy as np
 
 from drystone import atomic
 from drystone.postprocess import markdown
-from drystone.studies import rounds
+from drystone.studies import common as sc
 from drystone.studies.shape import plan as planmod
 
 #: two variants differ "beyond the seed-to-seed spread" when an exact two-sided permutation
@@ -70,7 +70,7 @@ def tilt_wall(cfg, variant: str, seed: int, workers=1, backend="local", address=
     cfg = planmod.get(cfg)
     return tilt.tilt(planmod.TILT_CASE, out=planmod.wall_dir(cfg, variant, seed) / "tilt", workers=workers,
                      backend=backend, address=address, overrides=planmod.wall_overrides(cfg, variant, seed), log=log,
-                     **rounds.tilt_protocol(planmod.TILT_CASE))
+                     **sc.tilt_protocol(planmod.TILT_CASE))
 
 
 def collapse_wall(cfg, plan: dict, variant: str, seed: int, workers=None, backend="local", address=None,
@@ -83,7 +83,7 @@ def collapse_wall(cfg, plan: dict, variant: str, seed: int, workers=None, backen
     return collapse.collapse(planmod.RECORD_CASE, files, out=planmod.wall_dir(cfg, variant, seed) / "collapse",
                              workers=workers or len(files), backend=backend, address=address,
                              overrides=planmod.common_overrides(cfg) + planmod.wall_overrides(cfg, variant, seed),
-                             log=log, **rounds.search_params(cfg.pga_cap_g, cfg.resolution_g))
+                             log=log, **sc.search_params(cfg.pga_cap_g, cfg.resolution_g))
 
 
 def _duration(cfg, plan: dict, record: str) -> float:
@@ -130,7 +130,7 @@ def run(config="full", workers=None, backend="local", address=None) -> dict:
 
     cfg = planmod.get(config)
     t0 = time.time()
-    load0 = rounds.load_average()
+    load0 = sc.load_average()
     plan = planmod.build(cfg)
     cores = workers or os.cpu_count() or 1
     each = min(cores, len(cfg.records))  # one collapse analysis runs its records' searches at once
@@ -150,8 +150,8 @@ def run(config="full", workers=None, backend="local", address=None) -> dict:
     for v, why in refused.items():
         print(f"[shape] variant {v} left out: {why}", flush=True)
     folders = [planmod.wall_dir(cfg, v, s) / k for v, s in walls(cfg) for k in ("tilt", "collapse")]
-    summary["runs_run"], summary["runs_reused"], summary["rounds"] = rounds.count_runs(folders, t0)
-    return rounds.finish(cfg.out_dir, summary, t0)
+    summary["runs_run"], summary["runs_reused"], summary["rounds"] = sc.count_runs(folders, t0)
+    return sc.finish(cfg.out_dir, summary, t0)
 
 
 # --- collect and compare ----------------------------------------------------------------------------------
@@ -159,7 +159,7 @@ def collect(config="full") -> dict:
     """Every search and tilt of the walls' analyses on disk (collapse.json, tilt.json)."""
     cfg = planmod.get(config)
     plan = planmod.load_plan(cfg)
-    refused = rounds.read_json(cfg.out_dir / "refused.json") or {}
+    refused = sc.read_json(cfg.out_dir / "refused.json") or {}
     out = {"searches": [], "tilt": []}
     for v, s, r in searches(cfg):
         key = {"variant": v, "seed": s, "record": r}
@@ -167,9 +167,9 @@ def collect(config="full") -> dict:
             out["searches"].append(dict(key, status="refused", runs=[], bracket=None, error=refused[v]))
             continue
         d = planmod.wall_dir(cfg, v, s) / "collapse"
-        res = rounds.read_json(d / "collapse.json") or {"records": {}}
+        res = sc.read_json(d / "collapse.json") or {"records": {}}
         stem = Path(plan["records"][r]["file"]).stem
-        out["searches"].append(rounds.search_state(key, res["records"].get(stem), d))
+        out["searches"].append(sc.search_state(key, res["records"].get(stem), d))
     if cfg.tilt:
         for v, s in walls(cfg):
             key = {"variant": v, "seed": s, "name": f"{v}-s{s}"}
@@ -177,8 +177,8 @@ def collect(config="full") -> dict:
                 out["tilt"].append(dict(key, status="refused", error=refused[v]))
                 continue
             d = planmod.wall_dir(cfg, v, s) / "tilt"
-            res = rounds.read_json(d / "tilt.json") or {"directions": {}}
-            out["tilt"].append(rounds.tilt_row(key, next(iter(res["directions"].values()), None), d))
+            res = sc.read_json(d / "tilt.json") or {"directions": {}}
+            out["tilt"].append(sc.tilt_row(key, next(iter(res["directions"].values()), None), d))
     out["plan"] = plan
     return out
 
@@ -457,8 +457,8 @@ def report(config="full") -> Path:
     ms = measures(data, cfg)
     cmp = compare(ms, cfg)
     c = costs(data)
-    timing = rounds.read_json(cfg.out_dir / "timing.json") or []
-    refused = rounds.read_json(cfg.out_dir / "refused.json") or {}
+    timing = sc.read_json(cfg.out_dir / "timing.json") or []
+    refused = sc.read_json(cfg.out_dir / "refused.json") or {}
     fig = figure(data, ms, cfg, cfg.out_dir / "shape.png")
     write_csv(data, cfg.out_dir / "runs.csv")
     status = {s: sum(st["status"] == s for st in data["searches"]) for s in ("done", "pending", "failed", "refused")}
@@ -568,7 +568,7 @@ def report(config="full") -> Path:
         b = st.get("bracket")
         br = ("refused" if st["status"] == "refused" else
               f"> {b['low_g']:g} (stood at the cap)" if b and b["censored"] else
-              f"({b['low_g']:g}, {b['high_g']:g}]" if b and b["done"] else rounds.missing_text(st["status"]))
+              f"({b['low_g']:g}, {b['high_g']:g}]" if b and b["done"] else sc.missing_text(st["status"]))
         seq = ", ".join(f"{r['pga_g']:g}: {'c' if r.get('collapsed') else 's' if r.get('status') == 'done' else r['status']}"
                         for r in st["runs"])
         L.append(f"| {planmod.VARIANTS[st['variant']][0]} | {st['seed']} | {st['record']} | {br} | {seq} |")

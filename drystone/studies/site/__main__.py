@@ -12,7 +12,7 @@ all      run, then report
 from __future__ import annotations
 
 from drystone.studies import exit_status
-from drystone.studies import rounds
+from drystone.studies import common as sc
 from drystone.studies.site import plan as planmod
 from drystone.studies.site import report
 from drystone.studies.site import run as runmod
@@ -24,7 +24,7 @@ def _plan(cfg) -> str:
 
 
 def main(argv=None) -> int:
-    return rounds.main(argv, "python -m drystone.studies.site", __doc__, planmod.CONFIGS, _plan, runmod.run,
+    return sc.main(argv, "python -m drystone.studies.site", __doc__, planmod.CONFIGS, _plan, runmod.run,
                        report.write, "site")
 
 

@@ -20,7 +20,7 @@ inertia and Mononobe-Okabe's k_h point outwards).
 
 Searches: the PGA at collapse at rock (g) of each wall, site, record and polarity, one
 ``collapse`` analysis each (drystone/analyses/collapse.py, its search set to the study's grid:
-drystone/studies/rounds.py ``search_params``) between 0 (assumed standing) and a cap, to
+drystone/studies/common.py ``search_params``) between 0 (assumed standing) and a cap, to
 the wall's ``resolution_g`` (its ``refine_g`` where given); the water level (m above the
 platform) at which the retained wall fails statically, by the same search over static runs
 (cases/site/retained_static.toml: the load type has a fixed ``water_level``, so each level is
@@ -45,7 +45,7 @@ import numpy as np
 
 from drystone import atomic
 from drystone import paths, tomlio
-from drystone.studies.rounds import StudyFolders, write_if_changed
+from drystone.studies.common import StudyFolders, write_if_changed
 from drystone.studies.shape import plan as shape_plan
 
 CASES = paths.CASES / "site"

@@ -17,7 +17,7 @@ import numpy as np
 
 from drystone import atomic
 from drystone.postprocess import markdown
-from drystone.studies import rounds
+from drystone.studies import common as sc
 from drystone.studies.site import hand
 from drystone.studies.site import plan as planmod
 from drystone.studies.site import run as runmod
@@ -37,7 +37,7 @@ def collect(config="full") -> dict:
     """Every search, the tilt and static runs, from the analyses' JSON (run.py)."""
     cfg = planmod.get(config)
     plan = planmod.load_plan(cfg)
-    refused = rounds.read_json(cfg.out_dir / "refused.json") or {}
+    refused = sc.read_json(cfg.out_dir / "refused.json") or {}
     walls = [w for w in plan["walls"]]
     out = {"plan": plan, "refused": refused, "searches": [], "tilt": [], "static": None, "water": None}
     for w, site, r, pol in runmod.searches(cfg, walls):
@@ -48,8 +48,8 @@ def collect(config="full") -> dict:
             out["searches"].append(dict(key, status="refused", bracket=None, runs=[], error=refused[w]))
             continue
         d = planmod.search_dir(cfg, w, site, r, pol)
-        res = rounds.read_json(d / "collapse.json") or {"records": {}}
-        st = rounds.search_state(key, next(iter(res["records"].values()), None), d)
+        res = sc.read_json(d / "collapse.json") or {"records": {}}
+        st = sc.search_state(key, next(iter(res["records"].values()), None), d)
         for x in st["runs"]:
             x["pga_surface_g"] = runmod.surface_pga(d / "runs" / x["name"])
         out["searches"].append(st)
@@ -60,19 +60,19 @@ def collect(config="full") -> dict:
                 out["tilt"].append(dict(key, status="refused", error=refused[w]))
                 continue
             d = planmod.tilt_dir(cfg, w)
-            res = rounds.read_json(d / "tilt.json") or {"directions": {}}
+            res = sc.read_json(d / "tilt.json") or {"directions": {}}
             direction = next(iter(res["directions"].values()), None)
-            row = rounds.tilt_row(key, direction, d)
+            row = sc.tilt_row(key, direction, d)
             if row["status"] == "done":  # the onset's time and the tilt's start (``early``)
                 run_dir = d / direction["run"]
-                s_ = rounds.read_json(run_dir / "summary.json") or {}
-                spec = rounds.read_json(run_dir / "spec.json") or {}
+                s_ = sc.read_json(run_dir / "summary.json") or {}
+                spec = sc.read_json(run_dir / "spec.json") or {}
                 row.update(onset_time_s=(s_.get("collapse") or {}).get("time_s"),
                            tilt_start_s=next((st["start"] for st in spec.get("stages", []) if st.get("type") == "tilt"),
                                              None))
             out["tilt"].append(row)
     if "retained" in walls and cfg.water and "retained" not in refused:
-        data = rounds.read_json(planmod.static_dir(cfg) / "water.json") or {}
+        data = sc.read_json(planmod.static_dir(cfg) / "water.json") or {}
         out["static"] = data.get("dry") or {"status": "pending", "name": planmod.static_run_name(None)}
         out["water"] = data.get("water") or {"search": "water", "status": "pending", "bracket": None, "runs": []}
     return out
@@ -90,7 +90,7 @@ def bracket_text(st: dict | None, unit: str = "g") -> str:
         return "not run"
     b = st.get("bracket")
     if st["status"] != "done" or not b:
-        return rounds.missing_text(st["status"])
+        return sc.missing_text(st["status"])
     if b["censored"]:
         return f"> {b['low_g']:g} (stood at the cap)"
     return f"({b['low_g']:g}, {b['high_g']:g}]"
@@ -206,7 +206,7 @@ def shape_check(data: dict, cfg) -> str | None:
     """The free-standing wall at rock against the shape study's coursed wall, seed 0 (the same
     generated section, record windows, stages and collapse reading: results/shape/shape.json),
     record by record; None when that study has not run or this config cuts the records."""
-    shape = rounds.read_json(cfg.results / "shape" / "shape.json")
+    shape = sc.read_json(cfg.results / "shape" / "shape.json")
     if not shape or cfg.record_duration_s or "free" not in data["plan"]["walls"]:
         return None
     pairs = []
@@ -377,7 +377,7 @@ def write(config="full") -> Path:
     data = collect(cfg)
     plan = data["plan"]
     walls = plan["walls"]
-    timing = rounds.read_json(cfg.out_dir / "timing.json") or []
+    timing = sc.read_json(cfg.out_dir / "timing.json") or []
     sp = spectra(cfg)
     c = costs(data)
     fig_sp = spectra_figure(sp, cfg.out_dir / "spectra.png")
@@ -440,7 +440,7 @@ def write(config="full") -> Path:
           "(\"before the tilt\": the retained wall's stones creep as its soil's load comes on with gravity, and the "
           "onset rule dates the motion there), the reaction drop is the angle to compare.",
           "* PGA at collapse (at rock): the `collapse` analysis (drystone/analyses/collapse.py) per search, its search "
-          "set to the study's grid (drystone/studies/rounds.py `search_params`: the first run at half the cap, the "
+          "set to the study's grid (drystone/studies/common.py `search_params`: the first run at half the cap, the "
           "cap next when the wall stood there, then the middle of the bracket) between 0 g (assumed standing) and a "
           "cap, to a final bracket of "
           + ", ".join(f"{planmod.tolerance(cfg, w):g} g ({w})" for w in walls)

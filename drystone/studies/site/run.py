@@ -2,10 +2,10 @@
 
 1. ``plan`` (plan.py): records, caps;
 2. per wall the ``tilt`` analysis of its tilt case (towards the open side, -y; the case's
-   own protocol: drystone/studies/rounds.py ``tilt_protocol``) into ``tilt/<wall>/``;
+   own protocol: drystone/studies/common.py ``tilt_protocol``) into ``tilt/<wall>/``;
 3. the retained wall's static runs (``static/``): dry (the search's premise: it stands without
    water), then the water level at failure, the ``collapse`` analysis's search
-   (drystone/analyses/ida.py, set to the study's grid: ``rounds.search_params``) over the
+   (drystone/analyses/ida.py, set to the study's grid: drystone/studies/common.py ``search_params``) over the
    level, one static run per step (``water.json``);
 4. the PGA at collapse of every wall, site, record and polarity: one ``collapse`` analysis each
    (``searches/<name>/``), its search set to the study's grid up to the search's cap,
@@ -30,7 +30,7 @@ import time
 from pathlib import Path
 
 from drystone import atomic
-from drystone.studies import rounds
+from drystone.studies import common as sc
 from drystone.studies.site import plan as planmod
 
 LABEL = "drystone/studies/site"
@@ -38,7 +38,7 @@ LABEL = "drystone/studies/site"
 
 def surface_pga(out: Path) -> float | None:
     """The PGA at the surface (g) of a run with a site (spec.json's excitations), else None."""
-    spec = rounds.read_json(Path(out) / "spec.json") or {}
+    spec = sc.read_json(Path(out) / "spec.json") or {}
     for ex in spec.get("excitations", []):
         if ex.get("site"):
             return ex["site"].get("pga_surface_g")
@@ -57,7 +57,7 @@ def tilt_wall(cfg, wall: str, backend="local", address=None, log=print) -> dict:
 
     case = planmod.WALLS[wall][2]
     return tilt.tilt(case, out=planmod.tilt_dir(cfg, wall), workers=1, backend=backend, address=address, log=log,
-                     **rounds.tilt_protocol(case))
+                     **sc.tilt_protocol(case))
 
 
 def collapse_search(cfg, plan: dict, wall: str, site: str, record: str, polarity: str, backend="local",
@@ -69,7 +69,7 @@ def collapse_search(cfg, plan: dict, wall: str, site: str, record: str, polarity
     return collapse.collapse(planmod.record_case(wall), [planmod.record_file(cfg, record, polarity)],
                              out=planmod.search_dir(cfg, wall, site, record, polarity), workers=1, backend=backend,
                              address=address, overrides=planmod.common_overrides(cfg) + planmod.site_overrides(site),
-                             log=log, **rounds.search_params(cap, planmod.tolerance(cfg, wall)))
+                             log=log, **sc.search_params(cap, planmod.tolerance(cfg, wall)))
 
 
 def static_runs(cfg, backend="local", address=None, log=print) -> dict:
@@ -81,10 +81,11 @@ def static_runs(cfg, backend="local", address=None, log=print) -> dict:
     common.output_dir(planmod.STATIC_CASE, "static", root)
     kw = dict(common=planmod.static_common(cfg), workers=1, backend=backend, address=address, log=log)
     name = planmod.static_run_name(None)
-    dry = dict(common.run_jobs(planmod.STATIC_CASE, [(name, [])], root, "static-dry", **kw)[name], name=name)
+    dry = dict(sc.run_row(common.run_jobs(planmod.STATIC_CASE, [(name, [])], root, "static-dry", **kw)[name],
+                          root / "runs" / name), name=name)
     water = None
     if dry["status"] == "done" and not dry["collapsed"]:
-        p = ida.Params(**rounds.search_params(cfg.level_cap_m, cfg.level_resolution_m))
+        p = ida.Params(**sc.search_params(cfg.level_cap_m, cfg.level_resolution_m))
         observed, runs, status = {}, [], None
         for k in range(1, p.max_runs + 1):
             s = ida.step(observed, p)
@@ -101,7 +102,7 @@ def static_runs(cfg, backend="local", address=None, log=print) -> dict:
         s = ida.step(observed, p)
         rec = {"status": status or s.status, "pga_at_collapse_g": s.bracket, "censored_at_g": s.censored_at_g,
                "standing_above_collapse_g": s.non_monotonic, "runs": runs}
-        water = rounds.search_state({"search": "water"}, rec, root)
+        water = sc.search_state({"search": "water"}, rec, root)
     data = {"dry": dry, "water": water}
     atomic.write_text(root / "water.json", json.dumps(data, indent=1, default=str) + "\n")
     return data
@@ -150,7 +151,7 @@ def run(config="full", workers=None, backend="local", address=None) -> dict:
     refused, failed = {}, []
     summary = {"rounds": 0, "runs_run": 0, "runs_reused": 0, "interrupted": False, "refused": refused,
                "failed": failed, "workers": workers, "backend": backend, "cores": os.cpu_count(),
-               "load_average_start": rounds.load_average()}
+               "load_average_start": sc.load_average()}
     todo = [("tilt", (w,)) for w in cfg.walls if cfg.tilt]
     if "retained" in cfg.walls and cfg.water:
         todo.append(("static", ("retained",)))
@@ -168,5 +169,5 @@ def run(config="full", workers=None, backend="local", address=None) -> dict:
         print(f"[site] wall {w} left out: {why}", flush=True)
     folders = ([planmod.tilt_dir(cfg, w) for w in cfg.walls] + [planmod.static_dir(cfg)]
                + [planmod.search_dir(cfg, *k) for k in searches(cfg)])
-    summary["runs_run"], summary["runs_reused"], summary["rounds"] = rounds.count_runs(folders, t0)
-    return rounds.finish(cfg.out_dir, summary, t0)
+    summary["runs_run"], summary["runs_reused"], summary["rounds"] = sc.count_runs(folders, t0)
+    return sc.finish(cfg.out_dir, summary, t0)

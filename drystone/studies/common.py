@@ -3,8 +3,8 @@ share: where a configuration writes (``StudyFolders``), the ``collapse`` analysi
 set to their grid (``search_params``), the ``tilt`` analysis set to their tilt cases
 (``tilt_protocol``), reading the analyses' JSON into the rows their reports use
 (``search_state``, ``tilt_row``), the runs made and reused (``count_runs``), the timing log
-(``finish``) and their command line (``main``). Every run is made by drystone/analyses/ (tilt, collapse): resumable, finished
-runs with the same fingerprint reused, local pool or Dask.
+(``finish``) and their command line (``main``). Every run is made by drystone/analyses/ (tilt,
+collapse): resumable, finished runs with the same fingerprint reused, local pool or Dask.
 """
 from __future__ import annotations
 
@@ -44,7 +44,7 @@ def search_params(cap_g: float, resolution_g: float) -> dict:
     """The ``collapse`` analysis's search (drystone/analyses/ida.py) set to the studies'
     bisection grid: the first run at half the cap, the cap next when the wall stood there,
     then the middles of the bracket until it is ``resolution_g`` wide, no fill-in. For a cap of
-    2^n grid steps every PGA it runs is a point of the old grid (drystone/analyses/bisect.py)."""
+    2^n grid steps every PGA it runs is a point of the grid the studies bisected before."""
     return {"start": cap_g / 2, "factor": 2.0, "cap": cap_g, "tolerance": resolution_g, "fill": None,
             "max_runs": MAX_RUNS}
 
@@ -70,6 +70,15 @@ def _run_cost(run_dir: Path) -> dict:
             "steps": info.get("steps")}
 
 
+def run_row(o: dict, run_dir: Path) -> dict:
+    """A run's outcome (drystone/analyses/common.py ``outcome``, or a collapse.json run) with
+    its simulated time and cost (run_info.json) and its largest out-of-plane residual in mm."""
+    row = {**_run_cost(run_dir), **o}
+    if o.get("largest_out_of_plane_m") is not None:
+        row["max_out_of_plane_mm"] = 1e3 * o["largest_out_of_plane_m"]
+    return row
+
+
 def search_state(key: dict, rec: dict | None, out_dir: Path) -> dict:
     """One record's search of a collapse analysis (collapse.json ``records.<stem>``, the
     analysis in ``out_dir``) as the studies' reports read it: ``status`` done (bracketed or
@@ -78,12 +87,7 @@ def search_state(key: dict, rec: dict | None, out_dir: Path) -> dict:
     and its largest out-of-plane residual in mm."""
     if rec is None:
         return dict(key, status="pending", bracket=None, runs=[])
-    runs = []
-    for r in rec["runs"]:
-        row = {**_run_cost(Path(out_dir) / "runs" / r["name"]), **r}
-        if r.get("largest_out_of_plane_m") is not None:
-            row["max_out_of_plane_mm"] = 1e3 * r["largest_out_of_plane_m"]
-        runs.append(row)
+    runs = [run_row(r, Path(out_dir) / "runs" / r["name"]) for r in rec["runs"]]
     st = rec["status"]
     b = None
     if st in ("bracketed", "censored"):
@@ -169,7 +173,7 @@ def finish(out_dir: Path, summary: dict, t0: float) -> dict:
 
 
 def main(argv, prog: str, doc: str, configs: dict, plan, run, report, tag: str) -> int:
-    """The command line of a study of bisection rounds (``python -m drystone.studies.NAME
+    """The command line of a study of walls' analyses (``python -m drystone.studies.NAME
     {plan,run,report,all} [--config ...] [--workers N] [--dask ADDRESS]``): ``plan(cfg)``
     returns a one-line description, ``run(cfg, workers=, backend=, address=)`` a summary
     (``count``, ``finish``), ``report(cfg)`` the report's path. Exit 130 when interrupted,
