@@ -38,7 +38,7 @@ def test_run_measures_are_those_of_the_record_as_applied(tmp_path):
     stripe, its PGV and Sa(T1) those of what excitation.for_stage gives the runner, and all
     three scale with the stripe (a 1.0 g run is twice a 0.5 g one)."""
     cfg = P.CONFIGS["small"]
-    P.write(cfg, out_dir=tmp_path, records_dir=tmp_path / "records")
+    P.write(cfg, out_dir=tmp_path)
     run = P.load_plan(tmp_path)["runs"][0]
     t1 = 0.385
     m = M.run_measures(run["record_file"], run["pga_g"], t1, cfg.record_duration_s)
@@ -131,7 +131,7 @@ def test_report_names_the_measure_and_the_smallest_beta(tmp_path, monkeypatch):
     and the figure of the curves per IM."""
     monkeypatch.setattr(sacsay, "wall_frequency", lambda: None)
     cfg = replace(P.CONFIGS["small"], n_boot=20)
-    P.write(cfg, out_dir=tmp_path, records_dir=tmp_path / "records")
+    P.write(cfg, out_dir=tmp_path)
     rows = [dict(r, kn=1e8, mu=0.45, settled=True, steps=50000, yade_wall_s=150.0, wall_s=158.0, simulated_s=40.0,
                  dt_s=8e-4) for r in _synthetic_runs()]
     data = {"runs": {"done": len(rows), "failed": 0, "pending": 0, "unreadable": 0},
@@ -151,8 +151,8 @@ def test_report_names_the_measure_and_the_smallest_beta(tmp_path, monkeypatch):
 def test_collect_adds_the_measures_to_each_planned_run(tmp_path):
     """collect on a plan with no finished run: every row pending, with its PGV and Sa(T1)."""
     cfg = P.CONFIGS["small"]
-    P.write(cfg, out_dir=tmp_path, records_dir=tmp_path / "records")
-    rows = S.collect(cfg, tmp_path, results=tmp_path / "results", t1_s=0.385)
+    P.write(cfg, out_dir=tmp_path)
+    rows = S.collect(cfg, tmp_path, t1_s=0.385)
     assert len(rows) == 4 and all(r["status"] == "pending" for r in rows)
     for r, run in zip(rows, P.load_plan(tmp_path)["runs"]):
         m = M.run_measures(run["record_file"], run["pga_g"], 0.385, cfg.record_duration_s)

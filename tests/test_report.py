@@ -294,13 +294,13 @@ def test_markdown_of_each_study_shape(study, tmp_path):
 def test_a_study_writes_report_html_beside_report_md(tmp_path):
     """The tilt study's report (synthetic runs, tests/test_tilt_report.py) comes with its
     page; ``drystone report`` on a study's folder rewrites it from report.md."""
-    from test_tilt_report import fake_run, sweep_json
+    from test_tilt_report import fake_run, runs_json
 
     from drystone.studies.tilt import study as tilt
 
     for k, a in enumerate([14.0, 14.5]):
         fake_run(tmp_path / "seeds", f"seed_{k}", k, a)
-    sweep_json(tmp_path / "seeds", ["seed_0", "seed_1"])
+    runs_json(tmp_path / "seeds", ["seed_0", "seed_1"])
     tilt.build(tmp_path / "seeds", tmp_path / "none", tmp_path / "none", tmp_path / "out", figures=False)
     page = tmp_path / "out" / "report.html"
     html = page.read_text()
