@@ -113,12 +113,13 @@ def find(data: dict, wall: str, site: str, record: str, polarity: str = "+") -> 
 
 
 def unique_runs(searches: list) -> list[tuple[dict, dict]]:
-    """(search, run) pairs, each run once (a finer search reuses its coarse bracket's ends)."""
+    """(search, run) pairs, each run once (a run is named within its search's folder)."""
     seen, out = set(), []
     for s in searches:
         for r in s["runs"]:
-            if r.get("name") not in seen:
-                seen.add(r.get("name"))
+            key = (s["wall"], s["site"], s["record"], s["polarity"], r.get("name"))
+            if key not in seen:
+                seen.add(key)
                 out.append((s, r))
     return out
 
