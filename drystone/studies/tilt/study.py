@@ -533,11 +533,20 @@ def main(argv=None) -> int:
     ap.add_argument("--extruded", help="folder of the constant-section walls (results/tilt/extruded)")
     ap.add_argument("--out", default=str(OUT))
     a = ap.parse_args(argv)
+    failed = []
     for g in a.run:
-        run_group(g, Path(a.out), a.workers, "dask" if a.dask else "local", a.dask)
+        res = run_group(g, Path(a.out), a.workers, "dask" if a.dask else "local", a.dask)
+        failed += [f"{g}/{n}/{r.get('run')}" for n, r in res.items() if r.get("status") != "done"]
     build(a.seeds, a.rate, a.sensitivity, Path(a.out), extruded=a.extruded)
     print((Path(a.out) / "report.md").read_text())
     print(f"written {Path(a.out) / 'summary.json'}")
+    if failed:  # the runs went on in other processes: said here, not through sweep.FAILED_RUNS
+        import sys
+
+        print(f"error: {len(failed)} run(s) failed, their results are missing from the report: "
+              + ", ".join(failed[:5]) + (", ..." if len(failed) > 5 else "")
+              + " (FAILED.txt and log.txt in each folder; run the study again to retry them)", file=sys.stderr)
+        return 1
     return 0
 
 
