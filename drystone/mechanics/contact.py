@@ -12,9 +12,6 @@ The law
   tangential:  F_t += -K_t A_c v_t dt,  |F_t| <= mu F_n          (Eqs. 6-7, incremental)
   twist:       M_t += -K_t J_p w_n dt,  |M_t| <= (2/3) mu F_n r_eq (reduced by F_t; not in
                the paper: the same shear springs resisting a rotation about n, ``twist_spring``)
-  carried:     F_t and M_t of the previous step are first scaled by A_c / A_c,prev and
-               J_p / J_p,prev where the patch shrank (``carry``: the springs of the part
-               that left the patch let go of their share), kept where it grew
   damping:     a dashpot pressure distributed over the contact patch (Eq. 8, see below)
 
 Damping. Eq. 8 of the paper writes F_d = mu_0 A_c v_rel, but mu_0 = 0.08 or 0.8 as a
@@ -150,59 +147,18 @@ def rotate_into_plane(fs, n) -> np.ndarray:
     return proj * scale[:, None]
 
 
-@njit(cache=True)
-def carry(f2, k_prev, k_now):
-    """(factor on a spring force carried from the previous step, the elastic energy it lets
-    go, J) when the spring's stiffness went from k_prev to k_now: the shear spring's K_t A_c
-    (N/m) or the twist spring's K_t J_p (N m/rad) of a contact whose patch changed; f2 the
-    carried force's (moment's) square, N^2 (N^2 m^2).
-
-    The law's springs are a bed of K_t per unit area over the patch, each point loaded by
-    the relative slide since it came into contact; its resultant is what is carried. Where
-    the patch shrank (k_now < k_prev), the points that left it let go of their share of the
-    force (a uniform traction: the fraction 1 - k_now / k_prev), so the force is scaled by
-    k_now / k_prev and its energy f^2 / (2 k) falls by f2 (1 - k_now / k_prev) / (2 k_prev).
-    Where it grew, the points that came in carry nothing yet: the force is kept, and the
-    single spring's energy f^2 / (2 k_now) is f2 (1 / k_prev - 1 / k_now) / 2 below the
-    previous step's (the force now spread over more springs; what a later unloading gives
-    back). Either way the stored energy never grows without work; what it loses is counted
-    as dissipated with the slip's plastic work (drystone/mechanics/energy.py). Carrying the
-    force unscaled, the law's earlier form, let a patch that shrank under shear (a joint
-    opening, a block rocking with uplift) hold a force its smaller spring stores with more
-    energy, from nowhere. A new contact (k_prev 0) carries nothing: factor 1, no energy."""
-    if k_prev <= 0.0:
-        return 1.0, 0.0
-    if k_now < k_prev:
-        s = max(k_now, 0.0) / k_prev
-        return s, 0.5 * f2 * (1.0 - s) / k_prev
-    return 1.0, 0.5 * f2 * (1.0 / k_prev - 1.0 / k_now)
-
-
-def carried_shear(fs_prev, n, area_prev, area, kt):
-    """The previous shear forces (m,3) N carried into this step: into the current tangent
-    plane (``rotate_into_plane``), scaled by ``carry`` with the shear springs' K_t A before
-    (area_prev) and now (area), m^2; kt N/m^3. Returns (forces (m,3) N, energy let go (m,) J)."""
-    f0 = rotate_into_plane(fs_prev, n)
-    f2 = dot(f0, f0)
-    out = np.array([carry(f2[k], kt[k] * area_prev[k], kt[k] * area[k]) for k in range(len(f2))]).reshape(-1, 2)
-    return f0 * out[:, :1], out[:, 1]
-
-
-def shear_spring(n, v_rel, fs_prev, area, kt, mu, fn_el, dt, rotate=True):
+def shear_spring(n, v_rel, fs_prev, area, kt, mu, fn_el, dt):
     """Elastic tangential spring of m contacts, one step (Eqs. 6-7).
 
     n (m,3) unit normals A->B; v_rel (m,3) B's velocity relative to A at the contact point,
     m/s; fs_prev (m,3) stored shear force on B, N; area (m,) A_c m^2; kt (m,) N/m^3; mu
     (m,); fn_el (m,) elastic normal force N; dt s. Returns (fs (m,3) the new shear force on
-    B, capped at mu F_n; slipping (m,) bool: the cap was reached). fs_prev is carried into
-    the plane as it is (``rotate``; already there: ``carried_shear``, which also scales it
-    with the patch's change of area).
+    B, capped at mu F_n; slipping (m,) bool: the cap was reached).
     """
     n = np.asarray(n, dtype=float)
     v_rel = np.asarray(v_rel, dtype=float)
     vt = v_rel - dot(v_rel, n)[:, None] * n
-    f0 = rotate_into_plane(fs_prev, n) if rotate else np.asarray(fs_prev, dtype=float)
-    fs = f0 - (kt * area)[:, None] * vt * dt
+    fs = rotate_into_plane(fs_prev, n) - (kt * area)[:, None] * vt * dt
     fmax = mu * fn_el
     fs_mag = np.linalg.norm(fs, axis=1)
     slipping = fs_mag > fmax

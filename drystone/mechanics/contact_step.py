@@ -27,12 +27,6 @@ from drystone.mechanics.integration import integrate
 from drystone.geometry import polyhedron as ph
 
 
-#: columns of a contact's history, kept from step to step: its shear force (N, 3), twisting
-#: moment about n (N m), and the area A_c (m^2) and polar moment J_p (m^4) its springs had
-#: (contact.carry scales what is carried by the change of K_t A_c and K_t J_p)
-HISTORY = 6
-
-
 # -- the numpy reference ---------------------------------------------------------------
 
 def _padded(rows) -> np.ndarray:
@@ -207,30 +201,23 @@ class NumpyStep:
         rb = c - pos[ib]
         v_rel = (vel[ib] + law.cross(angvel[ib], rb)) - (vel[ia] + law.cross(angvel[ia], ra))
         fn = kn * vol
-        # each contact's history (HISTORY): its shear force (N), twisting moment about n (N m),
-        # and the area (m^2) and polar moment (m^4) of its springs then
-        hist = np.array([self._shear.get(k, (0.0,) * HISTORY) for k in keys], float).reshape(-1, HISTORY)
-        jp = np.array([law.polar_moment(n[k], pj[k]) for k in range(len(ia))])
-        # carried into this step as the patch changed (contact.carry); the energy let go is dissipated
-        f0, released = law.carried_shear(hist[:, :3], n, hist[:, 4], area, kt)
-        slip = float(np.sum(released))
-        mt0 = np.empty(len(ia))
-        for k in range(len(ia)):
-            sc, e = law.carry(hist[k, 3] ** 2, kt[k] * hist[k, 5], kt[k] * jp[k])
-            mt0[k] = hist[k, 3] * sc
-            slip += e
-        fs_new, slipping = law.shear_spring(n, v_rel, f0, area, kt, mu, fn, dt, rotate=False)
+        # each contact's history: its shear force (N) and twisting moment about n (N m)
+        hist = np.array([self._shear.get(k, (0.0, 0.0, 0.0, 0.0)) for k in keys], float).reshape(-1, 4)
+        fs_prev = hist[:, :3]
+        fs_new, slipping = law.shear_spring(n, v_rel, fs_prev, area, kt, mu, fn, dt)
         # the slip's plastic work: the elastic trial of shear_spring against its capped force
+        f0 = law.rotate_into_plane(fs_prev, n)
         f_trial = f0 - (kt * area)[:, None] * (v_rel - law.dot(v_rel, n)[:, None] * n) * dt
-        slip += float(np.sum(energy.slip_work(f0, f_trial, fs_new, kt, area)))
+        slip = float(np.sum(energy.slip_work(f0, f_trial, fs_new, kt, area)))
         # the twist spring on the patch (contact.twist_spring)
+        jp = np.array([law.polar_moment(n[k], pj[k]) for k in range(len(ia))])
         wn = law.dot(angvel[ib] - angvel[ia], n)
         fs_mag = np.linalg.norm(fs_new, axis=1)
-        tw = [law.twist_spring(mt0[k], wn[k], jp[k], parea[k], kt[k], mu[k], fn[k], fs_mag[k], dt)
+        tw = [law.twist_spring(hist[k, 3], wn[k], jp[k], parea[k], kt[k], mu[k], fn[k], fs_mag[k], dt)
               for k in range(len(ia))]
         mt = np.array([t[0] for t in tw])
         slip += float(sum(t[1] for t in tw))
-        self._shear = dict(zip(keys, np.concatenate([fs_new, mt[:, None], area[:, None], jp[:, None]], axis=1)))
+        self._shear = dict(zip(keys, np.concatenate([fs_new, mt[:, None]], axis=1)))
 
         # damping distributed over the patch, at its centroid p
         pa_, pb_ = pc - pos[ia], pc - pos[ib]
@@ -341,11 +328,11 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
     xi = P[:, 3].copy()
     if shared:  # a body of several shapes: its joints' contacts share the damping ratio
         xi *= law.joint_share(oa, ob, nb, area)
-    # each contact's history (HISTORY): its shear force (columns 0-2), twisting moment about n
-    # (3), the area (4) and polar moment (5) its springs had, and its damping's modal basis (zeros for a new contact: no basis, a cold solve, also at
+    # each contact's history: its shear force (columns 0-2) and twisting moment about n (3),
+    # and its damping's modal basis (zeros for a new contact: no basis, a cold solve, also at
     # the next step if it is not damped now)
     prev = _previous(keys, prev_keys)
-    fs_prev = np.zeros((m, HISTORY))
+    fs_prev = np.zeros((m, 4))
     basis = np.zeros((m, 6, 6))
     warm = prev >= 0
     for k in range(m):
@@ -353,7 +340,7 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
             fs_prev[k] = prev_shear[prev[k]]
             basis[k] = prev_basis[prev[k]]
     fn = kn * vol
-    fs = np.empty((m, HISTORY))
+    fs = np.empty((m, 4))
     jp = np.empty(m)
     slipping = np.zeros(m, np.bool_)
     ra = np.empty((m, 3))
@@ -399,16 +386,9 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
         pm = np.sqrt(p0 ** 2 + p1 ** 2 + p2 ** 2)
         sc = mag / pm if pm > 0.0 else 0.0
         kta = kt[k] * area[k]
-        # carried as the patch changed (contact.carry); the energy let go is dissipated
-        mc = mag if pm > 0.0 else 0.0  # the magnitude carried into the plane
-        s_area, released = law.carry(mc * mc, kt[k] * f0[4], kta)
-        slip += released
-        q0 = p0 * sc * s_area  # the carried force (contact.carried_shear)
-        q1 = p1 * sc * s_area
-        q2 = p2 * sc * s_area
-        fs[k, 0] = q0 - kta * (vr[0] - vn * nk[0]) * dt
-        fs[k, 1] = q1 - kta * (vr[1] - vn * nk[1]) * dt
-        fs[k, 2] = q2 - kta * (vr[2] - vn * nk[2]) * dt
+        fs[k, 0] = p0 * sc - kta * (vr[0] - vn * nk[0]) * dt
+        fs[k, 1] = p1 * sc - kta * (vr[1] - vn * nk[1]) * dt
+        fs[k, 2] = p2 * sc - kta * (vr[2] - vn * nk[2]) * dt
         fm = np.sqrt(fs[k, 0] ** 2 + fs[k, 1] ** 2 + fs[k, 2] ** 2)
         fmax = mu[k] * fn[k]
         if fm > fmax:
@@ -417,21 +397,17 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
             # the return mapping's plastic work (energy.slip_work): (f0 + f) . (f* - f) / (2 K_t A)
             # with f = s f*: (1 - s) (f0 . f* + s |f*|^2)
             if kta > 0.0:
-                f0t = q0 * fs[k, 0] + q1 * fs[k, 1] + q2 * fs[k, 2]
+                f0t = p0 * sc * fs[k, 0] + p1 * sc * fs[k, 1] + p2 * sc * fs[k, 2]
                 slip += (1.0 - s) * (f0t + s * fm * fm) / (2.0 * kta)
             for q in range(3):
                 fs[k, q] *= s
-        # the twist spring on the patch (contact.twist_spring), its moment carried likewise
+        # the twist spring on the patch (contact.twist_spring)
         jp[k] = law.polar_moment(nk, pj[k])
-        s_twist, released = law.carry(f0[3] * f0[3], kt[k] * f0[5], kt[k] * jp[k])
-        slip += released
         wn = (angvel[b, 0] - angvel[a, 0]) * nk[0] + (angvel[b, 1] - angvel[a, 1]) * nk[1] \
             + (angvel[b, 2] - angvel[a, 2]) * nk[2]
-        fs[k, 3], w_twist = law.twist_spring(f0[3] * s_twist, wn, jp[k], area[k], kt[k], mu[k], fn[k],
+        fs[k, 3], w_twist = law.twist_spring(f0[3], wn, jp[k], area[k], kt[k], mu[k], fn[k],
                                              np.sqrt(fs[k, 0] ** 2 + fs[k, 1] ** 2 + fs[k, 2] ** 2), dt)
         slip += w_twist
-        fs[k, 4] = area[k]
-        fs[k, 5] = jp[k]
         # relative twist at the patch centroid
         twist[k, 0] = (vel[b, 0] + (angvel[b, 1] * pb[k, 2] - angvel[b, 2] * pb[k, 1])) \
             - (vel[a, 0] + (angvel[a, 1] * pa[k, 2] - angvel[a, 2] * pa[k, 1]))
@@ -523,7 +499,7 @@ class CompiledStep:
         self.jkeys = np.array([k for k, _ in keys], np.int64)
         self.jvals = np.array([v for _, v in keys], float).reshape(-1, 4)
         self.keys = np.zeros(0, np.int64)
-        self.shear_store = np.zeros((0, HISTORY))  # each contact's history (HISTORY)
+        self.shear_store = np.zeros((0, 4))  # shear force (N) and twisting moment (N m) per contact
         self.basis_store = np.zeros((0, 6, 6))  # each contact's damping modes (contact.damping_wrenches_warm)
         self.size = np.full(ns, np.inf) if size is None else np.asarray(size, float)
         self.depth_ratio = 0.0
