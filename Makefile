@@ -12,7 +12,7 @@ STAMP   := $(VENV)/.setup-stamp
 RUN     := $(PY) -m drystone
 
 .PHONY: setup system-deps test demo run gravity4 settlement4 bench clean help records spectrum ogawa3d ogawa \
-        reference sweep tilt tilt-rate tilt-sensitivity tilt-report sacsayhuaman sacsayhuaman-report vtk ogawa-pga readme docs free-decay \
+        reference sweep tilt tilt-rate tilt-sensitivity tilt-report sacsayhuaman sacsayhuaman-report vtk ogawa-pga readme docs free-decay pulse-overturning \
         fragility fragility-small fragility-report crosscheck shape-study shape-study-small shape-study-report \
         site-study site-study-small site-study-report report analyse limit
 
@@ -26,6 +26,7 @@ help:
 	@echo "make limit [CASE=cases/sacsayhuaman/sine.toml] [ARGS='--towards all']   rigid-block limit analysis: collapse multiplier, tilt angle and mechanism, both frictions (seconds, no YADE) -> results/<case name>/limit/"
 	@echo "make bench [BENCH='--only scale --sizes 500']   speed figures (not a test; all sections ~15 min on 2 cores)"
 	@echo "make reference    regenerate tests/data/reference/ (stored histories of test_regression.py) after an intended change"
+	@echo "make pulse-overturning   least one-sine pulse that overturns a slender block, damping 0.8 and Housner's, beside Zhang & Makris's rigid block (~20 min)"
 	@echo "make free-decay   damping ratio per mode of one block, both contact geometries, and a slender block's rocking restitution per impact vs Housner at 3 K_n x 4 dampings (~3 min)"
 	@echo "make ogawa        Ogawa et al.: Tables 1-3 check and figure, 1D friction studies and report (~15 min)"
 	@echo "make ogawa3d      the same five blocks in 3D (YADE) for the named friction sets (~4 min per set) + make ogawa-pga"
@@ -126,6 +127,9 @@ limit: setup
 
 free-decay: setup
 	$(RUN) free-decay
+
+pulse-overturning: setup
+	$(PY) -m drystone.studies.pulse_overturning
 
 records: setup
 	$(PY) -m drystone.motions records

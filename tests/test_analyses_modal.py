@@ -3,8 +3,8 @@ forms (no YADE), and once on a settled wall (YADE).
 
 One block b (x) x d (y) x H (z) on a Winkler joint (K_n, K_t per unit area), sunk by its
 static penetration delta0 = m g / (K_n A): the closed forms of tests/test_modal.py
-(bouncing, two sliding-rocking pairs with gravity's geometric stiffness -W h_c, and no
-torsional stiffness: the law's tangential spring acts at one point of a contact).
+(bouncing, two sliding-rocking pairs with gravity's geometric stiffness -W h_c, and the
+twist spring's torsion, w^2 = K_t A / m).
 
 A stone of two parts (a YADE clump) is one rigid body: its mass properties the union's, one
 contact per pair of parts of different stones, their forces summed on the stone:
@@ -13,9 +13,10 @@ contact per pair of parts of different stones, their forces summed on the stone:
   one-piece stone's, so are the modes, up to round-off (``MULTIPART_MODAL_REL``);
 * cut along its height into two halves side by side, each standing on the joint: the
   normal forces K_n V_i at the halves' overlap centroids add up to the one piece's force
-  and moment, the tangential springs K_t A_i at two points do too for every motion but a
-  twist about z, which they now resist: k = K_t (A/2) (b/4)^2 x 2 = K_t A b^2 / 16 about
-  the centroid's vertical, against J_z = m (b^2 + d^2) / 12.
+  and moment, the tangential springs K_t A_i at two points do too, and in a twist about z
+  they resist K_t (A/2) (b/4)^2 x 2 = K_t A b^2 / 16, which with the halves' own twist
+  springs 2 K_t (A/2) ((b/2)^2 + d^2) / 12 is the one piece's K_t A (b^2 + d^2) / 12
+  (parallel axes): the same six modes.
 """
 from __future__ import annotations
 
@@ -66,15 +67,16 @@ def one_piece():
 
 
 def test_one_block_on_a_winkler_joint(one_piece):
-    """The five frequencies with stiffness are the closed forms; the twist about z is no
-    frequency: it is listed apart, its stone and its cause named."""
+    """The six frequencies are the closed forms, the twist about z the twist spring's;
+    no zero mode."""
     r, m, delta0 = one_piece
     bounce = np.sqrt(KN * B * D / m) / (2 * np.pi)
-    expected = np.sort(np.r_[bounce, _rocking_sliding(B, D, m, delta0), _rocking_sliding(D, B, m, delta0)])
+    torsion = np.sqrt(KT * B * D / m) / (2 * np.pi)
+    expected = np.sort(np.r_[bounce, torsion, _rocking_sliding(B, D, m, delta0), _rocking_sliding(D, B, m, delta0)])
     np.testing.assert_allclose(r["frequencies_hz"], expected, rtol=tol.MODAL_FREQUENCY_REL)
-    assert len(r["zero_modes"]) == 1 and r["zero_modes"][0]["dominant_stone"] == 1
-    why = r["zero_modes"][0]["explanation"]
-    assert "single contact" in why and "rotation about z" in why
+    assert not r["zero_modes"]
+    twist = [mo for mo in r["modes"] if mo["dominant_motion"] == "rotation about z"]
+    assert len(twist) == 1 and twist[0]["frequency_hz"] == pytest.approx(torsion, rel=tol.MODAL_FREQUENCY_REL)
     # the lowest mode rocks and slides along x (the narrow side): all the x mass, none along y
     first = r["modes"][0]
     assert first["dominant_direction"] == "x" and first["effective_mass_ratio"]["y"] < tol.EXACT_ABS
@@ -88,21 +90,18 @@ def test_a_stone_cut_across_its_height_has_the_modes_of_one_piece(one_piece):
     r2 = am.analyse(asm, modes=6)
     assert r2["model"]["multi_part_stones"] == [1] and r2["model"]["contacts"] == 1
     np.testing.assert_allclose(r2["frequencies_hz"], r1["frequencies_hz"], rtol=tol.MULTIPART_MODAL_REL)
-    assert len(r2["zero_modes"]) == 1
+    assert not r2["zero_modes"]
 
 
 def test_a_stone_cut_into_two_halves_side_by_side(one_piece):
-    """Two contacts (one per part on the joint): the same five frequencies, and the twist
-    about z now has the stiffness of two tangential springs (module docstring)."""
+    """Two contacts (one per part on the joint): the same six frequencies, the twist about
+    z's stiffness shared between the two tangential springs and the halves' twist springs
+    (module docstring)."""
     r1, m, _ = one_piece
     asm, _, _ = _block(_side_by_side)
     r2 = am.analyse(asm, modes=6)
     assert r2["model"]["contacts"] == 2 and not r2["zero_modes"]
-    torsion = np.sqrt(KT * B * D * B ** 2 / 16 / (m * (B * B + D * D) / 12)) / (2 * np.pi)
-    twist = [mo for mo in r2["modes"] if mo["dominant_motion"] == "rotation about z"]
-    assert len(twist) == 1 and twist[0]["frequency_hz"] == pytest.approx(torsion, rel=tol.MODAL_FREQUENCY_REL)
-    others = sorted(mo["frequency_hz"] for mo in r2["modes"] if mo is not twist[0])
-    np.testing.assert_allclose(others, r1["frequencies_hz"], rtol=tol.MODAL_FREQUENCY_REL)
+    np.testing.assert_allclose(r2["frequencies_hz"], r1["frequencies_hz"], rtol=tol.MODAL_FREQUENCY_REL)
 
 
 def test_an_unstable_equilibrium_is_refused_naming_the_stone():
@@ -157,7 +156,7 @@ def test_a_stone_touching_nothing_is_explained():
     r = am.analyse(asm)
     lonely = [z for z in r["zero_modes"] if z["dominant_stone"] == 2]
     assert len(lonely) == 3 and all("touches nothing" in z["explanation"] for z in lonely)
-    assert len(r["frequencies_hz"]) == 5
+    assert len(r["zero_modes"]) == 3 and len(r["frequencies_hz"]) == 6
 
 
 @pytest.mark.yade
@@ -186,7 +185,7 @@ def test_modal_of_one_block_settled_by_the_analysis(tmp_path):
     """The full command on a case without a gravity stage (one block on the platform, a rest
     stage only): the analysis settles it under the gravity stage it adds (said so), and the
     frequencies of the settled block are the Winkler closed forms: bouncing and the two
-    sliding-rocking pairs, the twist about z listed apart. The settled sink is the closed
+    sliding-rocking pairs, the twist spring's torsion. The settled sink is the closed
     form's delta0 up to the residual motion of the run, and the frequencies depend on it
     only through h_c = H/2 - delta0/2 (delta0 / H = 1e-4 here)."""
     from conftest import have_yade
@@ -201,7 +200,7 @@ def test_modal_of_one_block_settled_by_the_analysis(tmp_path):
         "stages": [{"type": "rest", "duration": 0.1}], "output": {"interval": 0.01}}
     path = tmp_path / "one_block.toml"
     path.write_text(to_toml(case))
-    r = am.modal(path, out=tmp_path / "modal", modes=5, workers=1)
+    r = am.modal(path, out=tmp_path / "modal", modes=6, workers=1)
     assert r["settle"]["gravity_stage"].startswith("added")
     m = RHO * B * D * H
     delta0 = m * modal.G / (kn * B * D)
@@ -213,9 +212,10 @@ def test_modal_of_one_block_settled_by_the_analysis(tmp_path):
         K = np.array([[kt * a, -kt * a * hc], [-kt * a * hc, rock]])
         return np.sqrt(linalg.eigh(K, np.diag([m, m * (b * b + H * H) / 12]), eigvals_only=True)) / (2 * np.pi)
 
-    expected = np.sort(np.r_[np.sqrt(kn * a / m) / (2 * np.pi), pair(B, D), pair(D, B)])
+    expected = np.sort(np.r_[np.sqrt(kn * a / m) / (2 * np.pi), np.sqrt(kt * a / m) / (2 * np.pi), pair(B, D),
+                             pair(D, B)])
     np.testing.assert_allclose(r["frequencies_hz"], expected, rtol=tol.SETTLED_MODAL_REL)
-    assert len(r["zero_modes"]) == 1 and "single contact" in r["zero_modes"][0]["explanation"]
+    assert not r["zero_modes"]
 
 
 @pytest.mark.yade

@@ -6,9 +6,10 @@ delta0 = m g / (K_n A) (A = b d): the exact equilibrium of the law. With h = H/2
 height of the centroid above the block's bottom face:
 
 * bouncing: w^2 = K_n A / m;
-* torsion about z: none. The project's law puts the tangential spring K_t A_c at one
-  point, the overlap's centroid, below the block's centroid here: a twist about z does not
-  move that point, so a single flat joint has no torsional stiffness (a zero mode);
+* torsion about z: the law's twist spring K_t J_p (drystone/mechanics/contact.py
+  ``twist_spring``; the tangential spring K_t A_c acts at one point, the overlap's centroid
+  below the block's centroid, which a twist does not move), J_p = A (b^2 + d^2) / 12 the
+  footprint's polar moment, on J_z = m (b^2 + d^2) / 12: w^2 = K_t A / m;
 * sliding-rocking in x-z (DOFs u_x, theta_y about the centroid): K = [[K_t A, -K_t A h_c],
   [-K_t A h_c, K_n I_y + K_t A h_c^2 - W h_c]], M = diag(m, J_y), with I_y = d b^3 / 12,
   W = m g and h_c = h - delta0/2 the height of the centroid above the overlap's centroid
@@ -73,9 +74,10 @@ def test_one_block_on_a_winkler_foundation():
     res = asm.modes()
     f = np.sort(res["frequency_hz"])
     bounce = np.sqrt(KN * B * D / m) / (2 * np.pi)
-    expected = np.sort(np.concatenate([[bounce], _rocking_sliding(B, D, m, delta0), _rocking_sliding(D, B, m, delta0)]))
-    assert abs(f[0]) < tol.ZERO_MODE_HZ  # torsion: no stiffness (against 1.3-21 Hz)
-    np.testing.assert_allclose(f[1:], expected, rtol=tol.MODAL_FREQUENCY_REL)
+    torsion = np.sqrt(KT * B * D / m) / (2 * np.pi)
+    expected = np.sort(np.concatenate([[bounce, torsion], _rocking_sliding(B, D, m, delta0),
+                                       _rocking_sliding(D, B, m, delta0)]))
+    np.testing.assert_allclose(f, expected, rtol=tol.MODAL_FREQUENCY_REL)
     assert res["residual"] < tol.MODAL_RESIDUAL  # the sunk block is in equilibrium
     assert res["asymmetry"] < tol.MODAL_ASYMMETRY
     # gravity's geometric stiffness matters here: without it the lowest rocking mode is

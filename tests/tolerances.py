@@ -755,6 +755,12 @@ ENGINE_WORK_REL = 1e-9
 #: (undamped rocking), 0.21 (damped), 0.16 (settlement, the support moving a penetration
 #: per step), 1e-4 where the kinetic energy is a slide's (no contact mode carries it)
 BALANCE_SHADOW = 0.5
+#: a settled wall stands still: over the last 0.5 s of a gravity stage its stones move less
+#: than this fraction of the joints' depth scale rho g H / K_n (H the wall's height: the
+#: bottom joints' static depth under a full column, 0.45 mm for the 4 m Sacsayhuaman section
+#: at K_n 2e8). Measured 0.01 um (2e-5 of it) with the law's carried shear force; a carried
+#: force scaled with the contact area crept 70 um (docs/energy.md)
+SETTLED_DRIFT_DEPTH_FRACTION = 0.01
 #: second-order convergence (the balance's bounded leapfrog error): halving dt quarters it,
 #: a ratio of 4; the next order's share moves it by up to a quarter: 3-5
 SECOND_ORDER_RATIO_MIN = 3.0

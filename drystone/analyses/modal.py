@@ -23,8 +23,8 @@
 3. **Modes.** eigh(K, M), K symmetrised. Each eigenvalue is read (``modal.interpret``): a
    positive one is a mode (a frequency, its effective mass along x, y, z, its dominant
    direction and stones); one within ``modal.ZERO_EIGENVALUE_REL`` of zero is a motion the
-   joints do not resist (a stone touching nothing; a stone twisting on a single joint,
-   which the law's one-point tangential spring does not resist), listed apart with its
+   joints do not resist (a stone touching nothing, say; the twist spring,
+   ``contact.twist_spring``, holds a stone twisting on a single joint), listed apart with its
    stone and never as a frequency; a negative one (an unstable equilibrium) refuses the
    analysis, naming the stone.
 4. **Check (``--identify``).** A white-noise run after the same settling (``NOISE``:

@@ -15,6 +15,12 @@ X Y Z rotations) are left out. The generalised forces Q(q) are those of the proj
   point, of the two blocks' material points that were at the overlap centroid in the
   static configuration (A_c and that point fixed at their static values; no stored
   tangential force: the static configuration's shear forces are not recorded);
+* twist: the law's twist spring (``contact.twist_spring``), a moment -K_t J_p psi n about
+  the contact normal, psi = (theta_j - theta_i) . n the two blocks' relative rotation about
+  it from the static configuration (J_p the patch's polar moment there, ``contact.polar_moment``):
+  the same K_t J_p n n^T the damping's ``patch_stiffness`` holds, so a stone on a single flat
+  joint has a torsional mode, omega^2 = K_t J_p / I_n (for a b x d footprint under a box,
+  K_t A / m: the sliding spring's);
 * gravity: m g at each centroid.
 
 A stone of several convex parts (a re-entrant stone; a YADE clump) is one rigid body: its
@@ -156,8 +162,12 @@ class Assembly:
                      if _LETTERS[c] not in self.blocked[b]]
         self._index = {d: k for k, d in enumerate(self.dofs)}
         ref = self.contacts(np.zeros(self.ndof))
-        self.reference = {(int(i), int(j)): (c.copy(), float(a))
-                          for i, j, c, a in zip(ref["id1"], ref["id2"], ref["centroid"], ref["area"])}
+        pj = self._shape_contacts(np.zeros(self.ndof))[7]
+        jp = [law.polar_moment(n, J) for n, J in zip(ref["normal"], pj)]
+        #: per contact (pair of shapes): the overlap centroid (m), area A_c (m^2) and polar
+        #: moment J_p (m^4) of the static configuration
+        self.reference = {(int(i), int(j)): (c.copy(), float(a), float(p))
+                          for i, j, c, a, p in zip(ref["id1"], ref["id2"], ref["centroid"], ref["area"], jp)}
         self.reference_contacts = ref
 
     @property
@@ -193,22 +203,26 @@ class Assembly:
 
     def contact_forces(self, q) -> list:
         """Per contact of the configuration q: (stone index i, stone index j, point x (m),
-        normal force F_n (N, >= 0), force on stone j (3,) N: normal plus tangential spring)."""
-        pos, rot, _ = self._configuration(q)
+        normal force F_n (N, >= 0), force on stone j (3,) N: normal plus tangential spring,
+        moment on stone j (3,) N m: the twist spring's, about the normal)."""
+        pos, rot, u = self._configuration(q)
         c = self.contacts(q)
         out = []
         for si, sj, i, j, v, x, n in zip(c["id1"], c["id2"], c["block1"], c["block2"], c["volume"], c["centroid"],
                                          c["normal"]):
             fn = combine(self.kn[i], self.kn[j]) * v
             fb = fn * n
+            mb = np.zeros(3)
             ref = self.reference.get((int(si), int(sj)))
             if ref is not None:
-                x0, a0 = ref
+                x0, a0, jp0 = ref
+                kt = combine(self.kt[i], self.kt[j])
                 ub = pos[j] - self.pos0[j] + (rot[j] - np.eye(3)) @ (x0 - self.pos0[j])
                 ua = pos[i] - self.pos0[i] + (rot[i] - np.eye(3)) @ (x0 - self.pos0[i])
                 s = ub - ua
-                fb = fb - combine(self.kt[i], self.kt[j]) * a0 * (s - (s @ n) * n)
-            out.append((int(i), int(j), x, float(fn), fb))
+                fb = fb - kt * a0 * (s - (s @ n) * n)
+                mb = -kt * jp0 * float((u[j, 3:] - u[i, 3:]) @ n) * n
+            out.append((int(i), int(j), x, float(fn), fb, mb))
         return out
 
     def generalised_forces(self, q) -> np.ndarray:
@@ -218,11 +232,11 @@ class Assembly:
         force = np.zeros((nb, 3))
         moment = np.zeros((nb, 3))
         force[self.moving] += self.mass[self.moving, None] * self.gravity
-        for i, j, x, _, fb in self.contact_forces(q):
-            for b, f in ((j, fb), (i, -fb)):
+        for i, j, x, _, fb, mb in self.contact_forces(q):
+            for b, f, m in ((j, fb, mb), (i, -fb, -mb)):
                 if self.moving[b]:
                     force[b] += f
-                    moment[b] += np.cross(x - pos[b], f)
+                    moment[b] += np.cross(x - pos[b], f) + m
         out = np.empty(self.ndof)
         for k, (b, comp) in enumerate(self.dofs):
             out[k] = force[b, comp] if comp < 3 else (_tangent(u[b, 3:]).T @ moment[b])[comp - 3]
@@ -233,7 +247,7 @@ class Assembly:
         tangential springs' forces; needs ``mu``) and that contact's stone ids."""
         c = self.contacts(q)
         worst, where = 0.0, None
-        for (i, j, _, fn, fb), n in zip(self.contact_forces(q), c["normal"]):
+        for (i, j, _, fn, fb, _), n in zip(self.contact_forces(q), c["normal"]):
             ft = float(np.linalg.norm(fb - (fb @ n) * n))
             cap = min(self.mu[i], self.mu[j]) * fn
             r = ft / cap if cap > 0 else (np.inf if ft > 0 else 0.0)
@@ -472,10 +486,6 @@ def interpret(asm: Assembly, res: dict, zero_rel: float = ZERO_EIGENVALUE_REL) -
                                        f"{motion}, {ncont[top]} contact(s)) is not in stable equilibrium")
             elif ncont[top] == 0:
                 item["explanation"] = f"stone {top} touches nothing: a free rigid-body motion ({motion})"
-            elif motion.startswith("rotation") and ncont[top] == 1:
-                item["explanation"] = (f"stone {top} ({share}) on a single contact: {motion} has no stiffness (the "
-                                       "law's tangential spring acts at one point of a contact, so a joint does not "
-                                       "resist a twist about its normal)")
             else:
                 item["explanation"] = (f"a mechanism: the joints give no stiffness to this motion of stone {top} "
                                        f"({share}, mostly {motion}, {ncont[top]} contact(s))")

@@ -32,6 +32,9 @@ warning. Blocks (``BLOCKS``):
 * ``restitution``, ``restitution_curve``: the rocking block's restitution per impact against
   Housner's, and its first impact's restitution against the damping at K_n 2e8 N/m^3
   (results/free_decay/report.md; ``make free-decay``);
+* ``pulse_overturning``: the slender block's least overturning amplitude under one-sine
+  pulses at two dampings beside Zhang & Makris's rigid block, and its figure
+  (results/pulse_overturning/report.md, docs/figures/pulse_overturning.png; ``make pulse-overturning``);
 * ``identification``: the table of the paper's peaks as FFT bins and the transfer-function
   peaks (results/sacsayhuaman/identification.md; ``python -m drystone.studies.sacsayhuaman identify``);
 * ``fragility``: the fragility study's run count, fitted curves and cost
@@ -318,11 +321,18 @@ def bench(results: Path) -> str:
     return "\n".join(out) + "\n\n" + _source_note(p, results=results)
 
 
+def pulse_overturning(results: Path) -> str:
+    p = results / "pulse_overturning" / "report.md"
+    fig = "figures/pulse_overturning.png"  # written beside docs/ by the study
+    return (first_table_after(p, "Least overturning amplitude") + "\n\n"
+            + f"![least overturning amplitude against omega_p / p]({fig})\n\n" + _source_note(p, results=results))
+
+
 BLOCKS = {"bench": bench, "verification": verification, "tilt": tilt, "tilt_checks": tilt_checks, "ogawa": ogawa,
           "sacsayhuaman_table3": sacsayhuaman_table3, "free_decay": free_decay, "restitution": restitution,
           "restitution_curve": restitution_curve, "identification": identification,
           "fragility": fragility, "crosscheck": crosscheck, "shape": shape,
-          "site": site}
+          "site": site, "pulse_overturning": pulse_overturning}
 
 
 def documents(root: Path | None = None) -> list[Path]:
