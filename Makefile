@@ -5,7 +5,7 @@ PY      := $(VENV)/bin/python
 JOBS    ?= 2
 # YADE threads of one run: 1 is bitwise reproducible (docs: reproducibility); JOBS is the number of parallel runs
 THREADS ?= 1
-PYTEST_ARGS ?= -n $(JOBS)
+PYTEST_ARGS ?= -n $(JOBS) --dist loadfile --no-loadscope-reorder
 SUDO    := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 DEB_PKGS := yade python3-matplotlib python3-venv
 STAMP   := $(VENV)/.setup-stamp

@@ -1,4 +1,6 @@
-"""Shared test fixtures: output folders, matplotlib without a display, YADE runs."""
+"""Shared test fixtures: output folders, matplotlib without a display, YADE runs; for
+``make test`` (``pytest -n N``): numba's cache compiled once before the workers start, and the
+files in decreasing order of their cost."""
 from __future__ import annotations
 
 import os
@@ -33,6 +35,51 @@ def have_yade() -> bool:
 
 
 requires_yade = pytest.mark.skipif(not have_yade(), reason="YADE is not installed (run make setup)")
+
+#: the smallest run through the default step engine: one box settling for a few steps
+_WARM_CASE = {"case": {"name": "numba_warm", "geometry": {"generator": "boxes_on_platform", "mu": 0.6, "boxes": [
+    {"id": 1, "center_xy": [0.0, 0.0], "size": [0.4, 0.4, 0.2]}]}},
+    "stages": [{"type": "gravity", "duration": 0.002, "ramp": 0.001}], "output": {"interval": 0.001}}
+#: rough cost of a test (s) by its marks, to order the files for ``-n N``
+_COST_S = {"slow": 60.0, "yade": 8.0, "other": 0.2}
+
+
+def pytest_configure(config):
+    """In the controller of a parallel run (``-n N``: it runs no test itself) with numba's cache
+    cold, compile the contact kernels once, by running the smallest case, before the workers
+    start: otherwise each worker, and each YADE run a test starts before the cache is written,
+    compiles them on its own (30-60 s of a core each)."""
+    import tempfile
+
+    import drystone
+
+    parallel = getattr(config.option, "numprocesses", None) and not hasattr(config, "workerinput")
+    if not parallel or config.option.collectonly or drystone.kernels_cached() or not have_yade():
+        return
+    from drystone import runner
+
+    print("conftest: numba's cache is cold: compiling the contact kernels once (30-60 s)", flush=True)
+    with tempfile.TemporaryDirectory(prefix="drystone-warm-") as d:
+        runner.run_dict(_WARM_CASE, Path(d) / "warm.toml", out_dir=Path(d) / "out", quiet=True)
+
+
+def _cost(item) -> float:
+    if item.get_closest_marker("slow"):
+        return _COST_S["slow"]
+    yade = item.get_closest_marker("yade") or requires_yade.mark in item.iter_markers("skipif")
+    return _COST_S["yade" if yade else "other"]
+
+
+def pytest_collection_modifyitems(config, items):
+    """The files in decreasing order of their cost by marks (``_COST_S``), each file's tests in
+    their order: ``make test`` (``-n N --dist loadfile --no-loadscope-reorder``) hands the next
+    file to the first idle worker, so the longest start first and the workers finish together,
+    and one worker runs a whole file (a module fixture's runs are made once)."""
+    files: dict = {}
+    for item in items:
+        files.setdefault(item.nodeid.split("::", 1)[0], []).append(item)
+    ordered = sorted(files.values(), key=lambda f: -sum(_cost(i) for i in f))  # stable
+    items[:] = [i for f in ordered for i in f]
 
 
 def run_case(case: dict, outdir: Path, name: str = "case", **kw) -> tuple[dict, dict, dict]:
