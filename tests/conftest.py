@@ -40,8 +40,18 @@ requires_yade = pytest.mark.skipif(not have_yade(), reason="YADE is not installe
 _WARM_CASE = {"case": {"name": "numba_warm", "geometry": {"generator": "boxes_on_platform", "mu": 0.6, "boxes": [
     {"id": 1, "center_xy": [0.0, 0.0], "size": [0.4, 0.4, 0.2]}]}},
     "stages": [{"type": "gravity", "duration": 0.002, "ramp": 0.001}], "output": {"interval": 0.001}}
-#: rough cost of a test (s) by its marks, to order the files for ``-n N``
-_COST_S = {"slow": 60.0, "yade": 8.0, "other": 0.2}
+#: cost of the longest test files (s), to order the files for ``-n N``: one process (nice) on
+#: a loaded 2-core machine, so only their ratios matter; files not here are costed by marks
+#: (``_COST_S``, the same units). A stale figure only makes the two workers finish less together.
+_FILE_COST_S = {
+    "test_analyses_collapse.py": 300, "test_site_study.py": 255, "test_yade_contact.py": 240,
+    "test_multipart_runs.py": 230, "test_docs_runnable.py": 200, "test_shape_study.py": 175,
+    "test_sacsayhuaman.py": 120, "test_analyses_tilt.py": 115, "test_analyses_fragility.py": 115,
+    "test_yade_compiled.py": 105, "test_sweep.py": 95, "test_damping.py": 90, "test_earth_pressure_runs.py": 90,
+    "test_energy.py": 85, "test_tilt_block.py": 80, "test_analyses_assess.py": 70, "test_reliability_run.py": 55,
+    "test_reliability_output.py": 55, "test_excitation.py": 45, "test_report.py": 40}
+#: cost of a test (s) by its marks, for the files not in ``_FILE_COST_S``
+_COST_S = {"slow": 60.0, "yade": 15.0, "other": 0.3}
 
 
 def pytest_configure(config):
@@ -71,15 +81,18 @@ def _cost(item) -> float:
 
 
 def pytest_collection_modifyitems(config, items):
-    """The files in decreasing order of their cost by marks (``_COST_S``), each file's tests in
-    their order: ``make test`` (``-n N --dist loadfile --no-loadscope-reorder``) hands the next
-    file to the first idle worker, so the longest start first and the workers finish together,
-    and one worker runs a whole file (a module fixture's runs are made once)."""
+    """The files in decreasing order of their cost (``_FILE_COST_S``, else by marks), each
+    file's tests in their order: ``make test`` (``-n N --dist loadfile --no-loadscope-reorder``)
+    hands the next file to the first idle worker, so the longest start first and the workers
+    finish together, and one worker runs a whole file (a module fixture's runs are made once)."""
     files: dict = {}
     for item in items:
         files.setdefault(item.nodeid.split("::", 1)[0], []).append(item)
-    ordered = sorted(files.values(), key=lambda f: -sum(_cost(i) for i in f))  # stable
-    items[:] = [i for f in ordered for i in f]
+
+    def cost(path: str) -> float:
+        return _FILE_COST_S.get(Path(path).name) or sum(_cost(i) for i in files[path])
+
+    items[:] = [i for path in sorted(files, key=lambda p: -cost(p)) for i in files[path]]  # stable
 
 
 def run_case(case: dict, outdir: Path, name: str = "case", **kw) -> tuple[dict, dict, dict]:
