@@ -6,6 +6,9 @@ JOBS    ?= 2
 # YADE threads of one run: 1 is bitwise reproducible (docs: reproducibility); JOBS is the number of parallel runs
 THREADS ?= 1
 PYTEST_ARGS ?= -n $(JOBS)
+# make test hands each worker whole test files, the longest first (tests/conftest.py orders them): the
+# workers finish together and a module's shared runs are made once
+PYTEST_DIST ?= --dist loadfile --no-loadscope-reorder
 SUDO    := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 DEB_PKGS := yade python3-matplotlib python3-venv
 STAMP   := $(VENV)/.setup-stamp
@@ -77,7 +80,7 @@ $(STAMP): requirements.txt requirements-nodeps.txt requirements-crosscheck.txt c
 	@touch $@
 
 test: setup
-	$(PY) -m pytest $(PYTEST_ARGS)
+	$(PY) -m pytest $(PYTEST_DIST) $(PYTEST_ARGS)
 
 run: setup
 	@test -n "$(CASE)" || { echo "usage: make run CASE=path/to/case.toml [SET='key=value ...']"; exit 2; }

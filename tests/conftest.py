@@ -1,4 +1,6 @@
-"""Shared test fixtures: output folders, matplotlib without a display, YADE runs."""
+"""Shared test fixtures: output folders, matplotlib without a display, YADE runs; for
+``make test`` (``pytest -n N``): numba's cache compiled once before the workers start, and the
+files in decreasing order of their cost."""
 from __future__ import annotations
 
 import os
@@ -33,6 +35,65 @@ def have_yade() -> bool:
 
 
 requires_yade = pytest.mark.skipif(not have_yade(), reason="YADE is not installed (run make setup)")
+
+#: the smallest run through the default step engine: one box settling for a few steps
+_WARM_CASE = {"case": {"name": "numba_warm", "geometry": {"generator": "boxes_on_platform", "mu": 0.6, "boxes": [
+    {"id": 1, "center_xy": [0.0, 0.0], "size": [0.4, 0.4, 0.2]}]}},
+    "stages": [{"type": "gravity", "duration": 0.002, "ramp": 0.001}], "output": {"interval": 0.001}}
+#: cost of the longest test files (s), to order the files for ``-n N``: one process (nice) on
+#: a loaded 2-core machine, so only their ratios matter; files not here are costed by marks
+#: (``_COST_S``, the same units). A stale figure only makes the two workers finish less together.
+_FILE_COST_S = {
+    "test_site_study.py": 255, "test_docs_runnable.py": 245, "test_yade_contact.py": 240,
+    "test_multipart_runs.py": 200, "test_analyses_collapse.py": 190, "test_shape_study.py": 175,
+    "test_analyses_fragility.py": 175, "test_analyses_tilt.py": 115, "test_sacsayhuaman.py": 110,
+    "test_yade_compiled.py": 105, "test_earth_pressure_runs.py": 100, "test_sweep.py": 100, "test_damping.py": 90,
+    "test_energy.py": 85, "test_tilt_block.py": 80, "test_restitution.py": 75, "test_analyses_assess.py": 70,
+    "test_reliability_site.py": 60, "test_reliability_run.py": 55, "test_reliability_output.py": 55,
+    "test_crosscheck.py": 55, "test_report.py": 50, "test_fragility.py": 45, "test_excitation.py": 40}
+#: cost of a test (s) by its marks, for the files not in ``_FILE_COST_S``
+_COST_S = {"slow": 60.0, "yade": 15.0, "other": 0.3}
+
+
+def pytest_configure(config):
+    """In the controller of a parallel run (``-n N``: it runs no test itself) with numba's cache
+    cold, compile the contact kernels once, by running the smallest case, before the workers
+    start: otherwise each worker, and each YADE run a test starts before the cache is written,
+    compiles them on its own (30-60 s of a core each)."""
+    import tempfile
+
+    import drystone
+
+    parallel = getattr(config.option, "numprocesses", None) and not hasattr(config, "workerinput")
+    if not parallel or config.option.collectonly or drystone.kernels_cached() or not have_yade():
+        return
+    from drystone import runner
+
+    print("conftest: numba's cache is cold: compiling the contact kernels once (30-60 s)", flush=True)
+    with tempfile.TemporaryDirectory(prefix="drystone-warm-") as d:
+        runner.run_dict(_WARM_CASE, Path(d) / "warm.toml", out_dir=Path(d) / "out", quiet=True)
+
+
+def _cost(item) -> float:
+    if item.get_closest_marker("slow"):
+        return _COST_S["slow"]
+    yade = item.get_closest_marker("yade") or requires_yade.mark in item.iter_markers("skipif")
+    return _COST_S["yade" if yade else "other"]
+
+
+def pytest_collection_modifyitems(config, items):
+    """The files in decreasing order of their cost (``_FILE_COST_S``, else by marks), each
+    file's tests in their order: ``make test`` (``-n N --dist loadfile --no-loadscope-reorder``)
+    hands the next file to the first idle worker, so the longest start first and the workers
+    finish together, and one worker runs a whole file (a module fixture's runs are made once)."""
+    files: dict = {}
+    for item in items:
+        files.setdefault(item.nodeid.split("::", 1)[0], []).append(item)
+
+    def cost(path: str) -> float:
+        return _FILE_COST_S.get(Path(path).name) or sum(_cost(i) for i in files[path])
+
+    items[:] = [i for path in sorted(files, key=lambda p: -cost(p)) for i in files[path]]  # stable
 
 
 def run_case(case: dict, outdir: Path, name: str = "case", **kw) -> tuple[dict, dict, dict]:

@@ -199,7 +199,16 @@ def test_joint_share_keeps_one_contact_and_splits_equal_halves():
 
 # --- figures and VTK draw every part ----------------------------------------------------------
 
-def test_figures_and_vtk_draw_each_part(outdir):
+@pytest.fixture(scope="module")
+def settled_l(tmp_path_factory):
+    """The L stone settled on the platform under gravity: the run folder (one run for the
+    figures, the VTK files and the modal model below)."""
+    d = tmp_path_factory.mktemp("settled_l")
+    run_case(gravity_then([], write(d, stone_file([L_FOOT, L_LEG]))), d)
+    return d / "case"
+
+
+def test_figures_and_vtk_draw_each_part(outdir, settled_l):
     import meshio
     from conftest import assert_figure
     from drystone.postprocess import snapshots, vtk
@@ -208,17 +217,15 @@ def test_figures_and_vtk_draw_each_part(outdir):
     pts, faces = snapshots.stone_geometry(data["blocks"])[7]
     assert len(pts) == 16 and len(faces) == 12  # two boxes' corners and faces, not their hull's 8 and 6
     assert_figure(snapshots.elevation(write(outdir, data), outdir / "elevation.png"), (10, 5), dpi=110)
-    case = gravity_then([], write(outdir, data))
-    run_case(case, outdir)
-    pvd = vtk.write(outdir / "case", every=10)
+    pvd = vtk.write(settled_l, every=10, out=outdir / "vtk")
     last = meshio.read(sorted(pvd.parent.glob("blocks_*.vtu"))[-1])
     ids = np.concatenate(last.cell_data["block_id"])
     assert len(ids) == 18 and (ids == 7).sum() == 12  # the platform's 6 faces and the L's 12
     assert len(last.points) == 8 + 16  # the platform's corners and both parts'
-    assert_figure(snapshots.render(outdir / "case", [0.0, 1e9], outdir / "final.png"), (8.4, 4.2), dpi=110)
+    assert_figure(snapshots.render(settled_l, [0.0, 1e9], outdir / "final.png"), (8.4, 4.2), dpi=110)
 
 
-def test_modal_model_of_a_settled_multi_part_stone(outdir):
+def test_modal_model_of_a_settled_multi_part_stone(settled_l):
     """The L settled on the platform enters the modal model as one rigid body: the union's
     mass and inertia (drystone/geometry/massprops.py) at the recorded position, its foot the
     only part in contact (one contact); the analysis gives six frequencies, the twist about z
@@ -227,8 +234,7 @@ def test_modal_model_of_a_settled_multi_part_stone(outdir):
     from drystone.geometry import massprops
     from drystone.postprocess import identification
 
-    run_case(gravity_then([], write(outdir, stone_file([L_FOOT, L_LEG]))), outdir)
-    asm = identification.wall_assembly(outdir / "case")
+    asm = identification.wall_assembly(settled_l)
     b = asm.ids.index(7)
     mp = massprops.mass_properties([L_FOOT, L_LEG], RHO)
     assert len(asm.parts[b]) == 2 and asm.mass[b] == pytest.approx(mp.mass, rel=tol.EXACT_REL)

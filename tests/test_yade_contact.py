@@ -58,14 +58,16 @@ def test_push_below_friction_sticks_elastically(outdir):
     drift between 0.5 s and 2 s after the push < 1e-7 m; the unloaded neighbour moves
     < 1e-9 m (with YADE's stock law it creeps: test_stock_law_leaks_shear)."""
     F = 0.4 * W
-    s, h, _ = run_case(case(TWO, SETTLE + [{"type": "rest", "duration": 2.5}],
+    # the run ends 2 s after the push, at the end of the drift window
+    s, h, _ = run_case(case(TWO, SETTLE + [{"type": "rest", "duration": 2.0}],
                             [{"block": 1, "force": [F, 0.0, 0.0], "start": 0.5}]), outdir)
     t = h["t"]
     x = disp(h, 1)[:, 0]
-    i1, i2 = np.searchsorted(t, 1.0), np.searchsorted(t, 2.5)
+    i1, i2 = np.searchsorted(t, 1.0), len(t) - 1
+    assert t[i2] == pytest.approx(2.5, abs=0.5 * (t[1] - t[0]))
     assert abs(x[i2] - x[i1]) < tol.STICK_DRIFT_M
     # elastic deflection F / (K_t A); 3 % covers the slab's tilt under the push (1.5 %)
-    assert x[-1] == pytest.approx(F / (1e8 * 0.16), rel=tol.ELASTIC_DEFLECTION_REL)
+    assert x[i2] == pytest.approx(F / (1e8 * 0.16), rel=tol.ELASTIC_DEFLECTION_REL)
     assert np.abs(disp(h, 2)[:, :2]).max() < tol.NEIGHBOUR_M  # horizontal: it only settles vertically
 
 
