@@ -220,7 +220,7 @@ class Engine:
         for k in [i] + list(run.members.get(i, ())):
             run.O.bodies[k].groupMask = 0
         if self.step is not None and hasattr(self.step, "shapes"):
-            self.step.shapes.verts[self.step.owner == i] = np.nan
+            self.step.retire(self.step.owner == i)
 
     def check_depth(self) -> None:
         """Stop the run on a contact deeper than stability.TUNNEL_FRACTION x the smaller
