@@ -165,7 +165,7 @@ def timed_run(case: dict, workdir: Path, tag: str, threads: int = 1, overrides=(
                 contacts=info["max_contacts"],
                 final_contacts=info.get("final_contacts"), python_ms_per_step=None if py is None else py / 1e3,
                 steps=r["steps"], warm_steps=w["steps"], dt_s=r["dt_s"], wall_s=r["wall_time_s"],
-                engine_used=info.get("engine"), out=str(out))
+                engine_used=info.get("engine"), max_rss_mib=info.get("max_rss_mib"), out=str(out))
 
 
 def prime(workdir: Path) -> None:
@@ -487,6 +487,8 @@ def scale_section(workdir: Path, sizes=SIZES, walls=WALLS, steps: int = 300, eng
                 print(f"  {kind:12s} {engine or 'default':8s} {n:5d} stones: FAILED: {exc}", flush=True)
                 continue
             r["us_per_contact_step"] = 1e3 * r["ms_per_step"] / max(1, r["final_contacts"] or r["contacts"])
+            if r.get("max_rss_mib"):  # the YADE process's peak memory over the stones (KiB each)
+                r["kib_per_stone"] = 1024.0 * r["max_rss_mib"] / n
             run_dir = Path(r.pop("out"))
             r["search"] = contact_search_times(run_dir)
             r["split"] = step_times(run_dir)
@@ -503,17 +505,24 @@ def scale_section(workdir: Path, sizes=SIZES, walls=WALLS, steps: int = 300, eng
                   f"({100 * r['broad_phase_share']:.1f} %), clip of {sr['candidates']} candidates "
                   f"{sr['clip_ms']:.2f} ms" + (f"; the former all-pairs search {sr['all_pairs_ms']:.2f} ms" if "all_pairs_ms" in sr else "") + "\n"
                   f"  {'':21s} step in two halves alone: contact forces (search, law, damping) "
-                  f"{r['split']['forces_ms']:.3f} ms, integration of {n} stones {r['split']['integrate_ms']:.3f} ms",
-                  flush=True)
-    fits = {}
+                  f"{r['split']['forces_ms']:.3f} ms, integration of {n} stones {r['split']['integrate_ms']:.3f} ms"
+                  + (f"\n  {'':21s} memory: peak {r['max_rss_mib']:.0f} MiB, {r['kib_per_stone']:.0f} KiB per stone"
+                     if "kib_per_stone" in r else ""), flush=True)
+    fits, marginal = {}, {}
     for kind, engine in [(k, e or "default") for k in walls for e in engines]:
         pts = [(r["stones"], r["ms_per_step"]) for r in rows
                if r["wall"] == kind and r["engine"] == engine and "failed" not in r]
         if len(pts) >= 2:
             key = kind if len(engines) == 1 else f"{kind}/{engine}"
             fits[key] = growth_exponent(*zip(*pts))
-            print(f"  {key}: cost ~ N^{fits[key]:.2f} over N = {', '.join(str(p[0]) for p in pts)}", flush=True)
-    return {"steps": steps, "rows": rows, "growth_exponent": fits}
+            mem = [(r["stones"], r["max_rss_mib"]) for r in rows if r["wall"] == kind and r["engine"] == engine
+                   and r.get("max_rss_mib")]
+            extra = ""
+            if len(mem) >= 2 and mem[-1][0] > mem[0][0]:  # the memory each further stone takes
+                marginal[key] = 1024.0 * (mem[-1][1] - mem[0][1]) / (mem[-1][0] - mem[0][0])
+                extra = f"; memory {marginal[key]:.0f} KiB per further stone"
+            print(f"  {key}: cost ~ N^{fits[key]:.2f} over N = {', '.join(str(p[0]) for p in pts)}{extra}", flush=True)
+    return {"steps": steps, "rows": rows, "growth_exponent": fits, "kib_per_further_stone": marginal}
 
 
 # -- c: threads with a second run going -------------------------------------------------------
