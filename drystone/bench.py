@@ -264,9 +264,11 @@ def running_bond_section(workdir: Path) -> list[dict]:
 #: stones of the scale section's walls (about; the irregular walls' counts are drawn)
 SIZES = (40, 500, 2000)
 WALLS = ("running_bond", "irregular", "polygonal")
-#: the sizes a wall kind is built at, where not SIZES: the polygonal wall at 500 stones only
-#: (its generator's repairs make a 2000-stone face slow to draw)
-WALL_SIZES = {"polygonal": (500,)}
+#: the sizes a wall kind is built at, where not SIZES: the polygonal wall at 500 stones and at
+#: 2000, the 500-stone face drawn once and laid ``POLYGONAL_TILES`` times along the wall (its
+#: generator's repairs make a 2000-stone face slow to draw: more than 15 min)
+WALL_SIZES = {"polygonal": (500, 2000)}
+POLYGONAL_TILES = {2000: 4}
 #: the polygonal wall (drystone/geometry/polygonal_wall.py): a 12 x 5 m face of stones 0.25-0.5 m
 #: in equivalent diameter (500 stones at seed 0), re-entrant stones (several convex parts)
 #: r = 0.5 of the convex ones, LAYOUT's thickness
@@ -295,14 +297,49 @@ def wall_geometry(kind: str, size: int, seed: int = 0) -> dict:
                 "courses": courses, "stone_length": [0.75 * STONE_LENGTH, 1.25 * STONE_LENGTH], "seed": seed,
                 "name": f"irregular_{size}"}
     if kind == "polygonal":
-        return {"generator": "polygonal_wall", "thickness": THICKNESS, "seed": seed, **POLYGONAL}
+        return {"generator": "polygonal_wall", "thickness": THICKNESS, "seed": seed, **POLYGONAL,
+                **({"tiles": POLYGONAL_TILES[size]} if size in POLYGONAL_TILES else {})}
     raise ValueError(f"wall kind {kind!r}: one of {list(WALLS)}")
 
 
 def build_wall(geometry: dict) -> dict:
-    """The block-file dict of a case geometry table (``drystone.geometry.generators``)."""
+    """The block-file dict of a case geometry table (``drystone.geometry.generators``); a
+    table with ``tiles`` = k: the generator's wall laid k times along x (``tiled``)."""
     from drystone.geometry import generators
-    return generators.generate(dict(geometry))
+    geometry = dict(geometry)
+    k = geometry.pop("tiles", 1)
+    data = generators.generate(geometry)
+    return tiled(data, k) if k > 1 else data
+
+
+def tiled(data: dict, k: int) -> dict:
+    """A block-file dict of ``k`` copies of a wall's stones side by side along x (each
+    shifted by the stones' length; the copies' end faces flat and touching), on its
+    platform lengthened by the same; stone ids renumbered copy by copy."""
+    import copy
+
+    stones = [b for b in data["blocks"] if b["role"] != "platform"]
+    pts = np.vstack([np.vstack(b.get("parts", [b.get("vertices")])) for b in stones])
+    length = float(pts[:, 0].max() - pts[:, 0].min())
+    step = 1 + max(b["id"] for b in data["blocks"])
+    out = copy.deepcopy(data)
+    for b in out["blocks"]:
+        if b["role"] == "platform":
+            top = max(v[0] for v in b["vertices"])
+            b["vertices"] = [[v[0] + (k - 1) * length if v[0] == top else v[0], v[1], v[2]] for v in b["vertices"]]
+    for c in range(1, k):
+        for b in copy.deepcopy(stones):
+            b["id"] += c * step
+            def shift(vs):
+                return [[v[0] + c * length, v[1], v[2]] for v in vs]
+            if "vertices" in b:
+                b["vertices"] = shift(b["vertices"])
+            if "parts" in b:
+                b["parts"] = [shift(p) for p in b["parts"]]
+            out["blocks"].append(b)
+    out["control_points"] = []
+    out["name"] = f"{data.get('name', 'wall')}_x{k}"
+    return out
 
 
 def stone_count(data: dict) -> int:
@@ -477,8 +514,12 @@ def scale_section(workdir: Path, sizes=SIZES, walls=WALLS, steps: int = 300, eng
             data = build_wall(geo)
             n, dt = stone_count(data), time_step(data)
             tag = f"scale_{kind}_{size}" + (f"_{engine}" if engine else "")
+            run_geo = geo
+            if "tiles" in geo:  # no generator draws it: the case reads it from a block file
+                from drystone.geometry import blockfile
+                run_geo = str(blockfile.write(data, workdir / f"{tag}.json"))
             try:
-                r = timed_run(scale_case(geo, dt, scale_steps(steps, size)), workdir, tag, 1,
+                r = timed_run(scale_case(run_geo, dt, scale_steps(steps, size)), workdir, tag, 1,
                               ["contact.law=penalty_coulomb", "contact.detection=native"], engine,
                               wall=kind, engine=engine or "default", size=size, stones=n, geometry=geo)
             except runner.RunError as exc:  # one wall's failure leaves the others' figures

@@ -223,7 +223,9 @@ def write_run_info(run, wall) -> None:
                  "python_us_per_step": 1e6 * run.python_time / max(1, run.iter),
                  "kernel_us_per_step": 1e6 * run.kernel_time / max(1, run.iter),
                  # the process's peak resident memory (MiB; ru_maxrss is in KiB on Linux)
-                 "max_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0})
+                 "max_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
+                 # rebuilds of the compiled step's neighbour list (drystone/mechanics/neighbours.py)
+                 "neighbour_list_builds": getattr(getattr(run.engine.step, "neighbours", None), "builds", None)})
     tmp = run.out / "run_info.tmp.json"
     tmp.write_text(json.dumps(info, indent=1))
     os.replace(tmp, run.out / "run_info.json")
