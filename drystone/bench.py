@@ -9,14 +9,16 @@
                   thread is timed ``REPEATS`` times (the fastest kept) and set against the
                   goal of issue 14 (``GOAL_MS``, ``GOAL_SPEEDUP`` over the issue's
                   ``BASELINE_MS``; this run's numpy step beside it).
-``scale``         running-bond and irregular walls of about 40, 500 and 2000 stones, and a
-                  polygonal wall of about 500 (``POLYGONAL``: a third of its stones
-                  re-entrant, each several convex parts, one body) under
+``scale``         running-bond and irregular walls of about 40, 500 and 2000 stones, and
+                  polygonal walls of 500 (``POLYGONAL``: a third of its stones re-entrant,
+                  each several convex parts, one body) and 2000 (that face four times
+                  along the wall, ``POLYGONAL_TILES``) under
                   gravity for a few hundred steps (our law, native geometry, one thread): ms
                   per step, contacts, us per contact-step, the growth exponent of the cost
                   with the number of stones (least-squares slope of log ms/step on log N),
                   and the contact search (``drystone.mechanics.overlap.contacts_with_patches``) timed
-                  alone on the settled positions: its broad phase and its exact clip.
+                  alone on the settled positions: its broad phase and its exact clip; the
+                  run's peak memory per stone and per further stone.
 ``threads``       the 40-block wall on 1 and 2 threads, alone and with a second identical
                   run going in a background process (two jobs on the machine, as in a
                   sweep), and the thread count this suggests.
