@@ -9,14 +9,16 @@
                   thread is timed ``REPEATS`` times (the fastest kept) and set against the
                   goal of issue 14 (``GOAL_MS``, ``GOAL_SPEEDUP`` over the issue's
                   ``BASELINE_MS``; this run's numpy step beside it).
-``scale``         running-bond and irregular walls of about 40, 500 and 2000 stones, and a
-                  polygonal wall of about 500 (``POLYGONAL``: a third of its stones
-                  re-entrant, each several convex parts, one body) under
+``scale``         running-bond and irregular walls of about 40, 500 and 2000 stones, and
+                  polygonal walls of 500 (``POLYGONAL``: a third of its stones re-entrant,
+                  each several convex parts, one body) and 2000 (that face four times
+                  along the wall, ``POLYGONAL_TILES``) under
                   gravity for a few hundred steps (our law, native geometry, one thread): ms
                   per step, contacts, us per contact-step, the growth exponent of the cost
                   with the number of stones (least-squares slope of log ms/step on log N),
                   and the contact search (``drystone.mechanics.overlap.contacts_with_patches``) timed
-                  alone on the settled positions: its broad phase and its exact clip.
+                  alone on the settled positions: its broad phase and its exact clip; the
+                  run's peak memory per stone and per further stone.
 ``threads``       the 40-block wall on 1 and 2 threads, alone and with a second identical
                   run going in a background process (two jobs on the machine, as in a
                   sweep), and the thread count this suggests.
@@ -165,7 +167,7 @@ def timed_run(case: dict, workdir: Path, tag: str, threads: int = 1, overrides=(
                 contacts=info["max_contacts"],
                 final_contacts=info.get("final_contacts"), python_ms_per_step=None if py is None else py / 1e3,
                 steps=r["steps"], warm_steps=w["steps"], dt_s=r["dt_s"], wall_s=r["wall_time_s"],
-                engine_used=info.get("engine"), out=str(out))
+                engine_used=info.get("engine"), max_rss_mib=info.get("max_rss_mib"), out=str(out))
 
 
 def prime(workdir: Path) -> None:
@@ -264,9 +266,11 @@ def running_bond_section(workdir: Path) -> list[dict]:
 #: stones of the scale section's walls (about; the irregular walls' counts are drawn)
 SIZES = (40, 500, 2000)
 WALLS = ("running_bond", "irregular", "polygonal")
-#: the sizes a wall kind is built at, where not SIZES: the polygonal wall at 500 stones only
-#: (its generator's repairs make a 2000-stone face slow to draw)
-WALL_SIZES = {"polygonal": (500,)}
+#: the sizes a wall kind is built at, where not SIZES: the polygonal wall at 500 stones and at
+#: 2000, the 500-stone face drawn once and laid ``POLYGONAL_TILES`` times along the wall (its
+#: generator's repairs make a 2000-stone face slow to draw: more than 15 min)
+WALL_SIZES = {"polygonal": (500, 2000)}
+POLYGONAL_TILES = {2000: 4}
 #: the polygonal wall (drystone/geometry/polygonal_wall.py): a 12 x 5 m face of stones 0.25-0.5 m
 #: in equivalent diameter (500 stones at seed 0), re-entrant stones (several convex parts)
 #: r = 0.5 of the convex ones, LAYOUT's thickness
@@ -295,14 +299,49 @@ def wall_geometry(kind: str, size: int, seed: int = 0) -> dict:
                 "courses": courses, "stone_length": [0.75 * STONE_LENGTH, 1.25 * STONE_LENGTH], "seed": seed,
                 "name": f"irregular_{size}"}
     if kind == "polygonal":
-        return {"generator": "polygonal_wall", "thickness": THICKNESS, "seed": seed, **POLYGONAL}
+        return {"generator": "polygonal_wall", "thickness": THICKNESS, "seed": seed, **POLYGONAL,
+                **({"tiles": POLYGONAL_TILES[size]} if size in POLYGONAL_TILES else {})}
     raise ValueError(f"wall kind {kind!r}: one of {list(WALLS)}")
 
 
 def build_wall(geometry: dict) -> dict:
-    """The block-file dict of a case geometry table (``drystone.geometry.generators``)."""
+    """The block-file dict of a case geometry table (``drystone.geometry.generators``); a
+    table with ``tiles`` = k: the generator's wall laid k times along x (``tiled``)."""
     from drystone.geometry import generators
-    return generators.generate(dict(geometry))
+    geometry = dict(geometry)
+    k = geometry.pop("tiles", 1)
+    data = generators.generate(geometry)
+    return tiled(data, k) if k > 1 else data
+
+
+def tiled(data: dict, k: int) -> dict:
+    """A block-file dict of ``k`` copies of a wall's stones side by side along x (each
+    shifted by the stones' length; the copies' end faces flat and touching), on its
+    platform lengthened by the same; stone ids renumbered copy by copy."""
+    import copy
+
+    stones = [b for b in data["blocks"] if b["role"] != "platform"]
+    pts = np.vstack([np.vstack(b.get("parts", [b.get("vertices")])) for b in stones])
+    length = float(pts[:, 0].max() - pts[:, 0].min())
+    step = 1 + max(b["id"] for b in data["blocks"])
+    out = copy.deepcopy(data)
+    for b in out["blocks"]:
+        if b["role"] == "platform":
+            top = max(v[0] for v in b["vertices"])
+            b["vertices"] = [[v[0] + (k - 1) * length if v[0] == top else v[0], v[1], v[2]] for v in b["vertices"]]
+    for c in range(1, k):
+        for b in copy.deepcopy(stones):
+            b["id"] += c * step
+            def shift(vs):
+                return [[v[0] + c * length, v[1], v[2]] for v in vs]
+            if "vertices" in b:
+                b["vertices"] = shift(b["vertices"])
+            if "parts" in b:
+                b["parts"] = [shift(p) for p in b["parts"]]
+            out["blocks"].append(b)
+    out["control_points"] = []
+    out["name"] = f"{data.get('name', 'wall')}_x{k}"
+    return out
 
 
 def stone_count(data: dict) -> int:
@@ -477,8 +516,12 @@ def scale_section(workdir: Path, sizes=SIZES, walls=WALLS, steps: int = 300, eng
             data = build_wall(geo)
             n, dt = stone_count(data), time_step(data)
             tag = f"scale_{kind}_{size}" + (f"_{engine}" if engine else "")
+            run_geo = geo
+            if "tiles" in geo:  # no generator draws it: the case reads it from a block file
+                from drystone.geometry import blockfile
+                run_geo = str(blockfile.write(data, workdir / f"{tag}.json"))
             try:
-                r = timed_run(scale_case(geo, dt, scale_steps(steps, size)), workdir, tag, 1,
+                r = timed_run(scale_case(run_geo, dt, scale_steps(steps, size)), workdir, tag, 1,
                               ["contact.law=penalty_coulomb", "contact.detection=native"], engine,
                               wall=kind, engine=engine or "default", size=size, stones=n, geometry=geo)
             except runner.RunError as exc:  # one wall's failure leaves the others' figures
@@ -487,6 +530,8 @@ def scale_section(workdir: Path, sizes=SIZES, walls=WALLS, steps: int = 300, eng
                 print(f"  {kind:12s} {engine or 'default':8s} {n:5d} stones: FAILED: {exc}", flush=True)
                 continue
             r["us_per_contact_step"] = 1e3 * r["ms_per_step"] / max(1, r["final_contacts"] or r["contacts"])
+            if r.get("max_rss_mib"):  # the YADE process's peak memory over the stones (KiB each)
+                r["kib_per_stone"] = 1024.0 * r["max_rss_mib"] / n
             run_dir = Path(r.pop("out"))
             r["search"] = contact_search_times(run_dir)
             r["split"] = step_times(run_dir)
@@ -503,17 +548,24 @@ def scale_section(workdir: Path, sizes=SIZES, walls=WALLS, steps: int = 300, eng
                   f"({100 * r['broad_phase_share']:.1f} %), clip of {sr['candidates']} candidates "
                   f"{sr['clip_ms']:.2f} ms" + (f"; the former all-pairs search {sr['all_pairs_ms']:.2f} ms" if "all_pairs_ms" in sr else "") + "\n"
                   f"  {'':21s} step in two halves alone: contact forces (search, law, damping) "
-                  f"{r['split']['forces_ms']:.3f} ms, integration of {n} stones {r['split']['integrate_ms']:.3f} ms",
-                  flush=True)
-    fits = {}
+                  f"{r['split']['forces_ms']:.3f} ms, integration of {n} stones {r['split']['integrate_ms']:.3f} ms"
+                  + (f"\n  {'':21s} memory: peak {r['max_rss_mib']:.0f} MiB, {r['kib_per_stone']:.0f} KiB per stone"
+                     if "kib_per_stone" in r else ""), flush=True)
+    fits, marginal = {}, {}
     for kind, engine in [(k, e or "default") for k in walls for e in engines]:
         pts = [(r["stones"], r["ms_per_step"]) for r in rows
                if r["wall"] == kind and r["engine"] == engine and "failed" not in r]
         if len(pts) >= 2:
             key = kind if len(engines) == 1 else f"{kind}/{engine}"
             fits[key] = growth_exponent(*zip(*pts))
-            print(f"  {key}: cost ~ N^{fits[key]:.2f} over N = {', '.join(str(p[0]) for p in pts)}", flush=True)
-    return {"steps": steps, "rows": rows, "growth_exponent": fits}
+            mem = [(r["stones"], r["max_rss_mib"]) for r in rows if r["wall"] == kind and r["engine"] == engine
+                   and r.get("max_rss_mib")]
+            extra = ""
+            if len(mem) >= 2 and mem[-1][0] > mem[0][0]:  # the memory each further stone takes
+                marginal[key] = 1024.0 * (mem[-1][1] - mem[0][1]) / (mem[-1][0] - mem[0][0])
+                extra = f"; memory {marginal[key]:.0f} KiB per further stone"
+            print(f"  {key}: cost ~ N^{fits[key]:.2f} over N = {', '.join(str(p[0]) for p in pts)}{extra}", flush=True)
+    return {"steps": steps, "rows": rows, "growth_exponent": fits, "kib_per_further_stone": marginal}
 
 
 # -- c: threads with a second run going -------------------------------------------------------

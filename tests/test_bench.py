@@ -77,6 +77,24 @@ def test_irregular_walls_stone_counts(size, count):
     assert abs(count - size) <= tol.IRREGULAR_COUNT_REL * size + tol.IRREGULAR_COUNT_STONES
 
 
+def test_tiled_wall_is_k_copies_side_by_side():
+    """The large polygonal wall's construction on a small wall: k copies of the stones, each
+    shifted by the wall's length, on one platform lengthened by the same; unique ids, and
+    a block set that parses with its overlap check (copies touching at their end faces)."""
+    from drystone.geometry import blockfile as bf
+
+    data = bench.build_wall(bench.wall_geometry("running_bond", 40))
+    out = bench.tiled(data, 3)
+    assert bench.stone_count(out) == 3 * bench.stone_count(data)
+    assert len({b["id"] for b in out["blocks"]}) == len(out["blocks"])
+    xs = [np.array(b["vertices"])[:, 0] for b in out["blocks"] if b["role"] != "platform"]
+    length = 8 * bench.STONE_LENGTH
+    assert max(x.max() for x in xs) == pytest.approx(3 * length, abs=tol.SLACK)
+    plat = np.array(next(b for b in out["blocks"] if b["role"] == "platform")["vertices"])
+    assert plat[:, 0].max() >= 3 * length
+    bf.parse(out, "tiled")
+
+
 def test_wall_geometry_refuses_unknown_kinds_and_sizes():
     with pytest.raises(ValueError):
         bench.wall_geometry("herringbone", 500)

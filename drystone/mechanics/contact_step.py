@@ -22,6 +22,7 @@ from numba import njit
 
 from drystone.mechanics import contact as law
 from drystone.mechanics import energy
+from drystone.mechanics import neighbours as nbr
 from drystone.mechanics import overlap as ov
 from drystone.mechanics.integration import integrate
 from drystone.geometry import polyhedron as ph
@@ -110,6 +111,10 @@ class NumpyStep:
         #: largest omega dt of any contact mode so far (central differences are stable
         #: below 2 (sqrt(1 + xi^2) - xi))
         self.max_omega_dt = 0.0
+
+    def retire(self, shapes) -> None:
+        """Take ``shapes`` (a mask or indices) out of the contact search (non-finite vertices)."""
+        self.shapes.verts[shapes] = np.nan
 
     def _props_arrays(self, keys):
         out = []
@@ -309,15 +314,25 @@ def _global_inverse(R, d, out):
 
 @njit(cache=True)
 def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving, inv_mass,
-                    inv_inertia_local, mat, table, jkeys, jvals, prev_keys, prev_shear, prev_basis, dt, tol, size, shared):
+                    inv_inertia_local, mat, table, jkeys, jvals, prev_keys, prev_shear, prev_basis, dt, tol, size, shared,
+                    nl, buf):
     """One step's contacts between shapes (ia, ib: shape indices; shape s a convex part of
     body ``owner[s]``, ``size`` per shape; ``shared``: some body has several shapes) and
-    the forces and torques on the bodies."""
+    the forces and torques on the bodies. The contacts come from the neighbour list ``nl``
+    (``drystone.mechanics.neighbours``: the full search's contacts, in its order), into
+    the search's buffers ``buf``; both are returned last (grown, rebuilt)."""
     nb = len(pos)
     ns = len(nv)
-    ia, ib, vol, c, n, area, pc, pj = ov.contacts_of_shapes(verts, nv, normals, offsets, nf, faces, fk, owner, pos,
-                                                            rot, moving, tol)
-    m = len(ia)
+    nl = nbr.update(nl, verts, nv, normals, offsets, nf, owner, pos, rot)
+    m, buf = nbr.search(nl, buf, nv, nf, faces, fk, tol, ov.TOUCHING_IS_NO_CONTACT)
+    ia = buf[0][:m]
+    ib = buf[1][:m]
+    vol = buf[2][:m]
+    c = buf[3][:m]
+    n = buf[4][:m]
+    area = buf[5][:m]
+    pc = buf[6][:m]
+    pj = buf[7][:m]
     keys = ia * ns + ib  # a contact's history is its pair of shapes'
     oa = owner[ia]
     ob = owner[ib]
@@ -463,7 +478,8 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
                 depth_ratio = r
         if om[k] > om_max:
             om_max = om[k]
-    return ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, basis, F, T, e_el, om_max, depth_ratio, slip, Fd, Td
+    return (ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, basis, F, T, e_el, om_max, depth_ratio, slip, Fd, Td, nl,
+            buf)
 
 
 class CompiledStep:
@@ -479,9 +495,11 @@ class CompiledStep:
     of its two shapes (the tunnelling check, ``drystone.mechanics.stability``). A
     contact is a pair of shapes of different bodies, its shear history kept per pair of
     shapes; its forces act on the shapes' bodies. ``state`` is the last step's contacts
-    as a ``ContactState`` (built when asked for; ids of bodies)."""
+    as a ``ContactState`` (built when asked for; ids of bodies). ``skin`` (m): the
+    neighbour list's (``drystone.mechanics.neighbours``; ``neighbours``)."""
 
-    def __init__(self, mass, inertia, local_vertices, material, table, joints=None, size=None, owner=None):
+    def __init__(self, mass, inertia, local_vertices, material, table, joints=None, size=None, owner=None,
+                 skin=nbr.SKIN):
         self.mass = np.asarray(mass, float)
         self.moving = np.isfinite(self.mass)
         self.inv_mass = np.where(self.moving, 1.0 / np.where(self.moving, self.mass, 1.0), 0.0)
@@ -511,6 +529,26 @@ class CompiledStep:
         self.energy = np.zeros(3)
         #: the last step's damping wrenches summed on each body ``Fd``, ``Td`` (nb, 3) and slip work ``slip`` (J)
         self.last = {"Fd": np.zeros((nb, 3)), "Td": np.zeros((nb, 3)), "slip": 0.0}
+        #: the contact search's neighbour list and its buffers
+        self.neighbours = nbr.NeighbourList(self.shapes, self.owner, self.moving, nb, skin)
+
+    def retire(self, shapes) -> None:
+        """Take ``shapes`` (a mask or indices) out of the contact search: their vertices
+        made non-finite, the neighbour list rebuilt before the next step."""
+        self.shapes.verts[shapes] = np.nan
+        self.neighbours.invalidate()
+
+    def _search_state(self) -> tuple:
+        nl = self.neighbours
+        return nl.arrays, nl.contacts
+
+    def _keep_search_state(self, arrays, contacts) -> None:
+        self.neighbours.arrays, self.neighbours.contacts = arrays, contacts
+
+    def _keep_raw(self, raw) -> None:
+        """The last step's contacts for ``state`` (copies: the search's buffers are reused)."""
+        self._raw = tuple(np.array(x) for x in raw)
+        self._state = None
 
     def forces(self, pos, rot, vel, angvel, dt):
         """Contact forces and torques (nb, 3) on every body (N, N m) for the state given;
@@ -519,15 +557,15 @@ class CompiledStep:
         integrated)."""
         s = self.shapes
         (ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, basis, F, T, e_el, om_max,
-         self.depth_ratio, slip, Fd, Td) = _contact_forces(
+         self.depth_ratio, slip, Fd, Td, nl, buf) = _contact_forces(
             s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, self.owner, pos, rot, vel, angvel, self.moving,
             self.inv_mass, self.inv_inertia_local, self.material, self.table, self.jkeys, self.jvals, self.keys,
-            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared)
+            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared, *self._search_state())
+        self._keep_search_state(nl, buf)
         self.keys, self.shear_store, self.basis_store = keys, fs, basis
         self.elastic = (self.elastic[1], e_el)
         self.max_omega_dt = max(self.max_omega_dt, om_max * dt)
-        self._raw = (ia, ib, vol, c, n, area, fn, fs, fd, slipping)
-        self._state = None
+        self._keep_raw((ia, ib, vol, c, n, area, fn, fs, fd, slipping))
         self.energy[2] += 0.5 * slip
         self.last = {"Fd": Fd, "Td": Td, "slip": slip}
         return F, T
@@ -540,7 +578,8 @@ class CompiledStep:
         out = _contact_forces(
             s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, self.owner, pos, rot, vel, angvel, self.moving,
             self.inv_mass, self.inv_inertia_local, self.material, self.table, self.jkeys, self.jvals, self.keys,
-            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared)
+            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared, *self._search_state())
+        self._keep_search_state(out[20], out[21])
         return float(out[14]), float(out[17])
 
     def account(self, dt, g, F, T, F_ext, lin_free, v0, w0, v1, w1, loads=None):
@@ -572,17 +611,17 @@ class CompiledStep:
         s = self.shapes
         coef, Fb, Tb = self._no_loads(len(g)) if loads is None else loads
         (done, ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, basis, F, T, e_prev, e_last, om_max,
-         self.depth_ratio, slip, Fd, Td) = _advance(
+         self.depth_ratio, slip, Fd, Td, nl, buf) = _advance(
             s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, self.owner, pos, rot, vel, angvel, self.moving,
             self.inv_mass, self.inv_inertia_local, self.material, self.table, self.jkeys, self.jvals, self.keys,
-            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared, g, F_ext, coef, Fb, Tb,
-            self.elastic[1], self.energy, *motion)
+            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared, *self._search_state(), g, F_ext,
+            coef, Fb, Tb, self.elastic[1], self.energy, *motion)
+        self._keep_search_state(nl, buf)
         self.last = {"Fd": Fd, "Td": Td, "slip": slip}
         self.keys, self.shear_store, self.basis_store = keys, fs, basis
         self.elastic = (e_prev, e_last)
         self.max_omega_dt = max(self.max_omega_dt, om_max * dt)
-        self._raw = (ia, ib, vol, c, n, area, fn, fs, fd, slipping)
-        self._state = None
+        self._keep_raw((ia, ib, vol, c, n, area, fn, fs, fd, slipping))
         return done, F, T, done == len(g)
 
     def _no_loads(self, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -627,8 +666,8 @@ def applied_wrench(c, Fb, Tb, F, T):
 
 @njit(cache=True)
 def _advance(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving, inv_mass, inv_inertia_local,
-             mat, table, jkeys, jvals, keys, shear, basis, dt, tol, size, shared, g, F_ext, coef, Fb, Tb, e_last, acc,
-             mass, inertia, lin_free, rot_free, aspherical, angmom, quat):
+             mat, table, jkeys, jvals, keys, shear, basis, dt, tol, size, shared, nl, buf, g, F_ext, coef, Fb, Tb, e_last,
+             acc, mass, inertia, lin_free, rot_free, aspherical, angmom, quat):
     """``CompiledStep.advance``: len(g) steps of ``_contact_forces`` + ``integrate`` (+
     ``energy.account`` into ``acc``) without leaving compiled code; the arithmetic of each
     step is that of one call of each (the same results bit for bit). The loads' wrench of
@@ -642,8 +681,9 @@ def _advance(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, a
     w0 = np.empty_like(angvel)
     while True:
         (ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, basis, F, T, e_el, om, depth, slip, Fd,
-         Td) = _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving, inv_mass,
-                               inv_inertia_local, mat, table, jkeys, jvals, keys, shear, basis, dt, tol, size, shared)
+         Td, nl, buf) = _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving,
+                                        inv_mass, inv_inertia_local, mat, table, jkeys, jvals, keys, shear, basis, dt,
+                                        tol, size, shared, nl, buf)
         shear = fs
         e_prev = e_last
         e_last = e_el
@@ -655,7 +695,7 @@ def _advance(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, a
         acc[2] += 0.5 * slip
         if depth > 1.0:  # the caller checks it before this step is integrated
             return (s, ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, basis, F, T, e_prev, e_last, om_max, depth,
-                    slip, Fd, Td)
+                    slip, Fd, Td, nl, buf)
         v0[:] = vel
         w0[:] = angvel
         integrate(dt, g[s], F, T, mass, inertia, lin_free, rot_free, aspherical, pos, vel, angvel, angmom, quat, rot)
@@ -665,4 +705,4 @@ def _advance(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, a
         s += 1
         if s == n:
             return (s, ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, basis, F, T, e_prev, e_last, om_max, depth,
-                    slip, Fd, Td)
+                    slip, Fd, Td, nl, buf)

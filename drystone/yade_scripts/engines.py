@@ -46,6 +46,7 @@ from drystone.mechanics import contact as law
 from drystone.mechanics import contact_step as cs
 from drystone.mechanics import energy, integration, monitors, rotations, stability
 from drystone.yade_scripts import contact_engine as ce
+from drystone.yade_scripts import quiet_steps as quiet
 
 
 def _state_row(s) -> tuple:
@@ -220,7 +221,7 @@ class Engine:
         for k in [i] + list(run.members.get(i, ())):
             run.O.bodies[k].groupMask = 0
         if self.step is not None and hasattr(self.step, "shapes"):
-            self.step.shapes.verts[self.step.owner == i] = np.nan
+            self.step.retire(self.step.owner == i)
 
     def check_depth(self) -> None:
         """Stop the run on a contact deeper than stability.TUNNEL_FRACTION x the smaller
@@ -316,6 +317,23 @@ class NumpyEngine(Engine):
             self.ledger._pending[8][i] = 0.0
 
 
+def law_tables(run) -> tuple[list, np.ndarray, dict]:
+    """(material index of each body, the (nm, nm, 4) table of kn, kt, mu, damping of each pair
+    of materials, the joint overrides {(ia, ib): [kn, kt, mu, damping]} by body) of a run,
+    as ``CompiledStep`` takes them."""
+    spec, mats = run.spec, run.spec.materials
+    names = sorted(mats)
+    keys = ("kn", "kt", "mu", "damping")
+    table = np.array([[[law.pair_properties(mats[a], mats[b])[k] for k in keys] for b in names] for a in names])
+    material = [names.index(run.blocks[run.bid[i]]["material"]) for i in range(len(run.mass))]
+    joints = {}
+    for key in spec.joint_overrides:
+        a, b = (int(x) for x in key.split("-"))
+        p = pair_properties(run, run.yid[a], run.yid[b])
+        joints[(run.yid[a], run.yid[b])] = [p[k] for k in keys]
+    return material, table, joints
+
+
 class CompiledEngine(Engine):
     """The project's law on the native geometry and the integration in numba, in its own
     time loop in place of YADE's (drystone.mechanics.contact_step); the scene is written back at the end."""
@@ -326,16 +344,6 @@ class CompiledEngine(Engine):
     def __init__(self, run):
         super().__init__(run)
         nb = len(run.mass)
-        spec, mats = run.spec, run.spec.materials
-        names = sorted(mats)
-        keys = ("kn", "kt", "mu", "damping")
-        table = np.array([[[law.pair_properties(mats[a], mats[b])[k] for k in keys] for b in names] for a in names])
-        material = [names.index(run.blocks[run.bid[i]]["material"]) for i in range(nb)]
-        joints = {}
-        for key in spec.joint_overrides:
-            a, b = (int(x) for x in key.split("-"))
-            p = pair_properties(run, run.yid[a], run.yid[b])
-            joints[(run.yid[a], run.yid[b])] = [p[k] for k in keys]
         free = [integration.free_directions(run.states[i].blockedDOFs or "", bool(np.isfinite(run.mass[i]))) for i in range(nb)]
         self.lin_free = np.array([f[0] for f in free])
         self.rot_free = np.array([f[1] for f in free])
@@ -345,7 +353,7 @@ class CompiledEngine(Engine):
         self.angmom = np.zeros((nb, 3))
         self.mass_int = np.where(np.isfinite(run.mass), run.mass, 1.0)  # never divided for non-moving bodies
         self.inertia_int = np.where(np.isfinite(run.mass)[:, None], run.inertia, 1.0)
-        self.step = ce.Compiled(run.mass, run.inertia, run.local_v, material, table, joints,
+        self.step = ce.Compiled(run.mass, run.inertia, run.local_v, *law_tables(run),
                                 run.shape_size * stability.TUNNEL_FRACTION, run.owner)
         self.F = self.T = self.F_ext = None
         self.c = None  # the loads' coefficients of the step being taken (None: no loads)
@@ -364,7 +372,7 @@ class CompiledEngine(Engine):
             run.quat[i] = (q[0], q[1], q[2], q[3])
         run.rot = rotations.to_matrix(run.quat)
 
-    def _motion(self):
+    def motion(self):
         """What ``integrate`` needs beside the state (mass, inertia, free directions, angular momentum)."""
         return (self.mass_int, self.inertia_int, self.lin_free, self.rot_free, self.aspherical, self.angmom)
 
@@ -385,7 +393,7 @@ class CompiledEngine(Engine):
             run.t += dt
             if run.done or run.failure is not None:
                 break
-            self._advance_quietly(dt)
+            quiet.advance_quietly(self, dt)
         run.python_time += time.perf_counter() - t_py
 
     def clock(self):
@@ -394,72 +402,7 @@ class CompiledEngine(Engine):
     def stop(self):
         pass
 
-    def _quiet_steps(self, dt) -> np.ndarray:
-        """Times (s) of the steps from ``run.iter`` on that need no Python: up to the next
-        recorded sample, stage start or switch of an applied force, and to the step after
-        which the run stops (``stop_at``), at most the run's end."""
-        run = self.run
-        i = run.iter
-        nxt = min((i // run.rec_every + 1) * run.rec_every if i % run.rec_every else i, run.steps_total)
-        if nxt <= i:
-            return np.zeros(0)
-        ts = np.add.accumulate(np.concatenate([[run.t], np.full(nxt - i - 1, dt)]))  # as YADE adds dt
-        ends = np.array([st.end for st in run.prog.stages])
-        k = np.minimum(np.searchsorted(ends, ts, side="right"), len(ends) - 1)  # prog.stage_index
-        cut = len(ts) if np.all(k == k[0]) else int(np.argmax(k != k[0]))
-        for _, _, start, end in run.forces:
-            on = (start <= ts) & (ts < end)
-            if not np.all(on == on[0]):
-                cut = min(cut, int(np.argmax(on != on[0])))
-        if k[0] != run.stage:  # step() enters a stage
-            cut = 0
-        if run.stop_at is not None:
-            past = np.flatnonzero(ts[:cut] >= run.stop_at)
-            if len(past):
-                cut = int(past[0]) + 1  # the run stops after that step
-        return ts[:cut]
-
-    def _advance_quietly(self, dt):
-        """The steps of ``_quiet_steps`` in one compiled call (the depth check stops it,
-        ``CompiledStep.advance``)."""
-        run = self.run
-        ts = self._quiet_steps(dt)
-        if len(ts) == 0:
-            return
-        g = run.prog.body_acceleration_at(ts)  # bit for bit the per-step values
-        loads = coef = None
-        if run.loads is not None:  # a coefficient row per step; a step where a load is undefined goes through step()
-            coef, bad, _ = run.loads.coefficients(ts, g)
-            if bad is not None:
-                ts, g, coef = ts[:bad], g[:bad], coef[:bad]
-                if len(ts) == 0:
-                    return
-            loads = (coef, run.loads.force, run.loads.moment)
-        F_ext = np.zeros_like(run.pos)
-        for y, f, start, end in run.forces:
-            if start <= ts[0] < end:
-                F_ext[y] += tuple(f)
-        t_k = time.perf_counter()
-        done, F, T, integrated = self.step.advance(run.pos, run.rot, run.vel, run.angvel, dt, g, F_ext,
-                                                   self._motion() + (run.quat,), loads)
-        run.kernel_time += time.perf_counter() - t_k
-        if not integrated:  # stopped on the depth check before integrating step ts[done]
-            self.check_depth()
-            if run.failure is not None:
-                return
-            self._integrate(dt, g[done], F, T, F_ext, None if coef is None else coef[done])
-            done += 1
-        if coef is not None:
-            run.loads.taken(coef[:done], dt)
-        run.g_integral += float(np.sum(np.linalg.norm(g[:done], axis=1))) * dt  # the speed bound
-        run.iter += done
-        last = ts[done - 1]  # the time of the last step taken
-        run.t = last + dt
-        if run.stop_at is not None and last >= run.stop_at:
-            run.done = True
-        run.progress.on_step(run, run.t, run.stage)
-
-    def _integrate(self, dt, g, F, T, F_ext, c=None):
+    def integrate(self, dt, g, F, T, F_ext, c=None):
         """One step of the motion (F, T: contact plus applied F_ext, plus the loads' wrench of
         coefficients ``c``), then its energy terms."""
         run = self.run
@@ -487,7 +430,7 @@ class CompiledEngine(Engine):
 
     def finish_step(self, g):
         t_k = time.perf_counter()
-        self._integrate(self.run.O.dt, g, self.F, self.T, self.F_ext, self.c)
+        self.integrate(self.run.O.dt, g, self.F, self.T, self.F_ext, self.c)
         self.run.kernel_time += time.perf_counter() - t_k
 
     def finish(self):

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import os
+import resource
 import sys
 import time
 from pathlib import Path
@@ -26,7 +27,6 @@ from yade import log
 
 # drystone is installed in the interpreter YADE runs (make setup: pip install -e .)
 from drystone.mechanics import laws, monitors, rotations, stability  # noqa: E402
-from drystone.geometry import polyhedron as ph  # noqa: E402
 from drystone.model.loading import LoadProgramme  # noqa: E402
 from drystone.model.loads import AppliedLoads  # noqa: E402
 from drystone.simulate import ENGINES as REQUESTS  # noqa: E402 (what ENGINE may ask for)
@@ -69,7 +69,9 @@ class Driver:
         self.quat = np.array([tuple(O.bodies[i].state.ori) for i in range(nb)])
         self.quat0 = self.quat.copy()
         self.rot = rotations.to_matrix(self.quat)
-        self._shapes(tables["members"])
+        # the convex shapes the contact laws see (sc.shapes): owner, local_v, shape_size; size per body
+        self.owner, self.local_v, self.shape_size, self.size = sc.shapes(O, self.blocks, self.bid, tables["members"],
+                                                                         self.pos, self.rot)
         self.prog = LoadProgramme.from_spec(spec, self.out)  # excitation samples from the run folder
         self.moving_static = [self.yid[b] for b in self.prog.moving_blocks()]
         self.moving = np.concatenate([self.dyn, np.array(self.moving_static, int)])  # the bodies read back
@@ -101,35 +103,6 @@ class Driver:
         self.python_time = self.kernel_time = 0.0  # s in the per-step Python, of which in compiled kernels
         self.progress = monitors.Progress()
 
-    def _shapes(self, members: dict) -> None:
-        """The convex shapes the contact laws see, in YADE's body order: a body's Polyhedra,
-        or each member of a clump (a multi-part stone) as a shape of the clump body.
-        ``owner`` (ns,) each shape's body, ``local_v`` its vertices in that body's frame (m),
-        ``shape_size`` its smallest dimension (m); ``size`` per body: its smallest, a
-        multi-part stone's smallest part's (the tunnelling check, stability.TUNNEL_FRACTION)."""
-        O, nb = self.O, len(self.O.bodies)
-        clump_of = {m: c for c, ms in members.items() for m in ms}
-        owner, local_v, shape_size = [], [], []
-        self.size = np.full(nb, np.inf)
-        for i in range(nb):
-            if i in members:
-                continue
-            block = self.blocks[self.bid[i]]
-            if i in clump_of:  # a part: its vertices into the clump's frame
-                c = clump_of[i]
-                part = block["parts"][members[c].index(i)]
-                x = self.pos[i] + np.asarray([tuple(v) for v in O.bodies[i].shape.v]) @ self.rot[i].T
-                local_v.append([tuple(v) for v in (x - self.pos[c]) @ self.rot[c]])
-                owner.append(c)
-                size = float(ph.extent(np.asarray(part)).min())
-            else:
-                local_v.append([tuple(v) for v in O.bodies[i].shape.v])
-                owner.append(i)
-                size = float(ph.extent(np.asarray(block["vertices"])).min())
-            shape_size.append(size)
-            self.size[owner[-1]] = min(self.size[owner[-1]], size)
-        self.owner, self.local_v, self.shape_size = np.array(owner, np.int64), local_v, np.array(shape_size)
-
     def step(self):
         """One step that needs Python: the load, a stage's start, the forces, a recorded
         sample with its monitors, the motion (engines.py calls it)."""
@@ -141,7 +114,7 @@ class Driver:
         self.g_integral += float(np.linalg.norm(g)) * self.O.dt  # the speed bound (stability.speed_budget)
         k = self.prog.stage_index(t)
         if k != self.stage:
-            self._enter_stage(k)
+            enter_stage(self, k)
         e.forces(t, g)
         if self.iter % self.rec_every == 0:
             e.before_sample()
@@ -156,35 +129,8 @@ class Driver:
 
     def _sample(self, t):
         s = self.recorder.sample(t)
-        for m in self.monitors:  # kept in their order (_enter_stage)
+        for m in self.monitors:  # kept in their order (enter_stage)
             m.on_sample(self, s)
-
-    def _enter_stage(self, k):
-        self.stage = k
-        st = self.prog.stages[k]
-        print(f"[{self.spec_name}] stage {k + 1}/{len(self.prog.stages)}: {st.type} "
-              f"{st.start:.3f}-{st.end:.3f} s", flush=True)
-        for block, v in self.prog.imposed_velocities(self.t).items():
-            self.engine.set_velocity(self.yid[block], v)
-        dv = self.prog.velocity_jump(k)
-        if np.any(dv):
-            # Eq. 9 as a displacement: the base's velocity jump, as a relative velocity of every
-            # free block (drystone.runner.initial_relative_velocity); blocked translations keep theirs
-            for i in self.dyn:
-                state = self.states[int(i)]
-                free = np.array([c not in (state.blockedDOFs or "") for c in "xyz"], float)
-                v0 = self.engine.velocity(int(i))
-                self.engine.set_velocity(int(i), v0 + dv * free)
-                gained = 0.5 * self.mass[i] * (np.sum((v0 + dv * free) ** 2) - np.sum(v0 ** 2))
-                self.stability.energy.inject(gained)
-                self.engine.add_work(gained)  # the base's impulse: work of the excitation (energy balance)
-            self.jumps.append({"stage": k + 1, "time_s": float(self.t), "relative_velocity_m_s": dv.tolist()})
-            self.jump_dvs.append(np.asarray(dv, float))
-            print(f"[{self.spec_name}] stage {k + 1}: base velocity jump, free blocks get {dv.tolist()} m/s "
-                  "relative to the platform", flush=True)
-        m = self.prog.monitor(k, self)
-        if m is not None:
-            self.monitors = sorted(self.monitors + [m], key=lambda x: x.order)
 
     def retire(self, i: int, kinetic_J: float) -> None:
         """Take free body ``i`` out of the scene: it left the model (monitors.LeftModel) at
@@ -227,28 +173,64 @@ class Driver:
             sys.stdout.flush()
             os._exit(3)
         self.recorder.save(self.out)
-        self.save_info(wall)
+        write_run_info(self, wall)
 
-    def save_info(self, wall):
-        info = {"steps": int(self.iter), "simulated_time_s": float(self.t), "wall_time_s": wall,
-                "dt_s": float(self.O.dt), "threads": int(yade.Omega().numThreads),
-                "max_contacts": int(self.recorder.max_contacts), "final_contacts": int(self.recorder.h["n_contacts"][-1]),
-                "stopped_early": bool(self.done), "collapse": self.collapse, "velocity_jumps": self.jumps,
-                "settle": None}
-        if self.loads is not None:
-            info["load_limit_s"] = self.load_limit_s
-        for m in self.monitors:
-            info.update(m.info())
-        info.update({"max_contact_omega_dt": float(self.engine.max_omega_dt),
-                     "yade_version": yade.config.version if hasattr(yade, "config") else "unknown",
-                     "engine": self.engine.name, "us_per_step": 1e6 * wall / max(1, self.iter),
-                     "python_us_per_step": 1e6 * self.python_time / max(1, self.iter),
-                     "kernel_us_per_step": 1e6 * self.kernel_time / max(1, self.iter)})
-        tmp = self.out / "run_info.tmp.json"
-        tmp.write_text(json.dumps(info, indent=1))
-        os.replace(tmp, self.out / "run_info.json")
-        print(f"[{self.spec_name}] done: {info['steps']} steps, {info['simulated_time_s']:.3f} s simulated, "
-              f"{wall:.1f} s wall ({info['us_per_step']:.0f} us/step)", flush=True)
+
+def enter_stage(run, k: int) -> None:
+    """The start of stage ``k`` of ``run`` (the driver): imposed velocities, the base's velocity
+    jump given to every free block (its energy), the stage's monitor."""
+    run.stage = k
+    st = run.prog.stages[k]
+    print(f"[{run.spec_name}] stage {k + 1}/{len(run.prog.stages)}: {st.type} "
+          f"{st.start:.3f}-{st.end:.3f} s", flush=True)
+    for block, v in run.prog.imposed_velocities(run.t).items():
+        run.engine.set_velocity(run.yid[block], v)
+    dv = run.prog.velocity_jump(k)
+    if np.any(dv):
+        # Eq. 9 as a displacement: the base's velocity jump, as a relative velocity of every
+        # free block (drystone.runner.initial_relative_velocity); blocked translations keep theirs
+        for i in run.dyn:
+            state = run.states[int(i)]
+            free = np.array([c not in (state.blockedDOFs or "") for c in "xyz"], float)
+            v0 = run.engine.velocity(int(i))
+            run.engine.set_velocity(int(i), v0 + dv * free)
+            gained = 0.5 * run.mass[i] * (np.sum((v0 + dv * free) ** 2) - np.sum(v0 ** 2))
+            run.stability.energy.inject(gained)
+            run.engine.add_work(gained)  # the base's impulse: work of the excitation (energy balance)
+        run.jumps.append({"stage": k + 1, "time_s": float(run.t), "relative_velocity_m_s": dv.tolist()})
+        run.jump_dvs.append(np.asarray(dv, float))
+        print(f"[{run.spec_name}] stage {k + 1}: base velocity jump, free blocks get {dv.tolist()} m/s "
+              "relative to the platform", flush=True)
+    m = run.prog.monitor(k, run)
+    if m is not None:
+        run.monitors = sorted(run.monitors + [m], key=lambda x: x.order)
+
+
+def write_run_info(run, wall) -> None:
+    """run_info.json of a finished run (the driver ``run``; ``wall`` its wall time, s) into its folder."""
+    info = {"steps": int(run.iter), "simulated_time_s": float(run.t), "wall_time_s": wall,
+            "dt_s": float(run.O.dt), "threads": int(yade.Omega().numThreads),
+            "max_contacts": int(run.recorder.max_contacts), "final_contacts": int(run.recorder.h["n_contacts"][-1]),
+            "stopped_early": bool(run.done), "collapse": run.collapse, "velocity_jumps": run.jumps,
+            "settle": None}
+    if run.loads is not None:
+        info["load_limit_s"] = run.load_limit_s
+    for m in run.monitors:
+        info.update(m.info())
+    info.update({"max_contact_omega_dt": float(run.engine.max_omega_dt),
+                 "yade_version": yade.config.version if hasattr(yade, "config") else "unknown",
+                 "engine": run.engine.name, "us_per_step": 1e6 * wall / max(1, run.iter),
+                 "python_us_per_step": 1e6 * run.python_time / max(1, run.iter),
+                 "kernel_us_per_step": 1e6 * run.kernel_time / max(1, run.iter),
+                 # the process's peak resident memory (MiB; ru_maxrss is in KiB on Linux)
+                 "max_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
+                 # rebuilds of the compiled step's neighbour list (drystone/mechanics/neighbours.py)
+                 "neighbour_list_builds": getattr(getattr(run.engine.step, "neighbours", None), "builds", None)})
+    tmp = run.out / "run_info.tmp.json"
+    tmp.write_text(json.dumps(info, indent=1))
+    os.replace(tmp, run.out / "run_info.json")
+    print(f"[{run.spec_name}] done: {info['steps']} steps, {info['simulated_time_s']:.3f} s simulated, "
+          f"{wall:.1f} s wall ({info['us_per_step']:.0f} us/step)", flush=True)
 
 
 def main(argv):

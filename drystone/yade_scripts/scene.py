@@ -17,9 +17,11 @@ angle atan(mu), shear stiffness ks = K_t A_ref and no damping.
 """
 from __future__ import annotations
 
+import numpy as np
 import yade
 from yade import utils
 
+from drystone.geometry import polyhedron as ph
 from drystone.mechanics import laws
 
 DYNAMIC_MASK = 0b01
@@ -90,3 +92,36 @@ def build(spec, integrate: bool = True) -> dict:
         ]
     O.dt = spec.dt
     return {"yid": yid, "bid": bid, "dynamic": dynamic, "members": members, "newton": newton}
+
+
+def shapes(O, blocks: dict, bid: dict, members: dict, pos, rot) -> tuple:
+    """The convex shapes the contact laws see, in YADE's body order: a body's Polyhedra,
+    or each member of a clump (a multi-part stone) as a shape of the clump body.
+    ``owner`` (ns,) each shape's body, ``local_v`` its vertices in that body's frame (m),
+    ``shape_size`` its smallest dimension (m); ``size`` per body: its smallest, a
+    multi-part stone's smallest part's (the tunnelling check, stability.TUNNEL_FRACTION).
+    ``blocks`` the spec's blocks by id, ``bid`` a body's block id, ``members`` a clump's
+    members' ids, ``pos`` and ``rot`` the bodies' positions and rotation matrices: returns
+    (owner, local_v, shape_size, size)."""
+    nb = len(O.bodies)
+    clump_of = {m: c for c, ms in members.items() for m in ms}
+    owner, local_v, shape_size = [], [], []
+    size = np.full(nb, np.inf)
+    for i in range(nb):
+        if i in members:
+            continue
+        block = blocks[bid[i]]
+        if i in clump_of:  # a part: its vertices into the clump's frame
+            c = clump_of[i]
+            part = block["parts"][members[c].index(i)]
+            x = pos[i] + np.asarray([tuple(v) for v in O.bodies[i].shape.v]) @ rot[i].T
+            local_v.append([tuple(v) for v in (x - pos[c]) @ rot[c]])
+            owner.append(c)
+            part_size = float(ph.extent(np.asarray(part)).min())
+        else:
+            local_v.append([tuple(v) for v in O.bodies[i].shape.v])
+            owner.append(i)
+            part_size = float(ph.extent(np.asarray(block["vertices"])).min())
+        shape_size.append(part_size)
+        size[owner[-1]] = min(size[owner[-1]], part_size)
+    return np.array(owner, np.int64), local_v, np.array(shape_size), size

@@ -1,0 +1,242 @@
+"""A Verlet (skin) neighbour list for the compiled contact search (no YADE import).
+
+``overlap.contacts_of_shapes`` finds a step's contacts from scratch: every shape's box,
+a sort and sweep of all of them, then the exact clip of every candidate pair. Between
+two steps the stones of a wall move micrometres, so the sort and sweep finds the same
+pairs again and again. Here it runs only now and then, on the boxes grown by half a
+``skin`` on every side: the list then holds every pair of shapes whose boxes are within
+``skin`` of each other (of different bodies, at least one of them moving, neither
+having left the model), and it stays complete while no body has moved since its last
+build by more than half the skin. Each step tests the listed pairs' own boxes (the same
+closed-box test as the sort and sweep) and clips those that pass, in the list's order
+(lexicographic, as the sweep's): the contacts, their order and every number computed
+from them are the full search's bit for bit, the list only spares the sort.
+
+Rebuild rule (as YADE's collider ``verletDist`` and the skins of LAMMPS/LIGGGHTS): a
+body's vertices have moved since the build by at most
+``|x - x0| + ||R - R0||_F r`` (``r`` the largest distance of its shapes' vertices from
+its origin; the Frobenius norm of the rotation's change is at least the chord
+2 sin(theta/2) by which a point at unit distance moves); the list is rebuilt before a
+step in which this bound exceeds ``skin / 2`` for some body, or when a shape's geometry
+changed (a stone taken out of the model: its vertices made non-finite, ``invalidate``).
+Two boxes that overlap now were each within that bound of their boxes at the build,
+so their grown boxes overlapped then: the list holds them.
+
+``skin`` (m, ``SKIN`` by default; the case key ``contact.skin``): a larger skin makes
+rebuilds rarer and the list longer (each listed pair costs a box test per step). The
+state is plain arrays (``NeighbourList.arrays``) passed to and returned by the compiled
+step; the work arrays of the search (global vertices and planes of every shape, the
+contacts' outputs, the clip's polygons) are allocated once and grown with the list.
+
+Units: metres.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from drystone.mechanics import overlap as ov
+
+#: default skin (m): a few times a wall's motion over the steps between two samples under
+#: a strong record, small beside a stone (0.25-0.6 m): a list a few percent longer than
+#: the pairs whose boxes touch (``make bench`` measures the rebuilds' share)
+SKIN = 0.02
+
+
+def body_radius(verts, nv, owner, nb) -> np.ndarray:
+    """(nb,) the largest distance (m) of any vertex of a body's shapes from the body's
+    origin; -1 for a body without shapes (its motion moves no shape)."""
+    r = np.full(nb, -1.0)
+    for s in range(len(nv)):
+        v = np.asarray(verts[s, :nv[s]], float)
+        d = float(np.sqrt((v * v).sum(axis=1)).max()) if len(v) else 0.0
+        b = int(owner[s])
+        r[b] = max(r[b], d if np.isfinite(d) else 0.0)
+    return r
+
+
+class NeighbourList:
+    """The list's state for ``ns`` shapes (``shapes``: ``overlap.Shapes``) of ``nb``
+    bodies: the candidate pairs, the bodies' positions and rotations at the last build,
+    their radii, the skin, and the work arrays of the search. ``arrays`` is the tuple the
+    compiled step takes (and returns, grown); ``builds`` counts the rebuilds."""
+
+    def __init__(self, shapes, owner, moving, nb: int, skin: float = SKIN):
+        skin = float(skin)
+        if not (np.isfinite(skin) and skin >= 0.0):
+            raise ValueError(f"contact skin {skin!r} m: a finite length >= 0")
+        self.skin = skin
+        ns, maxv, maxf = len(shapes.nv), shapes.verts.shape[1], shapes.normals.shape[1]
+        owner = np.asarray(owner, np.int64)
+        # meta: [pairs listed, rebuilds, rebuild at the next step (1)]
+        meta = np.array([0, 0, 1], np.int64)
+        self.arrays = (np.zeros(0, np.int64), np.zeros(0, np.int64), meta, np.full((nb, 3), np.nan),
+                       np.full((nb, 3, 3), np.nan), body_radius(shapes.verts, shapes.nv, owner, nb),
+                       np.array([0.5 * skin]), np.asarray(moving, np.bool_)[owner],
+                       # per shape: global vertices, planes, box, finite
+                       np.empty((ns, maxv, 3)), np.empty((ns, maxf, 3)), np.empty((ns, maxf)), np.empty((ns, 3)),
+                       np.empty((ns, 3)), np.zeros(ns, np.bool_))
+        self.contacts = contact_buffers(0, maxf)
+
+    @property
+    def builds(self) -> int:
+        return int(self.arrays[2][1])
+
+    def __len__(self) -> int:
+        return int(self.arrays[2][0])
+
+    def invalidate(self) -> None:
+        """A shape's geometry changed (a stone left the model): rebuild before the next step."""
+        self.arrays[2][2] = 1
+
+
+def contact_buffers(cap: int, maxf: int) -> tuple:
+    """The search's output and clip work arrays for ``cap`` candidate pairs (``_search``)."""
+    return _buffers(cap, maxf)
+
+
+@njit(cache=True)
+def _buffers(cap, maxf):
+    polys, counts, A, B, S = ov._work(maxf)
+    return (np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty(cap), np.empty((cap, 3)),
+            np.empty((cap, 3)), np.empty(cap), np.empty((cap, 3)), np.empty((cap, 3, 3)), polys, counts, A, B, S,
+            np.empty(3))
+
+
+@njit(cache=True)
+def _shape_geometry(verts, nv, normals, offsets, nf, owner, pos, rot, GV, GN, GD, lo, hi, ok):
+    """Every shape's vertices, face planes and box in the global frame, into the work
+    arrays (the arithmetic of ``overlap._global_geometry`` on pos[owner], rot[owner]);
+    ``ok``: the shape's vertices are finite (a shape of a stone that left the model, or of
+    a blown-up body, pairs with nothing)."""
+    for s in range(len(nv)):
+        b = owner[s]
+        V = GV[s]
+        N = GN[s]
+        D = GD[s]
+        for q in range(nv[s]):
+            for a in range(3):
+                V[q, a] = pos[b, a] + rot[b, a, 0] * verts[s, q, 0] + rot[b, a, 1] * verts[s, q, 1] \
+                    + rot[b, a, 2] * verts[s, q, 2]
+        for f in range(nf[s]):
+            for a in range(3):
+                N[f, a] = rot[b, a, 0] * normals[s, f, 0] + rot[b, a, 1] * normals[s, f, 1] \
+                    + rot[b, a, 2] * normals[s, f, 2]
+            D[f] = offsets[s, f] - (N[f, 0] * pos[b, 0] + N[f, 1] * pos[b, 1] + N[f, 2] * pos[b, 2])
+        good = True
+        for a in range(3):
+            mn = V[0, a]
+            mx = V[0, a]
+            for q in range(nv[s]):
+                x = V[q, a]
+                if not np.isfinite(x):
+                    good = False
+                if x < mn:
+                    mn = x
+                if x > mx:
+                    mx = x
+            lo[s, a] = mn
+            hi[s, a] = mx
+        ok[s] = good
+
+
+@njit(cache=True)
+def _stale(pos, rot, ref_pos, ref_rot, radius, half_skin):
+    """Whether some body may have moved a vertex by more than ``half_skin`` since the
+    last build (module docstring); non-finite states count as moved."""
+    for b in range(len(radius)):
+        if radius[b] < 0.0:
+            continue
+        d = 0.0
+        for a in range(3):
+            x = pos[b, a] - ref_pos[b, a]
+            d += x * x
+        r = 0.0
+        for a in range(3):
+            for c in range(3):
+                x = rot[b, a, c] - ref_rot[b, a, c]
+                r += x * x
+        if not (np.sqrt(d) + np.sqrt(r) * radius[b] <= half_skin):
+            return True
+    return False
+
+
+@njit(cache=True)
+def _build(lo, hi, ok, moving_s, owner, half_skin):
+    """The listed pairs (a, b), a < b, in lexicographic order: shapes of different bodies,
+    both finite, one moving, whose boxes grown by ``half_skin`` overlap."""
+    ns = len(ok)
+    glo = np.empty((ns, 3))
+    ghi = np.empty((ns, 3))
+    for s in range(ns):
+        for a in range(3):
+            glo[s, a] = lo[s, a] - half_skin if ok[s] else np.nan
+            ghi[s, a] = hi[s, a] + half_skin if ok[s] else np.nan
+    ia, ib = ov.sweep_pairs(glo, ghi, moving_s)
+    m = 0
+    for k in range(len(ia)):
+        if owner[ia[k]] != owner[ib[k]]:
+            ia[m] = ia[k]
+            ib[m] = ib[k]
+            m += 1
+    return ia[:m].copy(), ib[:m].copy()
+
+
+@njit(cache=True)
+def update(nl, verts, nv, normals, offsets, nf, owner, pos, rot):
+    """The shapes' global geometry into the list's work arrays, and the list rebuilt if it
+    is stale (``_stale``) or invalidated; returns the list's arrays (new pair arrays after
+    a rebuild)."""
+    la, lb, meta, ref_pos, ref_rot, radius, hs, moving_s, GV, GN, GD, lo, hi, ok = nl
+    _shape_geometry(verts, nv, normals, offsets, nf, owner, pos, rot, GV, GN, GD, lo, hi, ok)
+    if meta[2] == 0 and not _stale(pos, rot, ref_pos, ref_rot, radius, hs[0]):
+        return nl
+    la, lb = _build(lo, hi, ok, moving_s, owner, hs[0])
+    meta[0] = len(la)
+    meta[1] += 1
+    meta[2] = 0
+    ref_pos[:, :] = pos
+    ref_rot[:, :, :] = rot
+    return (la, lb, meta, ref_pos, ref_rot, radius, hs, moving_s, GV, GN, GD, lo, hi, ok)
+
+
+@njit(cache=True)
+def search(nl, buf, nv, nf, faces, fk, tol, touching):
+    """This step's contacts among the listed pairs (``update`` first): the pairs whose
+    closed boxes overlap and whose shapes are finite, clipped in the list's order, as
+    ``overlap._contacts_of_pairs`` on the sweep's candidates. Returns (the number of
+    contacts m, ``buf``: its first m rows of id1, id2, vol, cen, nrm, area, pc, pj hold
+    them; grown to the list's length where it was shorter)."""
+    la, lb, meta, ref_pos, ref_rot, radius, hs, moving_s, GV, GN, GD, lo, hi, ok = nl
+    n = meta[0]
+    if len(buf[0]) < n:
+        buf = _buffers(n + n // 4 + 16, GN.shape[1])
+    id1, id2, vol, cen, nrm, area, pc, pj, polys, counts, A, B, S, g = buf
+    m = 0
+    for k in range(n):
+        i = la[k]
+        j = lb[k]
+        if not (ok[i] and ok[j]):
+            continue
+        if lo[i, 0] > hi[j, 0] or lo[j, 0] > hi[i, 0] or lo[i, 1] > hi[j, 1] or lo[j, 1] > hi[i, 1] \
+                or lo[i, 2] > hi[j, 2] or lo[j, 2] > hi[i, 2]:
+            continue
+        if touching and ov._apart(GV[i], nv[i], GN[i], GD[i], nf[i], GV[j], nv[j], GN[j], GD[j], nf[j], tol):
+            continue
+        na, nt = ov._clip_pair(GV[i], nv[i], faces[i], fk[i], nf[i], GN[i], GD[i], GV[j], nv[j], faces[j], fk[j],
+                               nf[j], GN[j], GD[j], tol, polys, counts, A, B, S)
+        v = ov._volume(polys, counts, na, nt, cen[m], g)
+        if v <= 0.0:
+            continue
+        ga = np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
+        if ga <= 0.0:
+            continue
+        ov._patch(polys, counts, na, nt, cen[m], g, pc[m], pj[m])
+        id1[m] = i
+        id2[m] = j
+        vol[m] = v
+        for a in range(3):
+            nrm[m, a] = -g[a] / ga
+        area[m] = ga
+        m += 1
+    return m, buf
