@@ -44,13 +44,13 @@ _WARM_CASE = {"case": {"name": "numba_warm", "geometry": {"generator": "boxes_on
 #: a loaded 2-core machine, so only their ratios matter; files not here are costed by marks
 #: (``_COST_S``, the same units). A stale figure only makes the two workers finish less together.
 _FILE_COST_S = {
-    "test_site_study.py": 255, "test_docs_runnable.py": 245, "test_yade_contact.py": 240,
-    "test_multipart_runs.py": 200, "test_analyses_collapse.py": 190, "test_shape_study.py": 175,
-    "test_analyses_fragility.py": 175, "test_analyses_tilt.py": 115, "test_sacsayhuaman.py": 110,
+    "test_yade_contact.py": 240, "test_docs_runnable.py": 215, "test_multipart_runs.py": 200,
+    "test_analyses_collapse.py": 190, "test_analyses_fragility.py": 175, "test_site_study.py": 140,
+    "test_shape_study.py": 135, "test_analyses_tilt.py": 115,
     "test_yade_compiled.py": 105, "test_earth_pressure_runs.py": 100, "test_sweep.py": 100, "test_damping.py": 90,
     "test_energy.py": 85, "test_tilt_block.py": 80, "test_restitution.py": 75, "test_analyses_assess.py": 70,
-    "test_reliability_site.py": 60, "test_reliability_run.py": 55, "test_reliability_output.py": 55,
-    "test_crosscheck.py": 55, "test_report.py": 50, "test_fragility.py": 45, "test_excitation.py": 40}
+    "test_reliability_site.py": 60, "test_sacsayhuaman.py": 60, "test_reliability_run.py": 55,
+    "test_reliability_output.py": 55, "test_crosscheck.py": 55, "test_report.py": 50, "test_fragility.py": 45, "test_excitation.py": 40}
 #: cost of a test (s) by its marks, for the files not in ``_FILE_COST_S``
 _COST_S = {"slow": 60.0, "yade": 15.0, "other": 0.3}
 

@@ -248,7 +248,7 @@ def _as_site(cfg) -> Path:
 @pytest.mark.yade
 @pytest.mark.slow
 def test_small_study_end_to_end(outdir):
-    """The small plan (ancash1970 cut to 1.5 s, coarse brackets, both walls, rock and surface,
+    """The small plan (ancash1970 cut to 0.75 s, coarse brackets, both walls, rock and surface,
     tilt, dry and water static runs), every search a collapse analysis: every search ends, the
     report's tables carry what the analyses say (brackets from collapse.json; each run's
     collapse as its folder says, surface PGAs from each run's spec.json), every run is in

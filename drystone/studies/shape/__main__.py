@@ -6,7 +6,7 @@ run      plan, then per wall the tilt analysis and the collapse analysis (PGA at
          results/<out>/walls/<wall>/{tilt,collapse}/ (resumable: finished runs are reused; local pool or Dask)
 report   the analyses' results read back -> shape.json, runs.csv, shape.png, report.md
 all      run, then report
---config small: 2 variants, 1 seed, 1 record cut to 3 s, a 1.6 g bracket (results/shape_small/): a
+--config small: 2 variants, 1 seed, 1 record cut to 1 s, a 1.6 g bracket (results/shape_small/): a
 pipeline check, not a result."""
 from __future__ import annotations
 

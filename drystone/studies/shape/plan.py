@@ -107,8 +107,8 @@ class Config(StudyFolders):
 CONFIGS = {
     "full": Config(name="full", out="shape"),
     "small": Config(name="small", out="shape_small", variants=("coursed", "polygonal"), seeds=(0,), records=("ancash1970",), resolution_g=1.6,
-                    record_duration_s=3.0, rest_max_s=1.5,
-                    notes=("1 seed, 1 record cut to 3 s, 2 variants, a 1.6 g bracket, rest at most 1.5 s: a pipeline "
+                    record_duration_s=1.0, rest_max_s=1.5,
+                    notes=("1 seed, 1 record cut to 1 s, 2 variants, a 1.6 g bracket, rest at most 1.5 s: a pipeline "
                            "check, not a result",)),
 }
 

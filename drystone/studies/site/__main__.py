@@ -8,7 +8,7 @@ run      plan, the tilt analyses, the retained wall's static runs (dry, then the
 report   the analyses' results read back -> site.json, runs.csv, site.png, spectra.png, report.md,
          report.html
 all      run, then report
---config small: 1 record cut to 1.5 s, coarse brackets (results/site_small/): a pipeline check, not a result."""
+--config small: 1 record cut to 0.75 s, coarse brackets (results/site_small/): a pipeline check, not a result."""
 from __future__ import annotations
 
 from drystone.studies import exit_status

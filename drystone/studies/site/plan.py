@@ -93,9 +93,9 @@ CONFIGS = {
     "full": Config(name="full", out="site"),
     "small": Config(name="small", out="site_small", records=("ancash1970",),
                     polarities={"free": ("+",), "retained": ("+",)}, pga_cap_g={"free": 3.2, "retained": 0.6},
-                    resolution_g={"free": 1.6, "retained": 0.3}, refine_g={"retained": 0.15}, level_resolution_m=2.0, record_duration_s=1.5,
-                    rest_max_s=1.5,
-                    notes=("1 record cut to 1.5 s, as recorded only, 1.6 g (free) and 0.3 g (retained) brackets, "
+                    resolution_g={"free": 1.6, "retained": 0.3}, refine_g={}, level_resolution_m=2.0,
+                    record_duration_s=0.75, rest_max_s=1.5,
+                    notes=("1 record cut to 0.75 s, as recorded only, 1.6 g (free) and 0.3 g (retained) brackets, "
                            "a 2 m water-level bracket, rest at most 1.5 s: a pipeline check, not a result",)),
 }
 
