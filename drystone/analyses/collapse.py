@@ -38,8 +38,9 @@ MAX_ROUNDS = 100
 
 def add_arguments(p) -> None:
     common.add_common_arguments(p)
-    p.add_argument("--record", nargs="+", action="extend", default=[], metavar="FILE|NAME",
-                   help="acceleration record(s): a file or a catalogue name (docs/motions.md); repeatable "
+    p.add_argument("--record", nargs="+", action="extend", default=[], metavar="FILE|NAME|fema:ID",
+                   help="acceleration record(s): a file, a catalogue name (docs/motions.md) or a FEMA P695 id such "
+                        "as fema:12a (ASSUMED stand-in); repeatable "
                         "(default: the case's own excitation, scaled)")
     p.add_argument("--tolerance", type=float, default=0.05, help="final bracket width, g (0.05)")
     p.add_argument("--cap", type=float, default=3.0, help="highest PGA run, g: a wall standing there is censored (3.0)")
@@ -105,7 +106,7 @@ def _records(case_path, case_dict, records, stage, direction, overrides) -> tupl
         m = st["motion"]
         stem = (common.safe_name(st["record"]) if m == "record" else
                 f"sine_{common.number_tag(st['frequency_hz'])}hz" if m == "sine" else m)
-        return {stem: (f"the case's own {m}", [])}, k
+        return {stem: (f"the case's own {m}" + (f" ({st['record']})" if m == "record" else ""), [])}, k
     k = None if not has and stage is None else common.excitation_stage(case_dict, stage, where)
     out = {}
     for r in records:
@@ -177,6 +178,9 @@ def collapse(case, records, tolerance: float = 0.05, cap: float = 3.0, stage=Non
              "standing_above_collapse_g": list(s.non_monotonic), "runs": rows}
         if stem in failed:
             r["error"] = failed[stem]
+        note = record_note(given)
+        if note:
+            r["note"] = note
         summary[stem] = r
     wall = [r.get("wall_s") or 0.0 for rs in results.values() for r in rs]
     data = {"analysis": "collapse", "case": str(case_path), "overrides": list(overrides),
@@ -192,6 +196,18 @@ def collapse(case, records, tolerance: float = 0.05, cap: float = 3.0, stage=Non
     fig = ida_figure(summary, out_dir / "ida.png")
     common.write_report(out_dir, f"PGA at collapse: {case_path.name}", report_markdown(data), [fig])
     return dict(data, out_dir=str(out_dir))
+
+
+def record_note(given: str) -> str | None:
+    """For a FEMA P695 id (as given, or the case's own): its event and station, labelled ASSUMED."""
+    from drystone.motions import fema
+
+    ids = [w.strip("()") for w in str(given).split() if fema.parse_id(w.strip("()"))]
+    if not ids:
+        return None
+    c = fema.entry(ids[0])
+    return (f"{fema.canonical_id(c)}: FEMA P695 {c['set']} {c['record_id']}{c['component']}, {c['event']} "
+            f"{c['year']}, {c['station']}; {fema.ASSUMED}")
 
 
 def _row(o: dict) -> dict:
@@ -250,6 +266,9 @@ def report_markdown(data: dict) -> str:
         nm = ("standing at " + ", ".join(f"{g:g}" for g in r["standing_above_collapse_g"])
               if r["non_monotonic"] else "no")
         L.append(f"| {stem} | {pga} | {len(r['runs'])} | {nm} | {r['status']} |")
+    notes = [r["note"] for r in data["records"].values() if r.get("note")]
+    if notes:
+        L += [""] + [f"- {n}" for n in notes]
     L += ["", "![IDA curves](ida.png)", "", "## Runs", "",
           "| record | PGA (g) | collapsed | stones | largest residual (mm) | in-plane sliding | run |",
           "|---|---|---|---|---|---|---|"]

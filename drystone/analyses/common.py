@@ -227,17 +227,22 @@ def stages_before(case_path, overrides=()) -> list[dict]:
 
 
 def record_value(record, where: str = "case") -> str:
-    """A record as a case's ``record`` key takes it: a catalogue name, or a file made absolute;
-    CaseError when it is neither."""
-    from drystone.motions import catalogue
+    """A record as a case's ``record`` key takes it: a catalogue name, a FEMA P695 id
+    ('fema:12a', ASSUMED stand-in), or a file made absolute; CaseError when it is none."""
+    from drystone.motions import catalogue, fema
 
     r = str(record)
     if r in catalogue.names():
         return r
+    if fema.parse_id(r):
+        try:
+            return fema.canonical_id(fema.entry(r))
+        except (KeyError, fema.FemaDataMissing) as exc:
+            raise casemod.CaseError(f"{where}: record {exc.args[0] if isinstance(exc, KeyError) else exc}") from None
     p = Path(r).expanduser()
     if not p.is_file():
-        raise casemod.CaseError(f"{where}: record {r!r} is neither a file nor a catalogue name "
-                                f"({', '.join(catalogue.names())})")
+        raise casemod.CaseError(f"{where}: record {r!r} is neither a file, a FEMA P695 id (fema:12a) nor a "
+                                f"catalogue name ({', '.join(catalogue.names())})")
     return str(p.resolve())
 
 
