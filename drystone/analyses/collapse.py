@@ -212,7 +212,8 @@ def record_note(given: str) -> str | None:
 
 def _row(o: dict) -> dict:
     keys = ("status", "collapsed", "collapsed_stones", "why", "left_model", "largest_residual_m",
-            "largest_residual_stone", "largest_out_of_plane_m", "in_plane_sliding", "settled", "wall_s", "error")
+            "largest_residual_stone", "largest_out_of_plane_m", "in_plane_sliding", "settled", "end_time_s", "wall_s",
+            "error")
     return {k: o.get(k) for k in keys if k in o}
 
 
