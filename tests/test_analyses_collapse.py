@@ -313,3 +313,4 @@ def test_a_fema_id_in_a_case_file_and_on_the_command_line(tmp_path, monkeypatch,
     rec = res["records"]["fema_12a"]
     assert rec["record"] == "fema:12a" and "ASSUMED" in rec["note"] and "Landers" in rec["note"]
     assert "ASSUMED" in (tmp_path / "out" / "report.md").read_text()
+    assert res["search"]["stop_when_fallen"]  # each run stops once a stone fell or left the model

@@ -49,6 +49,9 @@ def add_arguments(p) -> None:
     p.add_argument("--fill", type=float, default=0.25,
                    help="fill in below the collapse until no gap exceeds this fraction of it (0.25; 0: no fill-in)")
     p.add_argument("--max-runs", type=int, default=30, help="most runs per record (30)")
+    p.add_argument("--full-runs", action="store_true",
+                   help="run every run to its end (default: a run stops once a stone fell or left the model, "
+                        "output.stop_when_fallen)")
     p.add_argument("--probes", type=int, default=1,
                    help="PGAs of one record run at once, each round (1; e.g. the cores per record: fewer rounds, "
                         "a few more runs; drystone/analyses/ida.py plan)")
@@ -66,7 +69,7 @@ def main(args) -> int:
     res = collapse(args.case, args.record, tolerance=args.tolerance, cap=args.cap, stage=args.stage, out=args.out,
                    workers=args.workers, backend=backend, address=address, start=args.start, factor=args.factor,
                    fill=args.fill or None, max_runs=args.max_runs, overrides=args.set,
-                   direction=args.direction, probes=args.probes)
+                   direction=args.direction, probes=args.probes, stop_when_fallen=not args.full_runs)
     for stem, r in res["records"].items():
         print(f"{stem}: {describe(r)}")
     print(f"report: {Path(res['out_dir']) / 'report.html'}")
@@ -125,9 +128,11 @@ def _records(case_path, case_dict, records, stage, direction, overrides) -> tupl
 def collapse(case, records, tolerance: float = 0.05, cap: float = 3.0, stage=None, out=None, workers=None,
              backend: str = "local", address=None, start: float = 0.1, factor: float = 2.0,
              fill: float | None = 0.25, max_runs: int = 30, overrides=(), direction: str = "y",
-             probes: int = 1, log=print) -> dict:
+             probes: int = 1, stop_when_fallen: bool = True, log=print) -> dict:
     """The PGA at collapse of ``case`` under each of ``records`` (module docstring);
-    returns what it writes to collapse.json, with ``out_dir``."""
+    returns what it writes to collapse.json, with ``out_dir``. ``stop_when_fallen``: each run
+    stops once a stone is certain to have collapsed (case key output.stop_when_fallen: it
+    fell or left the model; the run's outcome is then decided)."""
     from drystone.model import case as casemod
 
     t0 = time.time()
@@ -153,7 +158,8 @@ def collapse(case, records, tolerance: float = 0.05, cap: float = 3.0, stage=Non
                 continue
             for g in ida.plan(observed[stem], params, probes):
                 name = f"{stem}-pga_{common.number_tag(g)}"
-                todo.append((stem, g, name, over + [f"stages.{k}.pga_g={g!r}"]))
+                todo.append((stem, g, name, over + [f"stages.{k}.pga_g={g!r}"]
+                             + (["output.stop_when_fallen=true"] if stop_when_fallen else [])))
         if not todo:
             break
         log(f"[collapse] round {rnd}: {len(todo)} run(s) ({', '.join(n for _, _, n, _ in todo)}); "
@@ -189,7 +195,7 @@ def collapse(case, records, tolerance: float = 0.05, cap: float = 3.0, stage=Non
             "criterion": common.CRITERION,
             "search": {"method": "hunt-and-fill (drystone/analyses/ida.py)", "start_g": start, "factor": factor,
                        "cap_g": cap, "tolerance_g": tolerance, "fill": fill, "max_runs": max_runs,
-                       "probes": probes},
+                       "probes": probes, "stop_when_fallen": bool(stop_when_fallen)},
             "records": summary,
             "cost": {"runs": n_runs, "run_wall_s": sum(wall), "elapsed_s": time.time() - t0}}
     common.write_json(out_dir / "collapse.json", data, case=case_path, overrides=overrides)

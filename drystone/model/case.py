@@ -76,6 +76,10 @@ SECTIONS: dict[str, dict[str, Key]] = {
                           positive=True),
         "onset_window": Key(collapse.WINDOW_DEG, "deg", "tilt over which the onset rate is measured (filters "
                             "vibrations)", float, positive=True),
+        "stop_when_fallen": Key(False, "-", "stop the run at the first sample after gravity at which a stone is "
+                                "certain to have collapsed: it left the model or fell (its centroid dropped by "
+                                "more than half its height; drystone/mechanics/monitors.py Fallen); the "
+                                "collapse analysis sets it (a collapsed run needs no more)", bool),
     },
     "analysis": {
         "penetration": Key(None, "-", "name of a recorded contact whose final normal penetration is "

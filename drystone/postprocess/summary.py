@@ -259,6 +259,8 @@ def build(spec, out: Path) -> dict:
     # a last rest stage run until the kinetic energy settled: threshold, reached or not (None:
     # no such stage); velocity jumps of sines started as Eq. 9's displacement
     s["run"].update(settle=info.get("settle"), velocity_jumps=info.get("velocity_jumps", []))
+    if info.get("stopped_when_fallen") is not None:  # output.stop_when_fallen: cut short once a stone fell
+        s["run"]["stopped_when_fallen"] = info["stopped_when_fallen"]
     s["run"]["left_model"] = left_model_report(spec, h, left, info)
     s["run"]["motion"] = "unbounded" if left else "bounded"
     s["run"]["contact_stability"] = contact_stability(spec, info, len(left))
