@@ -29,6 +29,18 @@
                   stones (``LIMIT_WALL``): seconds to read the geometry, to find the
                   interfaces and to solve the LP towards +y (associative; the
                   non-associative iteration on the section too), against ``LIMIT_GOALS_S``.
+``fragility_ida`` ``python -m drystone fragility`` by IDA (hunt-and-fill) on
+                  cases/sacsayhuaman/record.toml over the FEMA P695 far-field records
+                  (component a; ``--records N``: the first N, default all 22) on ``--workers``
+                  (2) processes: runs used, runs per record, wall time, core-minutes (the
+                  runs' own wall times summed), seconds per run and per simulated second,
+                  the fitted theta and beta, and the whole set's wall time extrapolated from
+                  the records run (runs per record x seconds per run x 22 / workers; said to
+                  be an extrapolation when fewer than 22 ran), against ``FRAGILITY_GOAL_MIN``.
+                  Its runs stay in results/bench/fragility_ida/ (a rerun reuses them by
+                  fingerprint); ``--tolerance`` (g, ``FRAGILITY_TOLERANCE``) and
+                  ``--duration`` (s of each record from 1 s before its peak; default whole)
+                  trade precision for runs and simulated time.
 
 ms per step: a run's YADE wall time has a fixed start-up (about a second: the first step
 loads the compiled kernels) besides its steps, so each measured run goes with a short one
@@ -61,7 +73,7 @@ from drystone.mechanics import laws
 
 from drystone import paths, runner
 
-SECTIONS = ("running_bond", "scale", "threads", "sacsayhuaman", "limit")
+SECTIONS = ("running_bond", "scale", "threads", "sacsayhuaman", "limit", "fragility_ida")
 
 CASE = {
     "case": {"name": "bench_running_bond", "geometry": {"generator": "running_bond"}},
@@ -786,8 +798,69 @@ def limit_section() -> list[dict]:
     return rows
 
 
-def main(only=None, sizes=SIZES, walls=WALLS, steps: int = 300, engines=None) -> dict:
-    """Run the sections ``only`` (default all, in SECTIONS' order) and write bench.json."""
+#: the fragility_ida section: its case, the goal for the 22 records on 2 workers (min), and its
+#: default IDA settings (the bracket's width, g; the analysis's own default cap and start)
+FRAGILITY_CASE = paths.ROOT / "cases" / "sacsayhuaman" / "record.toml"
+FRAGILITY_GOAL_MIN = 60.0
+FRAGILITY_RECORDS = 22
+FRAGILITY_TOLERANCE = 0.1
+
+
+def fragility_estimate(n_records: int, runs: int, run_wall_s: float, workers: int,
+                       total_records: int = FRAGILITY_RECORDS) -> dict:
+    """The whole set's cost from the records run: runs per record, seconds per run, and the
+    wall time of ``total_records`` records on ``workers`` processes (each process busy all
+    the time: runs / workers x seconds per run)."""
+    per_record = runs / n_records
+    per_run = run_wall_s / runs
+    total_runs = per_record * total_records
+    return {"runs_per_record": per_record, "s_per_run": per_run, "runs_all": total_runs,
+            "core_min_all": total_runs * per_run / 60, "wall_min_all": total_runs * per_run / workers / 60,
+            "extrapolated": n_records < total_records}
+
+
+def fragility_section(n_records: int | None = None, tolerance: float = FRAGILITY_TOLERANCE,
+                      duration_s: float | None = None, workers: int = 2) -> dict:
+    """``fragility`` by IDA on the Sacsayhuaman record case (module docstring)."""
+    from drystone.analyses import fragility as fr
+
+    n = FRAGILITY_RECORDS if n_records is None else max(1, min(int(n_records), FRAGILITY_RECORDS))
+    records = ["farfield"] if n == FRAGILITY_RECORDS else [f"fema:{i}a" for i in range(1, n + 1)]
+    out = paths.RESULTS / "bench" / "fragility_ida"
+    t0 = time.time()
+    res = fr.fragility(FRAGILITY_CASE, records, method="ida", tolerance=tolerance, duration_s=duration_s,
+                       workers=workers, out=out, n_boot=200)
+    elapsed = time.time() - t0
+    cost = res["cost"]
+    runs = [x for r in res["records"].values() for x in r.get("runs", [])]
+    sim = [x.get("end_time_s") for x in runs if x.get("end_time_s")]
+    est = fragility_estimate(n, cost["runs"], cost["run_wall_s"], workers)
+    st = res["states"]["collapse"]
+    row = {"case": str(FRAGILITY_CASE), "records": n, "workers": workers, "tolerance_g": tolerance,
+           "duration_s": duration_s, "runs": cost["runs"], "elapsed_s": elapsed,
+           "run_wall_s": cost["run_wall_s"], "core_min": cost["run_wall_s"] / 60,
+           "simulated_s_per_run": sum(sim) / len(sim) if sim else None,
+           "wall_s_per_simulated_s": cost["run_wall_s"] / sum(sim) if sim else None,
+           "theta_g": st.get("theta"), "beta": st.get("beta"), "fit": st.get("reason") or "fitted",
+           "brackets": {k: r.get("pga_at_collapse_g") or r.get("censored_at_g") for k, r in res["records"].items()},
+           "estimate": est, "goal_min": FRAGILITY_GOAL_MIN, "goal_met": est["wall_min_all"] <= FRAGILITY_GOAL_MIN,
+           "out_dir": res["out_dir"]}
+    word = "extrapolated from " + f"{n} record(s)" if est["extrapolated"] else "measured"
+    print(f"  fragility_ida: {n} record(s), {cost['runs']} runs ({est['runs_per_record']:.1f} per record), "
+          f"{elapsed / 60:.1f} min wall on {workers} workers, {row['core_min']:.1f} core-min "
+          f"({est['s_per_run']:.0f} s per run" + (f", {row['simulated_s_per_run']:.1f} s simulated, "
+                                                   f"{row['wall_s_per_simulated_s']:.1f} s per simulated s"
+                                                   if sim else "") + "); "
+          + (f"theta {st['theta']:.3g} g, beta {st['beta']:.3g}" if st.get("theta") is not None
+             else f"no fit ({st.get('reason')})")
+          + f"; all {FRAGILITY_RECORDS} records: {est['wall_min_all']:.0f} min on {workers} workers ({word}; "
+          f"goal <= {FRAGILITY_GOAL_MIN:g} min: {'met' if row['goal_met'] else 'NOT met'})", flush=True)
+    return row
+
+
+def main(only=None, sizes=SIZES, walls=WALLS, steps: int = 300, engines=None, fragility: dict | None = None) -> dict:
+    """Run the sections ``only`` (default all, in SECTIONS' order) and write bench.json;
+    ``fragility``: the fragility_ida section's options (``fragility_section``'s keywords)."""
     only = list(SECTIONS) if not only else [s for s in SECTIONS if s in only]
     facts = machine()
     print(f"machine: {facts['cores']} cores, load average {facts['load_average_at_start'][0]:.2f} at the start, "
@@ -796,7 +869,7 @@ def main(only=None, sizes=SIZES, walls=WALLS, steps: int = 300, engines=None) ->
     t0 = time.time()
     with tempfile.TemporaryDirectory(dir=paths.ROOT) as tmp:
         tmp = Path(tmp)
-        if set(only) - {"limit"}:  # the limit analysis runs no YADE
+        if set(only) - {"limit", "fragility_ida"}:  # the limit analysis runs no YADE; fragility primes itself
             prime(tmp)
         if "running_bond" in only:
             results["running_bond"] = running_bond_section(tmp)
@@ -812,6 +885,8 @@ def main(only=None, sizes=SIZES, walls=WALLS, steps: int = 300, engines=None) ->
             print_sacsayhuaman(results["sacsayhuaman"])
         if "limit" in only:
             results["limit"] = {"rows": limit_section(), "machine": facts}
+        if "fragility_ida" in only:
+            results["fragility_ida"] = dict(fragility_section(**(fragility or {})), machine=facts)
     results["machine"] = dict(facts, sections=only, wall_s=time.time() - t0)
     out = write_results(results)
     print(f"written {out} ({time.time() - t0:.0f} s)")

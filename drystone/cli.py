@@ -62,7 +62,8 @@ def main(argv=None) -> int:
     c = sub.add_parser("compare", help="compare finished verification runs with the paper")
     c.add_argument("folders", nargs="+")
     b = sub.add_parser("bench", help="speed figures: 40-block wall, 500/2000-stone walls, threads, Sacsayhuaman")
-    b.add_argument("--only", nargs="+", choices=("running_bond", "scale", "threads", "sacsayhuaman", "limit"),
+    b.add_argument("--only", nargs="+", choices=("running_bond", "scale", "threads", "sacsayhuaman", "limit",
+                                                 "fragility_ida"),
                    help="run only these sections (bench.json keeps the others' earlier figures)")
     b.add_argument("--sizes", nargs="+", type=int, choices=(40, 500, 2000), default=[40, 500, 2000],
                    help="scale section: wall sizes (stones, about)")
@@ -72,6 +73,12 @@ def main(argv=None) -> int:
     b.add_argument("--steps", type=int, default=300, help="scale section: steps per run (300)")
     b.add_argument("--engines", nargs="+", choices=("compiled", "python"), default=None,
                    help="scale section: step engines (default: the runner's default)")
+    b.add_argument("--records", type=int, default=None,
+                   help="fragility_ida section: the first N FEMA P695 far-field records (default all 22)")
+    b.add_argument("--tolerance", type=float, default=None, help="fragility_ida section: IDA bracket width, g (0.1)")
+    b.add_argument("--duration", type=float, default=None,
+                   help="fragility_ida section: S seconds of each record from 1 s before its peak (default whole)")
+    b.add_argument("--workers", type=int, default=2, help="fragility_ida section: parallel runs (2)")
     sub.add_parser("free-decay", help="damping ratio per mode of one block (both contact geometries) and rocking "
                    "restitution per impact against Housner's -> "
                    "results/free_decay/report.md")
@@ -139,7 +146,9 @@ def main(argv=None) -> int:
             print(free_decay.report().read_text())
         elif a.cmd == "bench":
             from drystone import bench
-            bench.main(a.only, a.sizes, a.walls, a.steps, a.engines)
+            frag = {"n_records": a.records, "duration_s": a.duration, "workers": a.workers,
+                    **({"tolerance": a.tolerance} if a.tolerance is not None else {})}
+            bench.main(a.only, a.sizes, a.walls, a.steps, a.engines, frag)
     except KeyboardInterrupt:
         print("interrupted: the results folder is unchanged", file=sys.stderr)
         return 130

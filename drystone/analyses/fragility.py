@@ -21,8 +21,11 @@ Methods (drystone/analyses/fragility_fit.py holds the statistics):
 * ``stripes``: every record scaled to each of ``--levels`` (g), one sweep, then Baker's
   (2015) binomial MLE over the runs (``fit_runs``); bootstrap within stripes (PGA) or by runs.
 
-``--im pgv|sa``: a record's PGV (m/s) and Sa(T1) (g, 5 % damped, ``--t1`` s) scale with its
-PGA, so each run's IM is its PGA times the record's IM per g (drystone/analyses/measures.py).
+``--im pgv|sa``: a record's PGV (m/s) and Sa(T1) (g, 5 % damped pseudo-spectral acceleration)
+scale with its PGA, so each run's IM is its PGA times the record's IM per g
+(drystone/analyses/measures.py). T1 (s) is ``--period S``, else 1 / the first frequency of the
+case's modal analysis (``modal.json`` of ``python -m drystone modal CASE`` in its default
+folder: ``first_period``); fragility.json says which (``t1_source``).
 
 ``--uncertain mu,kn``: the analysis is done a second time with the friction coefficient and/or
 K_n drawn (seeded; ``UNCERTAIN``, ASSUMED spreads around the case's own values: mu lognormal
@@ -81,7 +84,9 @@ def add_arguments(p) -> None:
                    help="cut FEMA records to S seconds from 1 s before their peak")
     p.add_argument("--method", choices=("ida", "stripes"), default="ida")
     p.add_argument("--im", choices=tuple(IMS), default="pga", help="intensity measure (pga)")
-    p.add_argument("--t1", type=float, default=None, help="the wall's first period T1 (s), for --im sa")
+    p.add_argument("--period", "--t1", dest="t1", type=float, default=None,
+                   help="--im sa: the wall's first period T1 (s); default 1/f1 of the case's modal.json "
+                        "(python -m drystone modal CASE)")
     p.add_argument("--levels", nargs="+", type=float, default=None,
                    help=f"stripes' PGAs, g (default {' '.join(map(str, LEVELS_G))})")
     p.add_argument("--damage", action="append", default=[], metavar="DSk=FRACTION",
@@ -241,7 +246,56 @@ def im_per_g(record, im: str, t1_s: float | None) -> float:
         return 1.0
     from drystone.analyses import measures
 
-    return float(measures.run_measures(record, 1.0, t1_s or 1.0)[IMS[im][0]])
+    if im == "sa" and not (t1_s and t1_s > 0):
+        raise ValueError(f"Sa(T1) needs a positive period T1, got {t1_s!r}")
+    return float(measures.run_measures(record, 1.0, t1_s if im == "sa" else 1.0)[IMS[im][0]])  # Sa unused for PGV
+
+
+def sa_damping() -> float:
+    """Sa(T1)'s damping ratio (motions.intensity's; stated in fragility.json and the report)."""
+    from drystone.motions import intensity
+
+    return intensity.DAMPING
+
+
+def modal_json_paths(case_path) -> list[Path]:
+    """Where ``python -m drystone modal CASE`` writes modal.json by default (common.output_dir):
+    results/<case name>/modal/ or results/<case name>.analyses/modal/."""
+    from drystone import paths
+
+    base = paths.RESULTS / common.case_name(case_path)
+    return [base / "modal" / "modal.json", base.with_name(base.name + ".analyses") / "modal" / "modal.json"]
+
+
+def first_period(case_path, t1_s=None, overrides=(), where=None) -> tuple[float, str]:
+    """(T1 in s, where it came from): ``t1_s`` when given (--period), else 1 / the first
+    positive frequency of the case's modal.json (``modal_json_paths``; the newest if both).
+    CaseError (one line) telling how to get one when there is neither."""
+    import json
+
+    where = where or str(case_path)
+    if t1_s is not None:
+        if not t1_s > 0:
+            raise common.casemod.CaseError(f"{where}: --period must be a positive number of seconds, got {t1_s!r}")
+        return float(t1_s), "--period"
+    found = sorted((p for p in modal_json_paths(case_path) if p.is_file()), key=lambda p: p.stat().st_mtime)
+    if not found:
+        raise common.casemod.CaseError(f"{where}: --im sa needs the wall's first period T1: run `python -m drystone "
+                                       f"modal {case_path}` first, or pass --period SECONDS")
+    p = found[-1]
+    try:
+        data = json.loads(p.read_text())
+        f1 = float(data["frequencies_hz"][0])
+    except (ValueError, KeyError, IndexError, TypeError) as exc:
+        raise common.casemod.CaseError(f"{p}: no first frequency (frequencies_hz) to take T1 from ({exc}): rerun "
+                                       "`python -m drystone modal` or pass --period SECONDS") from None
+    if not f1 > 0:
+        raise common.casemod.CaseError(f"{p}: first frequency {f1!r} Hz is not positive: pass --period SECONDS")
+    note = ""
+    theirs = list((data.get("provenance") or {}).get("overrides") or [])
+    if theirs != list(overrides or []):
+        note = f" (NOTE: the modal analysis's overrides {theirs}, this analysis's {list(overrides or [])})"
+    return 1.0 / f1, f"1 / f1 = 1 / {f1:.4g} Hz from {p}{note}"
 
 
 def wall_thickness(run_dir) -> float | None:
@@ -286,8 +340,9 @@ def fragility(case, records, method: str = "ida", im: str = "pga", levels=None, 
         raise casemod.CaseError(f"{where}: unknown method {method!r} (ida, stripes)")
     if im not in IMS:
         raise casemod.CaseError(f"{where}: unknown intensity measure {im!r} ({', '.join(IMS)})")
-    if im == "sa" and not (t1_s and t1_s > 0):
-        raise casemod.CaseError(f"{where}: --im sa needs the wall's first period: --t1 SECONDS")
+    t1_source = None
+    if im == "sa":
+        t1_s, t1_source = first_period(case_path, t1_s, overrides, where)
     levels = sorted(set(levels or LEVELS_G))
     if method == "stripes" and (len(levels) < 2 or min(levels) <= 0):
         raise casemod.CaseError(f"{where}: --levels needs at least 2 positive PGAs, got {levels}")
@@ -374,6 +429,7 @@ def fragility(case, records, method: str = "ida", im: str = "pga", levels=None, 
     wall = sum((x.get("wall_s") or 0.0) for x in done_runs)
     data = {"analysis": "fragility", "case": str(case_path), "overrides": list(overrides), "method": method,
             "im": im, "im_key": IMS[im][0], "im_unit": IMS[im][2], "t1_s": t1_s,
+            **({"t1_source": t1_source, "sa_damping": sa_damping()} if im == "sa" else {}),
             "wall_thickness_m": thick, "levels_g": levels if method == "stripes" else None,
             "search": None if method == "stripes" else {"tolerance_g": tolerance, "cap_g": cap, "start_g": start,
                                                         "factor": factor, "fill": fill, "max_runs": max_runs},
@@ -581,7 +637,9 @@ def report_markdown(data: dict) -> str:
             if data["method"] == "ida" else
             f"(stripes at {', '.join(f'{g:g}' for g in data['levels_g'])} g, binomial maximum likelihood, "
             "Baker 2015)")
-         + f"; intensity measure {IMS[data['im']][1]} ({unit}). P(DS | IM) = Φ(ln(IM/θ)/β).", ""]
+         + f"; intensity measure {IMS[data['im']][1]} ({unit})"
+         + (f", {100 * data['sa_damping']:g} % damped, T1 = {data['t1_s']:.4g} s ({data['t1_source']})"
+            if data["im"] == "sa" else "") + ". P(DS | IM) = Φ(ln(IM/θ)/β).", ""]
     if data.get("records_note"):
         L += [data["records_note"] + ".", ""]
     th = data.get("wall_thickness_m")

@@ -60,6 +60,48 @@ def stone(extent, u, rotvec) -> tuple[list[str], bool]:
     return reasons, (not reasons and abs(u[0]) > 0.5 * L)
 
 
+#: the rule in one line (reports, summary.json, the run's console)
+RULE = ("a stone has collapsed when, at the end of the run, it left the model, or its centroid dropped by more "
+        "than half its height, or it leans past its tipping angle (overturned), or its centroid moved out of "
+        "plane by more than half its depth; residual displacements short of that are damage, and a stone "
+        "sliding along the wall by more than half its length is reported as in-plane sliding, not collapse "
+        "(drystone/mechanics/collapse.py stone, drystone/analyses/common.py outcome; docs/physics.md)")
+
+
+def reference_sample(spec: dict, t) -> int:
+    """The sample the rule measures from: the end of the last gravity stage (0 without one)."""
+    from drystone.model.spec import stage_type
+
+    t = np.asarray(t, float)
+    grav = [st for st in spec["stages"] if stage_type(st) == "gravity"]
+    return min(int(np.searchsorted(t, grav[-1]["end"] - 1e-9)), len(t) - 1) if grav and len(t) else 0
+
+
+def run_stones(spec: dict, h: dict, left=()) -> dict[int, dict]:
+    """``stone`` applied to every free stone of a finished run at its last sample: block id ->
+    {"why": reasons (["left_model"] for a stone in ``left``, the ids that left the model),
+    "in_plane_sliding": bool, "u_m": its centroid's displacement since ``reference_sample``
+    (None when it left)}. ``spec`` a spec.json dict, ``h`` its histories (t, block_ids, pos,
+    quat). The one reading of collapse of summary.json, the run's console and the analyses."""
+    from drystone.mechanics import rotations
+
+    t = np.asarray(h["t"], float)
+    i0 = reference_sample(spec, t)
+    pos, quat = np.asarray(h["pos"], float), np.asarray(h["quat"], float)
+    u = pos[-1] - pos[i0]
+    rot = rotations.relative_rotation_vectors(quat[-1], quat[i0])
+    verts = {int(b["id"]): np.asarray(b["vertices"], float) for b in spec["blocks"]}
+    left = {int(b) for b in left}
+    out = {}
+    for j, b in enumerate(int(x) for x in h["block_ids"]):
+        if b in left:
+            out[b] = {"why": ["left_model"], "in_plane_sliding": False, "u_m": None}
+            continue
+        reasons, slid = stone(np.ptp(verts[b], axis=0), u[j], rot[j])
+        out[b] = {"why": reasons, "in_plane_sliding": bool(slid), "u_m": u[j]}
+    return out
+
+
 RATE_M_PER_DEG = 5e-3  # m of block displacement per degree of tilt
 WINDOW_DEG = 0.2  # deg of tilt over which the displacement is measured (filters rattling)
 

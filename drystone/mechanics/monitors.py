@@ -187,6 +187,47 @@ class LeftModel(Monitor):
                 "all_left_model_s": self.all_left_s, "model_region": self.region.as_dict()}
 
 
+class Fallen(Monitor):
+    """``output.stop_when_fallen``: stop the run at the first sample at or after the end of
+    the last gravity stage (``gravity_end_s``) at which a free stone is certain to have
+    collapsed by the package's rule (drystone/mechanics/collapse.py ``stone``): it left the
+    model (taken out of the scene), or it fell: its centroid is lower than at the end of
+    gravity by more than half its height (``heights``, m, per body index), so it no longer
+    stands on its seat and cannot regain it. The run's collapse is then decided whatever
+    follows; what it leaves out is the rest of the motion (run_info.json
+    ``stopped_when_fallen``)."""
+
+    order = 4
+
+    def __init__(self, heights, gravity_end_s: float):
+        self.heights = np.asarray(heights, float)
+        self.gravity_end_s = float(gravity_end_s)
+        self.z0 = None
+        self.stopped = None
+
+    def on_sample(self, run, s):
+        if run.failure is not None or self.stopped is not None or not len(run.dyn):
+            return
+        if s.t < self.gravity_end_s - 1e-9:
+            return
+        if self.z0 is None:  # the rule's reference: the first sample at the end of gravity
+            self.z0 = run.pos[:, 2].copy()
+        dyn = run.dyn
+        gone = np.asarray(run.removed, bool)[dyn]
+        fell = ~gone & (self.z0[dyn] - run.pos[dyn, 2] > 0.5 * self.heights[dyn])
+        if not (gone.any() or fell.any()):
+            return
+        self.stopped = {"time_s": float(s.t), "fell": [int(run.bid[int(i)]) for i in dyn[fell]],
+                        "left_model": [int(run.bid[int(i)]) for i in dyn[gone]]}
+        print(f"[{run.spec_name}] t = {s.t:.3f} s: a stone collapsed for certain (fell {self.stopped['fell']}, left "
+              f"the model {self.stopped['left_model']}): stopping (output.stop_when_fallen)", flush=True)
+        if run.stop_at is None or run.stop_at > s.t:
+            run.stop_at = float(s.t)
+
+    def info(self):
+        return {"stopped_when_fallen": self.stopped}
+
+
 class Collapse(Monitor):
     """A tilt stage with ``until_collapse``. Collapse is detected when the vertical reaction
     of the moving blocks drops by ``reaction_drop`` of their weight (the paper's Figure 13)

@@ -66,14 +66,20 @@ SECTIONS: dict[str, dict[str, Key]] = {
     "output": {
         "interval": Key(0.01, "s", "time between recorded samples", float, positive=True),
         "contacts": Key([], "-", "named contacts to record: list of {name, blocks = [a, b]}", list),
-        "collapse_displacement": Key("auto", "m", "a block that moves more than this has collapsed; "
-                                     "'auto' = half the block's smallest dimension", (float, str)),
+        "collapse_displacement": Key("auto", "m", "a block whose residual displacement exceeds this is reported "
+                                     "beyond the displacement threshold (damage, not collapse: collapse is the "
+                                     "rule of drystone/mechanics/collapse.py), and a tilt run stops once a block "
+                                     "moved this far; 'auto' = half the block's smallest dimension", (float, str)),
         "onset_rate": Key(collapse.RATE_M_PER_DEG, "m/deg", "in a tilt, a block that moves more than this "
                           "per degree of tilt (over onset_window) is moving: the collapse angle is the tilt "
                           "where the motion that led to collapse began (drystone/mechanics/collapse.py)", float,
                           positive=True),
         "onset_window": Key(collapse.WINDOW_DEG, "deg", "tilt over which the onset rate is measured (filters "
                             "vibrations)", float, positive=True),
+        "stop_when_fallen": Key(False, "-", "stop the run at the first sample after gravity at which a stone is "
+                                "certain to have collapsed: it left the model or fell (its centroid dropped by "
+                                "more than half its height; drystone/mechanics/monitors.py Fallen); the "
+                                "collapse analysis sets it (a collapsed run needs no more)", bool),
     },
     "analysis": {
         "penetration": Key(None, "-", "name of a recorded contact whose final normal penetration is "

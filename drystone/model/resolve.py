@@ -234,7 +234,8 @@ def resolve(case: dict, where: str, out: Path, check_overlaps: bool = True) -> S
         dt=dt, dt_critical=dt_crit, dt_critical_detail=crit, gravity=case["physics"]["gravity"],
         materials=mats, blocks=blocks, joint_overrides=_joint_overrides(bs), control_points=bs.control_points,
         stages=stages, forces=case["forces"],
-        output={"interval": case["output"]["interval"], "contacts": case["output"]["contacts"]},
+        output={"interval": case["output"]["interval"], "contacts": case["output"]["contacts"],
+                **({"stop_when_fallen": True} if case["output"].get("stop_when_fallen") else {})},
         collapse_threshold=_collapse_threshold(case, bs), onset_rate=case["output"]["onset_rate"],
         onset_window_deg=case["output"]["onset_window"], stock_shear_area=float(np.mean(free_areas)),
         geometry_source=geo_source, excitations=excitations, analysis=case["analysis"], loads=loads)
@@ -262,4 +263,6 @@ def fingerprint(spec) -> str:
     data["stages"] = stages
     if d.get("loads"):  # hashed only where there are loads: the runs before them keep their fingerprint
         data["loads"] = d["loads"]
+    if (d.get("output") or {}).get("stop_when_fallen"):  # a run cut short is another run (only then hashed)
+        data["stop_when_fallen"] = True
     return hashlib.sha256(json.dumps(data, sort_keys=True, default=str).encode()).hexdigest()

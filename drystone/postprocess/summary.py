@@ -2,10 +2,14 @@
 
 Conventions: positions are in the platform frame, so displacements are relative to the
 platform; SI units; rotations as rotation vectors (axis x angle, rad) of each block
-relative to its initial orientation. A block has *collapsed* when its displacement
-exceeds its collapse threshold (case key ``output.collapse_displacement``, by default half
-its smallest dimension) or it ends up lower than its initial position by more than its
-height (it fell). A block that left the model (drystone/mechanics/stability.py ``ModelRegion``: below
+relative to its initial orientation. A block has *collapsed* by the package's one rule
+(drystone/mechanics/collapse.py ``run_stones``: it left the model, fell, overturned or was
+pushed out of the wall, measured from the end of gravity; ``collapse_why`` gives the reasons;
+``in_plane_sliding`` a stone that slid along the wall by more than half its length, damage).
+Residual displacements are damage measures, named as such: ``beyond_displacement_threshold``
+says the residual exceeds ``displacement_threshold_m`` (case key
+``output.collapse_displacement``, by default half the block's smallest dimension; a tilt
+run's detection uses it to stop), not collapse. A block that left the model (drystone/mechanics/stability.py ``ModelRegion``: below
 the supports' underside, or thrown farther than their size plus the fall height) has
 collapsed and its motion is ``unbounded``: no residual, maximum or rotation is given for it
 (from the sample it left on, its numbers describe nothing the model holds).
@@ -55,14 +59,15 @@ def left_model(spec: dict, h: dict) -> dict[int, dict]:
 
 
 def block_table(spec: dict, h: dict, left: dict | None = None) -> dict:
-    """Per block id: residual and maximum displacement, rotation, collapsed; ``motion``
+    """Per block id: residual and maximum displacement, rotation (damage measures), collapsed
+    by the one rule (module docstring); ``motion``
     "bounded", or "unbounded" for a block that left the model (``left``, default
     ``left_model``): collapsed, its residuals and maxima None, when and where it left."""
     left = left_model(spec, h) if left is None else left
     ids = [int(i) for i in h["block_ids"]]
     disp = h["pos"] - h["pos0"][None]
     rot = rotations.relative_rotation_vectors(h["quat"], h["quat0"][None])
-    heights = {b["id"]: float(np.ptp(np.asarray(b["vertices"])[:, 2])) for b in spec["blocks"]}
+    rule = collapse.run_stones(spec, h, left)
     out = {}
     for j, bid in enumerate(ids):
         thr = spec["collapse_threshold"][str(bid)]
@@ -73,14 +78,14 @@ def block_table(spec: dict, h: dict, left: dict | None = None) -> dict:
                 "left_model": {"time_s": gone["time_s"], "where": gone["where"]},
                 "residual_displacement_m": None, "residual_displacement_norm_m": None,
                 "max_displacement_norm_m": None, "residual_rotation_rad": None, "residual_rotation_angle_rad": None,
-                "collapse_threshold_m": thr,
+                "displacement_threshold_m": thr, "beyond_displacement_threshold": None,
                 "fell": gone["where"].startswith("below"),
-                "collapsed": True,
+                "collapsed": True, "collapse_why": ["left_model"], "in_plane_sliding": False,
             }
             continue
         d = disp[:, j]
         nrm = np.linalg.norm(d, axis=1)
-        fell = bool(d[-1, 2] < -heights[bid])
+        why = rule[bid]["why"]
         out[str(bid)] = {
             "motion": "bounded",
             "residual_displacement_m": d[-1].tolist(),
@@ -88,9 +93,10 @@ def block_table(spec: dict, h: dict, left: dict | None = None) -> dict:
             "max_displacement_norm_m": float(nrm.max()),
             "residual_rotation_rad": rot[-1, j].tolist(),
             "residual_rotation_angle_rad": float(np.linalg.norm(rot[-1, j])),
-            "collapse_threshold_m": thr,
-            "fell": fell,
-            "collapsed": bool(fell or nrm[-1] > thr),
+            "displacement_threshold_m": thr,
+            "beyond_displacement_threshold": bool(nrm[-1] > thr),
+            "fell": "fell" in why,
+            "collapsed": bool(why), "collapse_why": why, "in_plane_sliding": rule[bid]["in_plane_sliding"],
         }
     return out
 
@@ -247,12 +253,14 @@ def build(spec, out: Path) -> dict:
                    "joint_overrides": spec["joint_overrides"], "stages": spec["stages"],
                    "excitations": spec["excitations"], "forces": spec["forces"], "dt_s": spec["dt"],
                    "dt_critical_s": spec["dt_critical"], "gravity_m_s2": spec["gravity"],
-                   "collapse_threshold_m": spec["collapse_threshold"], "provenance": case,
+                   "displacement_threshold_m": spec["collapse_threshold"], "provenance": case,
                    "assumed": assumed_inputs(spec, out)},
     }
     # a last rest stage run until the kinetic energy settled: threshold, reached or not (None:
     # no such stage); velocity jumps of sines started as Eq. 9's displacement
     s["run"].update(settle=info.get("settle"), velocity_jumps=info.get("velocity_jumps", []))
+    if info.get("stopped_when_fallen") is not None:  # output.stop_when_fallen: cut short once a stone fell
+        s["run"]["stopped_when_fallen"] = info["stopped_when_fallen"]
     s["run"]["left_model"] = left_model_report(spec, h, left, info)
     s["run"]["motion"] = "unbounded" if left else "bounded"
     s["run"]["contact_stability"] = contact_stability(spec, info, len(left))

@@ -96,6 +96,11 @@ class Driver:
         self.removed_kinetic = 0.0
         self.stability = monitors.Stability(self.w_free, self.size)
         self.monitors = [self.stability, monitors.LeftModel(self.region)]
+        if spec.output.get("stop_when_fallen"):
+            heights = np.array([float(np.ptp(np.asarray(self.blocks[self.bid.get(i)]["vertices"], float)[:, 2]))
+                                if self.bid.get(i) in self.blocks else np.inf for i in range(nb)])
+            grav = [st.end for st in self.prog.stages if st.type == "gravity"]
+            self.monitors.append(monitors.Fallen(heights, grav[-1] if grav else 0.0))
         self.stage, self.stop_at, self.done, self.failure, self.collapse = -1, None, False, None, None
         self.jumps, self.jump_dvs = [], []  # velocity jumps at stage starts (run_info.json; the speed bound)
         self.g_integral = 0.0  # integral of |g_eff| dt over the steps taken, m/s (stability.speed_budget)
