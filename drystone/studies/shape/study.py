@@ -83,7 +83,8 @@ def collapse_wall(cfg, plan: dict, variant: str, seed: int, workers=None, backen
     return collapse.collapse(planmod.RECORD_CASE, files, out=planmod.wall_dir(cfg, variant, seed) / "collapse",
                              workers=workers or len(files), backend=backend, address=address,
                              overrides=planmod.common_overrides(cfg) + planmod.wall_overrides(cfg, variant, seed),
-                             log=log, **sc.search_params(cfg.pga_cap_g, cfg.resolution_g))
+                             log=log, **sc.search_params(cfg.pga_cap_g, cfg.resolution_g),
+                             stop_when_fallen=False)  # runs to their end: the published runs
 
 
 def _duration(cfg, plan: dict, record: str) -> float:

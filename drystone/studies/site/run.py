@@ -69,7 +69,8 @@ def collapse_search(cfg, plan: dict, wall: str, site: str, record: str, polarity
     return collapse.collapse(planmod.record_case(wall), [planmod.record_file(cfg, record, polarity)],
                              out=planmod.search_dir(cfg, wall, site, record, polarity), workers=1, backend=backend,
                              address=address, overrides=planmod.common_overrides(cfg) + planmod.site_overrides(site),
-                             log=log, **sc.search_params(cap, planmod.tolerance(cfg, wall)))
+                             log=log, **sc.search_params(cap, planmod.tolerance(cfg, wall)),
+                             stop_when_fallen=False)  # runs to their end: the published runs
 
 
 def static_runs(cfg, backend="local", address=None, log=print) -> dict:
