@@ -119,9 +119,11 @@ def one(wall: Wall, towards: str, friction: str, facets: int = la.FACETS) -> tup
                             "cannot carry its own weight (a stone resting on nothing, an overhang)",
                             "unbounded": "no multiplier makes the wall collapse: no stone can move",
                             }.get(r.status, f"the LP solver failed: {r.message}")
-    elif r.status == "not_converged":
+    elif r.status == "not_converged" or r.message.startswith("the lowest"):
         entry["message"] = r.message
     if friction == "coulomb":
+        entry["converged"] = r.converged
+        entry["coulomb_residual"] = r.coulomb_residual
         entry["iterations"] = r.iterations
         entry["history"] = [float(x) for x in r.history]
     if ok and r.velocity is not None:

@@ -127,6 +127,7 @@ class Result:
     solve_s: float = 0.0
     shear: np.ndarray | None = None
     coulomb_residual: float | None = None
+    converged: bool | None = None
 
 
 @dataclass
@@ -224,7 +225,7 @@ def assemble(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.
     return Problem(A, b, live, rows, ci, cx, cmu, nc, facets, cone, force_scale, row_scale)
 
 
-def _solve(p: Problem, capacity=None, slope: float = 0.0) -> tuple[Result, np.ndarray | None]:
+def _solve(p: Problem, capacity=None, slope: float = 0.0, rest: bool = False) -> tuple[Result, np.ndarray | None]:
     """One LP: maximise lambda. ``capacity`` (N, per interface) only with the capped layout:
     sum over the interface's corners v and directions k of s_vk <= capacity + slope mu N
     (N the interface's normal force). Returns the
@@ -248,6 +249,10 @@ def _solve(p: Problem, capacity=None, slope: float = 0.0) -> tuple[Result, np.nd
     bounds = np.zeros((ncol + 1, 2))
     bounds[:, 1] = np.inf
     bounds[-1] = (-np.inf, np.inf)
+    if rest:  # the wall at rest (lambda = 0) with the least total normal force: no self-stress
+        c[:] = 0.0
+        c[:p.ncorner if not p.cone else ncol] = 1.0
+        bounds[-1] = (0.0, 0.0)
     res = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=p.b, bounds=bounds, method=METHOD)
     dt = time.perf_counter() - t0
     if res.status == 2:
@@ -299,7 +304,7 @@ def solve(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.0, 
 
 def solve_coulomb(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.0, 0.0, -9.81),
                   facets: int = FACETS, relax: float = RELAX, max_iter: int = MAX_ITER,
-                  lambda_tol: float = LAMBDA_TOL, force_tol: float = FORCE_TOL, slope: float = SLOPE) -> Result:
+                  lambda_tol: float = LAMBDA_TOL, force_tol: float = FORCE_TOL, slopes=(0.0, SLOPE)) -> Result:
     """Non-associative Coulomb friction by the iterative scheme of the module docstring."""
     t0 = time.perf_counter()
     r = solve(bodies, ifaces, mu, direction, gravity, facets)
@@ -310,12 +315,20 @@ def solve_coulomb(bodies: Bodies, ifaces: list[Interface], mu, direction, gravit
     mu_i = np.broadcast_to(np.asarray(mu, float), (len(ifaces),))
     mu_i = p.mu  # per corner
     hist = [r.multiplier]
-    n_prev = r.normal
-    last, y = r, None
+    # the start: the normal forces of the wall at rest carrying its weight with the least total
+    # normal force (no self-stress locked across joints that nothing loads)
+    r0, _ = _solve(assemble(bodies, ifaces, mu, direction, gravity, facets), rest=True)
+    n_rest = r0.normal if r0.normal is not None else r.normal
     converged = False
     dl = res_c = float("nan")
-    for _ in range(max_iter):
-        r, y_new = _solve(p, capacity=(1 - slope) * mu_i * n_prev, slope=slope)
+    best = None  # the lowest iterate whose forces satisfy Coulomb with their own normal forces
+    runs = [(sl, n) for sl in slopes for n in range(max_iter // len(slopes))]
+    for slope, k in runs:
+        if converged:
+            break
+        if k == 0:  # each residual friction starts afresh from the wall at rest
+            n_prev = n_rest
+        r, y = _solve(p, capacity=(1 - slope) * mu_i * n_prev, slope=slope)
         if r.multiplier is None:  # no admissible forces with the capped joints
             r.iterations = len(hist) + 1
             r.history = hist
@@ -328,21 +341,31 @@ def solve_coulomb(bodies: Bodies, ifaces: list[Interface], mu, direction, gravit
         shear_i = np.bincount(p.corner_iface, r.shear, minlength=len(ifaces))
         mun_i = np.bincount(p.corner_iface, mu_i * n_new, minlength=len(ifaces))
         res_c = float(np.max(shear_i - mun_i, initial=0.0)) / max(float(np.max(mun_i, initial=0.0)), 1e-300)
-        dl = abs(hist[-1] - hist[-2]) / max(abs(hist[-1]), 1e-12)
+        dl = abs(hist[-1] - hist[-2]) / max(abs(hist[-1]), 1e-12) if k > 0 else float("nan")
         n_prev = relax * n_new + (1 - relax) * n_prev
-        last, y = r, y_new
-        last.coulomb_residual = res_c
-        if dl <= lambda_tol and res_c <= force_tol:
+        r.coulomb_residual = res_c
+        if res_c <= force_tol and (best is None or r.multiplier < best[0].multiplier):
+            best = (r, y)
+        if k > 0 and dl <= lambda_tol and res_c <= force_tol:
             converged = True
-            break
+    if best is None:
+        last = r
+        last.status = "not_converged"
+        last.message = (f"the non-associative iteration did not converge in {max_iter} steps and no iterate "
+                        f"satisfied Coulomb (last relative change of lambda {dl:.2g}; shear above mu N "
+                        f"{res_c:.2g} of the largest mu N)")
+    else:
+        final = hist[-1]
+        last, y = best
+        if not converged or last.multiplier != final:
+            last.message = (f"the lowest of {len(hist) - 1} iterates whose forces satisfy Coulomb with their own "
+                            f"normal forces; the iteration " + (f"converged to {final:.6g}" if converged else
+                            f"did not settle (last relative change of lambda {dl:.2g})"))
     if y is not None:
         last.velocity = _normalise(_velocities(p, y, bodies), bodies, ifaces)
     last.iterations = len(hist)
     last.history = hist
-    if not converged:
-        last.status = "not_converged"
-        last.message = (f"the non-associative iteration did not converge in {max_iter} steps "
-                        f"(last relative change of lambda {dl:.2g}; shear above mu N {res_c:.2g} of the largest mu N)")
+    last.converged = converged
     last.solve_s = time.perf_counter() - t0
     return last
 
