@@ -38,20 +38,23 @@ the corners not opening) and sliding (tangential velocity at the hinge).
 Non-associative Coulomb friction (``solve_coulomb``): associative flow makes sliding dilate
 (opening mu x slip), which the joints of a real wall do not, so the associative lambda is
 an upper estimate where sliding governs. The iterative scheme of Gilbert, Casapulla &
-Ahmed (2006, Computers & Structures 84, 873-887): solve the associative problem, then
-repeatedly solve the problem with each corner's friction replaced by a modified joint
-whose shear capacity is fixed by the previous normal forces, sum_k s_vk <= (1 - SLOPE) mu
-N_v^(k-1) + SLOPE mu N_v (a cohesive joint with a small residual friction SLOPE mu that
-keeps the normal forces from jumping between the LP's many equivalent distributions; it
-is Coulomb's where N_v = N_v^(k-1)), under-relaxed (N^k <- omega N^k + (1 - omega)
-N^(k-1)), until lambda changes by less than ``LAMBDA_TOL`` (relative) and, per interface,
-the corners' shear exceeds mu x the interface's own normal force by less than
-``FORCE_TOL`` x the largest mu N. At that point the forces are statically admissible with
-Coulomb's friction (per interface) and the mechanism slides with a dilatancy of at most
-atan(SLOPE mu). Not converged in ``MAX_ITER`` steps is reported as such, with the last
-iterate. The scheme finds one solution of the non-associative problem, not necessarily
-the lowest: normal forces locked in by the associative start (a lateral self-stress across
-a vertical joint) may persist (docs/limit-analysis.md).
+Ahmed (2006, Computers & Structures 84, 873-887): repeatedly solve the problem with each
+corner's friction replaced by a modified joint whose shear capacity is fixed by the previous
+normal forces, sum_k s_vk <= (1 - s) mu N_v^(k-1) + s mu N_v, under-relaxed (N^k <- omega
+N^k + (1 - omega) N^(k-1)). The start is the wall at rest (lambda = 0) carrying its weight
+with the least total normal force, not the associative collapse state, whose lateral
+self-stress across vertical joints (paid for by associative dilatancy) would otherwise
+persist as friction a real joint does not have. Two passes of ``MAX_ITER`` / 2 LPs: s = 0
+(Gilbert's fixed capacities: a non-dilatant mechanism), then s = ``SLOPE`` (a small residual
+friction that keeps the normal forces from jumping between the LP's many equivalent
+distributions), each from the wall at rest. Converged: lambda changes by less than
+``LAMBDA_TOL`` (relative) and, per interface, the corners' shear exceeds mu x the
+interface's own normal force by less than ``FORCE_TOL`` x the largest mu N. Reported: the
+lowest iterate whose forces satisfy Coulomb with their own normal forces (within
+``FORCE_TOL``); its mechanism slips only where the shear is at the capacity mu N_prev <= mu N,
+so the value is on the safe side for that mechanism and exact at a fixed point (N = N_prev).
+No such iterate: ``not_converged`` with the last. The scheme finds a solution of the
+non-associative problem, not provably the lowest (docs/limit-analysis.md).
 
 Units: SI (kg, m, N); velocities are dimensionless (normalised).
 """
