@@ -76,12 +76,13 @@ def _cell(e: dict) -> str:
         "" if e["status"] == "collapse" else f" ({e['status']})")
 
 
-def tilt_table(seeds=TILT_SEEDS, log=print) -> str:
+def tilt_table(seeds=None, log=print) -> str:
+    """Per group and seed; ``seeds`` default: those with published DEM angles."""
     dem = tilt_dem_angles()
     rows = ["| tilt-table wall | seed | limit, associative (deg) | limit, Coulomb (deg) | DEM onset (deg) | "
             "DEM reaction drop (deg) |", "|---|---|---|---|---|---|"]
     for group, label, over in TILT_GROUPS:
-        for s in seeds:
+        for s in (seeds if seeds is not None else sorted(dem.get(group, {}))):
             e = tilt_limit_angles(over, s)
             log(f"  tilt {group} seed {s}: " + ", ".join(f"{fr} {x['status']} {x['angle_deg']}" for fr, x in e.items()))
             on, drop = dem.get(group, {}).get(s, (None, None))
@@ -122,19 +123,27 @@ def table(seeds=SEEDS, log=print) -> str:
     return "\n".join(rows)
 
 
-def report(log=print) -> str:
-    return "\n".join([
-        "# The rigid limit angle beside the DEM's tilt angles", "",
-        "Limit angles: rigid stones, the geometry as built, towards +y (`python -m drystone.studies.limit_dem`; "
-        "drystone/analyses/limit.py). DEM angles: the published runs (not rerun).", "",
-        "## Tilt-table walls", "", tilt_table(log=log), "",
-        "## Shape study's walls", "", table(log=log), ""])
+def report(parts=("tilt", "shape"), log=print) -> str:
+    out = ["# The rigid limit angle beside the DEM's tilt angles", "",
+           "Limit angles: rigid stones, the geometry as built, towards +y (`python -m drystone.studies.limit_dem`; "
+           "drystone/analyses/limit.py). DEM angles: the published runs (not rerun).", ""]
+    if "tilt" in parts:
+        out += ["## Tilt-table walls", "", tilt_table(log=log), ""]
+    if "shape" in parts:
+        out += ["## Shape study's walls", "", table(log=log), ""]
+    return "\n".join(out)
 
 
 def main(argv=None) -> int:
     from drystone import atomic
 
-    text = report(log=lambda *a: print(*a, file=sys.stderr))
+    import argparse
+
+    ap = argparse.ArgumentParser(prog="python -m drystone.studies.limit_dem", description=__doc__)
+    ap.add_argument("--only", nargs="+", choices=("tilt", "shape"), default=["tilt", "shape"],
+                    help="which walls (default both: minutes each, the non-associative iteration most of it)")
+    a = ap.parse_args(argv)
+    text = report(a.only, log=lambda *a: print(*a, file=sys.stderr))
     OUT.mkdir(parents=True, exist_ok=True)
     atomic.write_text(OUT / "report.md", text)
     print(text)
