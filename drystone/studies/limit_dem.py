@@ -4,7 +4,7 @@
 (the studies' tilt direction) with both frictions (drystone/analyses/limit.py), geometry as
 built, for
 
-* the tilt-table walls (cases/tilt_wall.toml, seeds 0-4, stones of varying depth and the
+* the tilt-table walls (cases/tilt_wall.toml, the seeds with published DEM angles, stones of varying depth and the
   constant-section walls), beside the tilt study's published DEM onset and reaction-drop
   angles per seed, read from its generated table in docs/validation-sacsayhuaman.md;
 * the shape study's four wall variants (drystone/studies/shape/plan.py: coursed, polygonal,
@@ -26,8 +26,7 @@ from drystone.geometry import blockfile as bf
 from drystone.studies.shape import plan
 
 SEEDS = (0, 1, 2)
-#: the tilt-table walls: seeds, and the groups of the tilt study (name, label, overrides of its case)
-TILT_SEEDS = (0, 1, 2, 3, 4)
+#: the tilt-table walls: the groups of the tilt study (name, label, overrides of its case)
 TILT_GROUPS = (("constant", "constant section", ["case.geometry.depth_spread=0.0"]),
                ("varying", "stones of varying depth", []))
 OUT = paths.RESULTS / "limit_dem"
