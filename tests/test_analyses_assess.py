@@ -33,6 +33,10 @@ def test_assess_quick_one_stone(tmp_path):
     # atan(mu), the rigid-plastic sliding angle, by the time the slide takes to reach 5 mm/deg
     slide = math.degrees(math.atan(0.4))
     assert slide - tol.QUICK_SLIDE_EARLY_DEG <= p["tilt"]["headline_deg"] <= slide + tol.QUICK_SLIDE_LAG_DEG
+    # beside it, the rigid limit of the same stone as built: atan(mu), both frictions
+    lim = p["tilt"]["limit"]
+    assert lim["associative_deg"] == pytest.approx(slide, rel=tol.LIMIT_LP_REL)
+    assert lim["coulomb_deg"] == pytest.approx(slide, rel=tol.LIMIT_ITERATION_REL)
     fr = json.loads((out / "fragility" / "fragility.json").read_text())
     modal = json.loads((out / "modal" / "modal.json").read_text())
     assert data["cost"]["runs"] == 1 + 1 + bool(modal.get("identification")) + fr["cost"]["runs"]
@@ -42,6 +46,7 @@ def test_assess_quick_one_stone(tmp_path):
     for link in ("tilt/report.html", "fragility/report.html", "fragility/collapse/report.html"):
         assert link in html
     assert "modal" in html.lower()
+    assert "rigid limit" in html
 
 
 @pytest.mark.slow

@@ -76,3 +76,37 @@ def test_bad_direction_is_one_line_exit_2(tmp_path, capsys):
 
     assert cli.main(["tilt", str(CASE), "--towards", "up", "--out", str(tmp_path / "t")]) == 2
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+@requires_yade
+@pytest.mark.yade
+@pytest.mark.slow
+def test_rigid_limit_beside_the_dem_angle(result):
+    """tilt.json sets the rigid limit angle (both frictions) beside the DEM's: one block that
+    slides, atan(mu) for both, and the DEM's onset (the slower rate check) at it within the tilt's
+    tolerance; the report shows it."""
+    exact = math.degrees(math.atan(0.4))
+    out = Path(result["out_dir"])
+    data = json.loads((out / "tilt.json").read_text())
+    for d in ("+y", "-x"):
+        lim = data["directions"][d]["limit"]
+        assert lim["associative_status"] == lim["coulomb_status"] == "collapse"
+        assert lim["associative_deg"] == pytest.approx(exact, rel=tol.LIMIT_LP_REL)
+        assert lim["coulomb_deg"] == pytest.approx(exact, rel=tol.LIMIT_ITERATION_REL)
+        rc = data["directions"][d]["rate_check"]
+        assert rc["headline_deg"] == pytest.approx(lim["associative_deg"], abs=tol.TILT_ANGLE_DEG)
+    assert "rigid limit deg" in (out / "report.html").read_text()
+
+
+def test_rigid_limit_of_the_tilt_case():
+    """The limit analysis the tilt analysis sets beside its runs (no YADE): one block, mu 0.4
+    < b/h = 1, slides at atan(0.4) = 21.80 deg, both frictions, any direction."""
+    from drystone.analyses import limit as L
+
+    exact = math.degrees(math.atan(0.4))
+    lims = L.beside_dem(CASE, ["+y", "-x"])
+    for d in ("+y", "-x"):
+        assert lims[d]["associative_deg"] == pytest.approx(exact, rel=tol.LIMIT_LP_REL)
+        assert lims[d]["coulomb_deg"] == pytest.approx(exact, rel=tol.LIMIT_ITERATION_REL)
+        assert T._limit_cell(lims[d]) == f"{exact:.2f} / {exact:.2f}"
+    assert "error" in L.beside_dem(paths.ROOT / "cases" / "no_such_case.toml", ["+y"])

@@ -163,3 +163,28 @@ def test_fragility_block_keeps_the_preliminary_warning(tmp_path):
     (tmp_path / "fragility" / "report.md").write_text(report.replace("**Preliminary: fitted on the 40 finished runs "
                                                                      "of 220.**\n\n", ""))
     assert "Preliminary" not in rt.fragility(tmp_path)
+
+
+def test_limit_dem_block_takes_both_tables(tmp_path):
+    """The limit_dem block: the tilt-table and shape tables of results/limit_dem/report.md;
+    missing report: left as it is."""
+    with pytest.raises(rt.Missing):
+        rt.limit_dem(tmp_path)
+    (tmp_path / "limit_dem").mkdir()
+    (tmp_path / "limit_dem" / "report.md").write_text(
+        "# t\n\n## Tilt-table walls\n\n| a | b |\n|---|---|\n| 1 | 2 |\n\n## Shape study's walls\n\n"
+        "| c |\n|---|\n| 3 |\n")
+    out = rt.limit_dem(tmp_path)
+    assert "| 1 | 2 |" in out and "| 3 |" in out and "results/limit_dem/report.md" in out
+
+
+def test_limit_dem_reads_the_published_tilt_angles():
+    """The tilt study's per-seed DEM angles as its generated table lists them (seeds named in
+    the row, one angle per seed, onset below reaction drop)."""
+    from drystone.studies import limit_dem
+
+    dem = limit_dem.tilt_dem_angles()
+    assert set(dem) == {"constant", "varying"} and dem["constant"] and dem["varying"]
+    for group in dem.values():
+        for onset, drop in group.values():
+            assert 0 < onset < drop < 45

@@ -2,7 +2,8 @@
 
 Runs, into results/<case name>/assess/ (or ``--out``), one folder each:
 
-1. ``tilt/``: the collapse angle tilting towards +y (drystone/analyses/tilt.py);
+1. ``tilt/``: the collapse angle tilting towards +y (drystone/analyses/tilt.py), beside the
+   rigid-block limit angle of the wall as built (both frictions; ``parts.tilt.limit``);
 2. ``modal/``: frequencies and mode shapes, when the modal analysis is present
    (drystone/analyses/modal.py; skipped, and said so, otherwise);
 3. ``fragility/``: the PGA at collapse under a small default record set by IDA
@@ -77,11 +78,13 @@ def assess(case, quick: bool = False, records=None, out=None, workers=None, back
                      address=address, rate=cfg["tilt_rate"], overrides=overrides, log=log)
     d = t["directions"]["+y"]
     parts["tilt"] = {"report": "tilt/report.html", "headline_deg": d.get("headline_deg"),
-                     "criterion": d.get("criterion"), "reached": d.get("reached"), "rate_deg_s": cfg["tilt_rate"]}
+                     "criterion": d.get("criterion"), "reached": d.get("reached"), "rate_deg_s": cfg["tilt_rate"],
+                     "reaction_drop_deg": d.get("reaction_drop_deg"), "limit": d.get("limit")}
     runs += 1
     run_s += _tilt_wall(out_dir / "tilt", d)
     summary.append(f"tilt +y: {d['headline_deg']:.2f} deg ({d.get('criterion')})" if d.get("headline_deg")
                    is not None else "tilt +y: no collapse up to the largest tilt")
+    summary.append(f"rigid limit +y (associative / Coulomb): {tiltmod._limit_cell(d.get('limit'))} deg")
 
     if importlib.util.find_spec("drystone.analyses.modal") is not None:
         log("[assess] 2/3 modal")
@@ -138,6 +141,12 @@ def _tilt_wall(folder: Path, d: dict) -> float:
         return 0.0
 
 
+def _limit_cell(lim) -> str:
+    from drystone.analyses.tilt import _limit_cell as cell
+
+    return cell(lim)
+
+
 def report_markdown(data: dict) -> str:
     p = data["parts"]
     L = [f"# Assessment: {Path(data['case']).name}", "",
@@ -147,7 +156,14 @@ def report_markdown(data: dict) -> str:
     t = p["tilt"]
     L += ["", "## Tilt", "", f"Towards +y at {t['rate_deg_s']:g} deg/s: "
           + (f"{t['headline_deg']:.2f} deg ({t['criterion']})" if t["headline_deg"] is not None else "no collapse")
-          + f". [Tilt report]({t['report']})", "", "## Modal", ""]
+          + f". [Tilt report]({t['report']})", "",
+          "| towards | DEM onset (deg) | DEM reaction drop (deg) | rigid limit, associative / Coulomb (deg) |", "|---|---|---|---|",
+          f"| +y | "
+          f"{'-' if t['headline_deg'] is None else format(t['headline_deg'], '.2f')} | "
+          f"{'-' if t.get('reaction_drop_deg') is None else format(t['reaction_drop_deg'], '.2f')} | "
+          f"{_limit_cell(t.get('limit'))} |", "",
+          "The rigid limit: the same wall of rigid stones as built (drystone/analyses/limit.py, "
+          "docs/limit-analysis.md), an upper reference for the reaction drop: the DEM's joints are compliant.", "", "## Modal", ""]
     m = p["modal"]
     L.append(f"Skipped: {m['skipped']}." if "skipped" in m else
              f"Frequencies: {', '.join(f'{x:.3g}' for x in m['frequencies_hz'])} Hz. [Modal report]({m['report']})")

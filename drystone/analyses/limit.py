@@ -119,9 +119,11 @@ def one(wall: Wall, towards: str, friction: str, facets: int = la.FACETS) -> tup
                             "cannot carry its own weight (a stone resting on nothing, an overhang)",
                             "unbounded": "no multiplier makes the wall collapse: no stone can move",
                             }.get(r.status, f"the LP solver failed: {r.message}")
-    elif r.status == "not_converged":
+    elif r.status == "not_converged" or r.message.startswith("the lowest"):
         entry["message"] = r.message
     if friction == "coulomb":
+        entry["converged"] = r.converged
+        entry["coulomb_residual"] = r.coulomb_residual
         entry["iterations"] = r.iterations
         entry["history"] = [float(x) for x in r.history]
     if ok and r.velocity is not None:
@@ -142,6 +144,33 @@ def analyse(wall: Wall, towards=("+y",), frictions=FRICTIONS, facets: int = la.F
             by[fr], results[(t, fr)] = one(wall, t, fr, facets)
         out[t] = dict(by[frictions[-1]], by_friction=by)
     return {"directions": out}, results
+
+
+def beside_dem(case_path, towards, overrides=()) -> dict:
+    """The rigid limit angles of a case's wall as built, per direction, to set beside a DEM
+    tilt angle: {dir: {"associative_deg", "coulomb_deg", "associative_status",
+    "coulomb_status", "note"}} (an angle None where the status is not a collapse, or
+    not_converged: the note says why). A wall this analysis cannot read gives
+    {"error": one line} instead (the DEM analysis goes on)."""
+    from drystone.geometry.blockfile import GeometryError
+
+    try:
+        wall = load_wall(case_path, overrides)
+    except (CaseError, GeometryError, ValueError) as e:
+        return {"error": f"the limit analysis could not read the wall: {str(e).splitlines()[0]}"}
+    out = {}
+    for t in directions(towards):
+        e = {}
+        for fr in FRICTIONS:
+            entry, _ = one(wall, t, fr)
+            collapse = entry["status"] == "collapse"
+            e[f"{fr}_deg"] = entry["angle_deg"] if collapse else None
+            e[f"{fr}_status"] = entry["status"]
+            if not collapse:
+                e.setdefault("note", entry.get("message", entry["status"]))
+        e["note"] = e.get("note", "rigid stones, the geometry as built (docs/limit-analysis.md)")
+        out[t] = e
+    return out
 
 
 def _speeds(wall: Wall, v) -> np.ndarray:

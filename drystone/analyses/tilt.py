@@ -26,7 +26,10 @@ the rate) until collapse; the two headlines agree when they differ by at most
 
 Writes into results/<case name>/tilt/ (or ``--out``): ``tilt.json`` ({"directions": {"+y":
 {"headline_deg", "criterion", "onset_deg", "reaction_drop_deg", "detected_deg",
-"first_stone", "collapsed_stones", "reached", "run", "rate_check"}}, protocol, provenance),
+"first_stone", "collapsed_stones", "reached", "run", "rate_check", "limit"}}, protocol, provenance);
+``limit``: the rigid-block limit angles of the same wall as built, {"associative_deg",
+"coulomb_deg", "associative_status", "coulomb_status", "note"} (drystone/analyses/limit.py
+``beside_dem``: an upper reference for the DEM's reaction-drop angle, docs/limit-analysis.md),
 ``tilt.png`` (largest stone displacement against tilt, per direction) and ``report.html``.
 """
 from __future__ import annotations
@@ -147,9 +150,14 @@ def tilt(case, towards=("+y",), out=None, workers=None, backend: str = "local", 
     lead_to, lead_rate = lead if lead is not None else (None, None)
     runs = [(_run_name(d), [stages_override(prefix, d, rate, max_deg, lead_to, lead_rate, after_collapse)])
             for d in dirs]
+    from drystone.analyses import limit as limitmod
+
+    limits = limitmod.beside_dem(case_path, dirs, overrides)  # seconds, before the runs
     log(f"[tilt] {len(runs)} direction(s) at {rate:g} deg/s: {', '.join(dirs)}")
     res = common.run_jobs(case_path, runs, out_dir, "tilt", list(overrides), workers, backend, address, log)
     directions = {d: _direction(res[_run_name(d)], _run_name(d)) for d in dirs}
+    for d in dirs:
+        directions[d]["limit"] = limits.get(d, limits)
     n_runs = len(runs)
     if rate_check:
         checks = []
@@ -258,6 +266,16 @@ def _f(x, fmt=".2f"):
     return "-" if x is None else format(x, fmt)
 
 
+def _limit_cell(lim: dict | None) -> str:
+    if not lim:
+        return "-"
+    if "error" in lim:
+        return lim["error"]
+    return f"{_f(lim.get('associative_deg'))} / {_f(lim.get('coulomb_deg'))}" + (
+        "" if lim.get("coulomb_status") == lim.get("associative_status") == "collapse"
+        else f" ({lim.get('associative_status')} / {lim.get('coulomb_status')})")
+
+
 def report_markdown(data: dict) -> str:
     p = data["protocol"]
     L = [f"# Tilt: {Path(data['case']).name}", "",
@@ -265,11 +283,14 @@ def report_markdown(data: dict) -> str:
          f"then the platform tilted at {p['rate_deg_s']:g} deg/s until collapse (at most {p['max_deg']:g} deg).", "",
          f"**Headline angle** = {data['headline']}. The reaction-drop angle (the Sacsayhuaman paper's reading: the "
          "vertical reaction of the moving stones 5 % below their weight) and the detection angle are details.", "",
+         "Rigid limit: the tilt angle atan(lambda) at which the same wall of rigid stones, as built, collapses "
+         "(drystone/analyses/limit.py; associative / Coulomb friction): an upper reference for the reaction drop, "
+         "the DEM's joints being compliant.", "",
          "| towards | headline (onset) deg | reaction drop deg | detected deg | first stone | collapsed stones | "
-         "rate check |", "|---|---|---|---|---|---|---|"]
+         "rate check | rigid limit deg (assoc. / Coulomb) |", "|---|---|---|---|---|---|---|---|"]
     for d, r in data["directions"].items():
         if r.get("status") == "failed":
-            L.append(f"| {d} | failed: {r.get('error')} | | | | | |")
+            L.append(f"| {d} | failed: {r.get('error')} | | | | | | {_limit_cell(r.get('limit'))} |")
             continue
         rc = r.get("rate_check")
         rtxt = "-" if not rc else (
@@ -279,7 +300,7 @@ def report_markdown(data: dict) -> str:
         head = _f(r["headline_deg"]) if r["reached"] else f"none up to {_f(r.get('max_tilt_deg'), '.1f')}"
         L.append(f"| {d} | {head} | {_f(r.get('reaction_drop_deg'))} | {_f(r.get('detected_deg'))} | "
                  f"{r.get('first_stone', '-')} | {' '.join(map(str, r.get('collapsed_stones') or [])) or '-'} | "
-                 f"{rtxt} |")
+                 f"{rtxt} | {_limit_cell(r.get('limit'))} |")
     L += ["", "![largest stone displacement against tilt](tilt.png)", "",
           f"Collapsed stones at the end of each run: {data['collapse_criterion']}.", "",
           f"Cost: {data['cost']['runs']} run(s), {data['cost']['elapsed_s'] / 60:.1f} min."]

@@ -38,20 +38,23 @@ the corners not opening) and sliding (tangential velocity at the hinge).
 Non-associative Coulomb friction (``solve_coulomb``): associative flow makes sliding dilate
 (opening mu x slip), which the joints of a real wall do not, so the associative lambda is
 an upper estimate where sliding governs. The iterative scheme of Gilbert, Casapulla &
-Ahmed (2006, Computers & Structures 84, 873-887): solve the associative problem, then
-repeatedly solve the problem with each corner's friction replaced by a modified joint
-whose shear capacity is fixed by the previous normal forces, sum_k s_vk <= (1 - SLOPE) mu
-N_v^(k-1) + SLOPE mu N_v (a cohesive joint with a small residual friction SLOPE mu that
-keeps the normal forces from jumping between the LP's many equivalent distributions; it
-is Coulomb's where N_v = N_v^(k-1)), under-relaxed (N^k <- omega N^k + (1 - omega)
-N^(k-1)), until lambda changes by less than ``LAMBDA_TOL`` (relative) and, per interface,
-the corners' shear exceeds mu x the interface's own normal force by less than
-``FORCE_TOL`` x the largest mu N. At that point the forces are statically admissible with
-Coulomb's friction (per interface) and the mechanism slides with a dilatancy of at most
-atan(SLOPE mu). Not converged in ``MAX_ITER`` steps is reported as such, with the last
-iterate. The scheme finds one solution of the non-associative problem, not necessarily
-the lowest: normal forces locked in by the associative start (a lateral self-stress across
-a vertical joint) may persist (docs/limit-analysis.md).
+Ahmed (2006, Computers & Structures 84, 873-887): repeatedly solve the problem with each
+corner's friction replaced by a modified joint whose shear capacity is fixed by the previous
+normal forces, sum_k s_vk <= (1 - s) mu N_v^(k-1) + s mu N_v, under-relaxed (N^k <- omega
+N^k + (1 - omega) N^(k-1)). The start is the wall at rest (lambda = 0) carrying its weight
+with the least total normal force, not the associative collapse state, whose lateral
+self-stress across vertical joints (paid for by associative dilatancy) would otherwise
+persist as friction a real joint does not have. Two passes of ``MAX_ITER`` / 2 LPs: s = 0
+(Gilbert's fixed capacities: a non-dilatant mechanism), then s = ``SLOPE`` (a small residual
+friction that keeps the normal forces from jumping between the LP's many equivalent
+distributions), each from the wall at rest. Converged: lambda changes by less than
+``LAMBDA_TOL`` (relative) and, per interface, the corners' shear exceeds mu x the
+interface's own normal force by less than ``FORCE_TOL`` x the largest mu N. Reported: the
+lowest iterate whose forces satisfy Coulomb with their own normal forces (within
+``FORCE_TOL``); its mechanism slips only where the shear is at the capacity mu N_prev <= mu N,
+so the value is on the safe side for that mechanism and exact at a fixed point (N = N_prev).
+No such iterate: ``not_converged`` with the last. The scheme finds a solution of the
+non-associative problem, not provably the lowest (docs/limit-analysis.md).
 
 Units: SI (kg, m, N); velocities are dimensionless (normalised).
 """
@@ -127,6 +130,7 @@ class Result:
     solve_s: float = 0.0
     shear: np.ndarray | None = None
     coulomb_residual: float | None = None
+    converged: bool | None = None
 
 
 @dataclass
@@ -224,7 +228,7 @@ def assemble(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.
     return Problem(A, b, live, rows, ci, cx, cmu, nc, facets, cone, force_scale, row_scale)
 
 
-def _solve(p: Problem, capacity=None, slope: float = 0.0) -> tuple[Result, np.ndarray | None]:
+def _solve(p: Problem, capacity=None, slope: float = 0.0, rest: bool = False) -> tuple[Result, np.ndarray | None]:
     """One LP: maximise lambda. ``capacity`` (N, per interface) only with the capped layout:
     sum over the interface's corners v and directions k of s_vk <= capacity + slope mu N
     (N the interface's normal force). Returns the
@@ -248,6 +252,10 @@ def _solve(p: Problem, capacity=None, slope: float = 0.0) -> tuple[Result, np.nd
     bounds = np.zeros((ncol + 1, 2))
     bounds[:, 1] = np.inf
     bounds[-1] = (-np.inf, np.inf)
+    if rest:  # the wall at rest (lambda = 0) with the least total normal force: no self-stress
+        c[:] = 0.0
+        c[:p.ncorner if not p.cone else ncol] = 1.0
+        bounds[-1] = (0.0, 0.0)
     res = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=p.b, bounds=bounds, method=METHOD)
     dt = time.perf_counter() - t0
     if res.status == 2:
@@ -299,7 +307,7 @@ def solve(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.0, 
 
 def solve_coulomb(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.0, 0.0, -9.81),
                   facets: int = FACETS, relax: float = RELAX, max_iter: int = MAX_ITER,
-                  lambda_tol: float = LAMBDA_TOL, force_tol: float = FORCE_TOL, slope: float = SLOPE) -> Result:
+                  lambda_tol: float = LAMBDA_TOL, force_tol: float = FORCE_TOL, slopes=(0.0, SLOPE)) -> Result:
     """Non-associative Coulomb friction by the iterative scheme of the module docstring."""
     t0 = time.perf_counter()
     r = solve(bodies, ifaces, mu, direction, gravity, facets)
@@ -310,12 +318,20 @@ def solve_coulomb(bodies: Bodies, ifaces: list[Interface], mu, direction, gravit
     mu_i = np.broadcast_to(np.asarray(mu, float), (len(ifaces),))
     mu_i = p.mu  # per corner
     hist = [r.multiplier]
-    n_prev = r.normal
-    last, y = r, None
+    # the start: the normal forces of the wall at rest carrying its weight with the least total
+    # normal force (no self-stress locked across joints that nothing loads)
+    r0, _ = _solve(assemble(bodies, ifaces, mu, direction, gravity, facets), rest=True)
+    n_rest = r0.normal if r0.normal is not None else r.normal
     converged = False
     dl = res_c = float("nan")
-    for _ in range(max_iter):
-        r, y_new = _solve(p, capacity=(1 - slope) * mu_i * n_prev, slope=slope)
+    best = None  # the lowest iterate whose forces satisfy Coulomb with their own normal forces
+    runs = [(sl, n) for sl in slopes for n in range(max_iter // len(slopes))]
+    for slope, k in runs:
+        if converged:
+            break
+        if k == 0:  # each residual friction starts afresh from the wall at rest
+            n_prev = n_rest
+        r, y = _solve(p, capacity=(1 - slope) * mu_i * n_prev, slope=slope)
         if r.multiplier is None:  # no admissible forces with the capped joints
             r.iterations = len(hist) + 1
             r.history = hist
@@ -328,21 +344,31 @@ def solve_coulomb(bodies: Bodies, ifaces: list[Interface], mu, direction, gravit
         shear_i = np.bincount(p.corner_iface, r.shear, minlength=len(ifaces))
         mun_i = np.bincount(p.corner_iface, mu_i * n_new, minlength=len(ifaces))
         res_c = float(np.max(shear_i - mun_i, initial=0.0)) / max(float(np.max(mun_i, initial=0.0)), 1e-300)
-        dl = abs(hist[-1] - hist[-2]) / max(abs(hist[-1]), 1e-12)
+        dl = abs(hist[-1] - hist[-2]) / max(abs(hist[-1]), 1e-12) if k > 0 else float("nan")
         n_prev = relax * n_new + (1 - relax) * n_prev
-        last, y = r, y_new
-        last.coulomb_residual = res_c
-        if dl <= lambda_tol and res_c <= force_tol:
+        r.coulomb_residual = res_c
+        if res_c <= force_tol and (best is None or r.multiplier < best[0].multiplier):
+            best = (r, y)
+        if k > 0 and dl <= lambda_tol and res_c <= force_tol:
             converged = True
-            break
+    if best is None:
+        last = r
+        last.status = "not_converged"
+        last.message = (f"the non-associative iteration did not converge in {max_iter} steps and no iterate "
+                        f"satisfied Coulomb (last relative change of lambda {dl:.2g}; shear above mu N "
+                        f"{res_c:.2g} of the largest mu N)")
+    else:
+        final = hist[-1]
+        last, y = best
+        if not converged or last.multiplier != final:
+            last.message = (f"the lowest of {len(hist) - 1} iterates whose forces satisfy Coulomb with their own "
+                            f"normal forces; the iteration " + (f"converged to {final:.6g}" if converged else
+                            f"did not settle (last relative change of lambda {dl:.2g})"))
     if y is not None:
         last.velocity = _normalise(_velocities(p, y, bodies), bodies, ifaces)
     last.iterations = len(hist)
     last.history = hist
-    if not converged:
-        last.status = "not_converged"
-        last.message = (f"the non-associative iteration did not converge in {max_iter} steps "
-                        f"(last relative change of lambda {dl:.2g}; shear above mu N {res_c:.2g} of the largest mu N)")
+    last.converged = converged
     last.solve_s = time.perf_counter() - t0
     return last
 

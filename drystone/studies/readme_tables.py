@@ -43,6 +43,9 @@ warning. Blocks (``BLOCKS``):
   (results/crosscheck/report.md; ``make crosscheck XC=all``);
 * ``shape``: the shape study's results per wall variant, its answers and cost
   (results/shape/report.md; ``make shape-study``);
+* ``limit_dem``: the rigid limit angles (both frictions) of the tilt-table walls and the shape
+  study's walls beside their published DEM angles (results/limit_dem/report.md;
+  ``python -m drystone.studies.limit_dem``);
 * ``site``: the site study's retained vs free-standing table, its rock vs surface table and
   cost (results/site/report.md; ``make site-study``).
 
@@ -257,6 +260,20 @@ def crosscheck(results: Path) -> str:
     return "\n\n".join(out) + "\n\n" + _source_note(p, results=results)
 
 
+def limit_dem(results: Path) -> str:
+    """The limit angles beside the DEM's: the tilt-table walls per seed, the shape study's
+    walls over their seeds (results/limit_dem/report.md)."""
+    p = results / "limit_dem" / "report.md"
+    out = [first_table_after(p, "Tilt-table walls")]
+    try:
+        out.append(first_table_after(p, "Shape study's walls"))
+    except Missing:
+        out.append("The shape study's walls: not computed in this report (`python -m drystone.studies.limit_dem "
+                   "--only shape`); the earlier table, with the older non-associative iteration, is in "
+                   "docs/limit-analysis.md.")
+    return "\n\n".join(out + [_source_note(p, results=results)])
+
+
 def _plain(text: str) -> str:
     """A sentence of bench.json in user words: the speed goal's baseline is the 1.6 ms/step
     of the uncompiled step the compiled one replaced (``drystone.bench.BASELINE_MS``), not a
@@ -332,7 +349,7 @@ BLOCKS = {"bench": bench, "verification": verification, "tilt": tilt, "tilt_chec
           "sacsayhuaman_table3": sacsayhuaman_table3, "free_decay": free_decay, "restitution": restitution,
           "restitution_curve": restitution_curve, "identification": identification,
           "fragility": fragility, "crosscheck": crosscheck, "shape": shape,
-          "site": site, "pulse_overturning": pulse_overturning}
+          "site": site, "pulse_overturning": pulse_overturning, "limit_dem": limit_dem}
 
 
 def documents(root: Path | None = None) -> list[Path]:
