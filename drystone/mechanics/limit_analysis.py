@@ -89,6 +89,11 @@ _LETTERS = "xyzXYZ"
 #: problems, degenerate (many corners with the same lever), 5-10 times faster than its
 #: dual simplex (``make bench``, section limit)
 METHOD = "highs-ipm"
+#: where highspy and highspy-extras are installed (requirements.txt), HiGHS 1.15's direct
+#: interior point HiPO instead: the 1000-stone wall's LP in about 15 CPU s instead of more
+#: than 3 min (``make bench``, section limit); no crossover (the duals of the interior
+#: solution: a collapse mechanism, possibly a combination of equivalent ones), one thread
+HIPO_OPTIONS = {"solver": "hipo", "run_crossover": "off", "threads": 1}
 
 
 @dataclass
@@ -256,21 +261,90 @@ def _solve(p: Problem, capacity=None, slope: float = 0.0, rest: bool = False) ->
         c[:] = 0.0
         c[:p.ncorner if not p.cone else ncol] = 1.0
         bounds[-1] = (0.0, 0.0)
-    res = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=p.b, bounds=bounds, method=METHOD)
+    if _highspy() is not None:
+        status, message, x, y = _solve_hipo(c, A_eq, p.b, A_ub, b_ub, bounds)
+    else:
+        res = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=p.b, bounds=bounds, method=METHOD)
+        status, message, x = res.status, res.message, res.x
+        y = None if res.eqlin is None else np.asarray(res.eqlin.marginals)
     dt = time.perf_counter() - t0
-    if res.status == 2:
-        return Result("infeasible", None, res.message, solve_s=dt), None
-    if res.status == 3:
-        return Result("unbounded", None, res.message, solve_s=dt), None
-    if res.status != 0:
-        return Result("failed", None, res.message, solve_s=dt), None
-    lam = float(res.x[-1])
-    xs = res.x[:-1] * p.force_scale
+    if status == 2:
+        return Result("infeasible", None, message, solve_s=dt), None
+    if status == 3:
+        return Result("unbounded", None, message, solve_s=dt), None
+    if status != 0:
+        return Result("failed", None, message, solve_s=dt), None
+    lam = float(x[-1])
+    xs = x[:-1] * p.force_scale
     normal = xs.reshape(p.ncorner, p.facets).sum(axis=1) if p.cone else xs[:p.ncorner]
-    r = Result("collapse" if lam >= 0 else "cannot_stand", lam, res.message, normal=normal, solve_s=dt)
+    r = Result("collapse" if lam >= 0 else "cannot_stand", lam, message, normal=normal, solve_s=dt)
     if not p.cone:
         r.shear = xs[p.ncorner:].reshape(p.ncorner, p.facets).sum(axis=1)
-    return r, np.asarray(res.eqlin.marginals)
+    return r, y
+
+
+def _highspy():
+    """highspy with HiGHS's direct interior point (HiPO: needs highspy-extras' BLAS and
+    METIS), or None (then scipy's HiGHS 1.2, ``METHOD``)."""
+    global _HIGHSPY
+    if _HIGHSPY is None:
+        try:
+            import highspy
+            import highspy_extras  # noqa: F401  (HiPO's BLAS, METIS, AMD)
+            _HIGHSPY = highspy
+        except ImportError:
+            _HIGHSPY = False
+    return _HIGHSPY or None
+
+
+_HIGHSPY = None
+
+
+def _solve_hipo(c, A_eq, b_eq, A_ub=None, b_ub=None, bounds=None):
+    """min c x, A_eq x = b_eq, A_ub x <= b_ub, x >= 0 but the last (free), by HiGHS's HiPO
+    (``HIPO_OPTIONS``: one thread, no crossover). Returns (status as scipy's linprog: 0
+    optimal, 2 infeasible, 3 unbounded, 4 other), message, x, the equality rows' duals.
+    ``bounds``: (n, 2) column bounds as linprog's (default: x >= 0 but the last, free)."""
+    hs = _highspy()
+    A = A_eq if A_ub is None else sparse.vstack([A_eq, A_ub])
+    A = sparse.csc_matrix(A)
+    A.eliminate_zeros()
+    n_eq = A_eq.shape[0]
+    lo = np.asarray(b_eq, float) if A_ub is None else np.r_[b_eq, np.full(A_ub.shape[0], -hs.kHighsInf)]
+    up = np.asarray(b_eq, float) if A_ub is None else np.r_[b_eq, b_ub]
+    n = A.shape[1]
+    lp = hs.HighsLp()
+    lp.num_col_, lp.num_row_ = n, A.shape[0]
+    lp.col_cost_ = np.asarray(c, float)
+    if bounds is None:
+        bounds = np.zeros((n, 2))
+        bounds[:, 1] = np.inf
+        bounds[-1, 0] = -np.inf
+    bounds = np.clip(np.asarray(bounds, float), -hs.kHighsInf, hs.kHighsInf)
+    lp.col_lower_ = np.ascontiguousarray(bounds[:, 0])
+    lp.col_upper_ = np.ascontiguousarray(bounds[:, 1])
+    lp.row_lower_, lp.row_upper_ = lo, up
+    lp.a_matrix_.format_ = hs.MatrixFormat.kColwise
+    lp.a_matrix_.start_, lp.a_matrix_.index_, lp.a_matrix_.value_ = A.indptr, A.indices, A.data
+    h = hs.Highs()
+    h.setOptionValue("output_flag", False)
+    for k, v in HIPO_OPTIONS.items():
+        h.setOptionValue(k, v)
+    h.passModel(lp)
+    h.run()
+    st = h.getModelStatus()
+    msg = h.modelStatusToString(st)
+    if st == hs.HighsModelStatus.kOptimal:
+        sol = h.getSolution()
+        return 0, msg, np.asarray(sol.col_value), np.asarray(sol.row_dual)[:n_eq]
+    if st == hs.HighsModelStatus.kInfeasible:
+        return 2, msg, None, None
+    if st in (hs.HighsModelStatus.kUnbounded, hs.HighsModelStatus.kUnboundedOrInfeasible):
+        if st == hs.HighsModelStatus.kUnboundedOrInfeasible:  # tell them apart: feasibility at lambda = 0 cost
+            s2, m2, _, _ = _solve_hipo(np.zeros(n), A_eq, b_eq, A_ub, b_ub, bounds)
+            return (3 if s2 == 0 else 2), msg, None, None
+        return 3, msg, None, None
+    return 4, msg, None, None
 
 
 def _velocities(p: Problem, y: np.ndarray, bodies: Bodies) -> np.ndarray:
