@@ -163,7 +163,7 @@ def report_markdown(data: dict) -> str:
           f"{'-' if t.get('reaction_drop_deg') is None else format(t['reaction_drop_deg'], '.2f')} | "
           f"{_limit_cell(t.get('limit'))} |", "",
           "The rigid limit: the same wall of rigid stones as built (drystone/analyses/limit.py, "
-          "docs/limit-analysis.md), an upper reference for the reaction drop: the DEM's joints are compliant.", "", "## Modal", ""]
+          "docs/limit-analysis.md): usually above the DEM's reaction drop (compliant joints), not a bound.", "", "## Modal", ""]
     m = p["modal"]
     L.append(f"Skipped: {m['skipped']}." if "skipped" in m else
              f"Frequencies: {', '.join(f'{x:.3g}' for x in m['frequencies_hz'])} Hz. [Modal report]({m['report']})")

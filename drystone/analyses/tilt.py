@@ -29,7 +29,7 @@ Writes into results/<case name>/tilt/ (or ``--out``): ``tilt.json`` ({"direction
 "first_stone", "collapsed_stones", "reached", "run", "rate_check", "limit"}}, protocol, provenance);
 ``limit``: the rigid-block limit angles of the same wall as built, {"associative_deg",
 "coulomb_deg", "associative_status", "coulomb_status", "note"} (drystone/analyses/limit.py
-``beside_dem``: an upper reference for the DEM's reaction-drop angle, docs/limit-analysis.md),
+``beside_dem``: usually above the DEM's reaction-drop angle, not a bound, docs/limit-analysis.md),
 ``tilt.png`` (largest stone displacement against tilt, per direction) and ``report.html``.
 """
 from __future__ import annotations
@@ -284,8 +284,8 @@ def report_markdown(data: dict) -> str:
          f"**Headline angle** = {data['headline']}. The reaction-drop angle (the Sacsayhuaman paper's reading: the "
          "vertical reaction of the moving stones 5 % below their weight) and the detection angle are details.", "",
          "Rigid limit: the tilt angle atan(lambda) at which the same wall of rigid stones, as built, collapses "
-         "(drystone/analyses/limit.py; associative / Coulomb friction): an upper reference for the reaction drop, "
-         "the DEM's joints being compliant.", "",
+         "(drystone/analyses/limit.py; associative / Coulomb friction): usually above the DEM's reaction drop, "
+         "the DEM's joints being compliant, but not a bound (docs/limit-analysis.md).", "",
          "| towards | headline (onset) deg | reaction drop deg | detected deg | first stone | collapsed stones | "
          "rate check | rigid limit deg (assoc. / Coulomb) |", "|---|---|---|---|---|---|---|---|"]
     for d, r in data["directions"].items():
