@@ -85,15 +85,25 @@ RELAX = 0.5
 SLOPE = 0.3
 MAX_ITER = 60
 _LETTERS = "xyzXYZ"
+#: coefficients of the equilibrium rows (forces over the heaviest weight, moments over the
+#: body's size: order 1) below this are round-off of exact zeros and left out (HiGHS drops
+#: those under 1e-9 itself)
+ZERO = 1e-12
 #: HiGHS's interior-point method with crossover (a vertex solution and its duals): on these
 #: problems, degenerate (many corners with the same lever), 5-10 times faster than its
 #: dual simplex (``make bench``, section limit)
 METHOD = "highs-ipm"
 #: where highspy and highspy-extras are installed (requirements.txt), HiGHS 1.15's direct
-#: interior point HiPO instead: the 1000-stone wall's LP in about 15 CPU s instead of more
-#: than 3 min (``make bench``, section limit); no crossover (the duals of the interior
-#: solution: a collapse mechanism, possibly a combination of equivalent ones), one thread
-HIPO_OPTIONS = {"solver": "hipo", "run_crossover": "off", "threads": 1}
+#: interior point HiPO instead: no crossover (the duals of the interior solution: a collapse
+#: mechanism, possibly a combination of equivalent ones), one thread, its Newton systems as
+#: normal equations (one row per body DOF: 6 per stone) ordered by AMD, no presolve. The
+#: 1000-stone wall's LP (``make bench``, section limit; CPU s, one process): 16.5 with HiPO's
+#: default (augmented system, 96 600 unknowns, 5 s of ordering), 11.9 as normal equations after
+#: presolve (its reductions spoil the ordering: 3.4 M non-zeros in the factor), 4.4 as here
+#: (1.5 M; METIS 5.1, RCM 15); 22 interior-point iterations each way; more than 3 min with
+#: scipy's HiGHS 1.2. The same LP, so the same lambda (to the solver's tolerance, 1e-8)
+HIPO_OPTIONS = {"solver": "hipo", "run_crossover": "off", "threads": 1, "presolve": "off",
+                "hipo_system": "normaleq", "hipo_ordering": "amd"}
 
 
 @dataclass
@@ -223,7 +233,9 @@ def assemble(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.
             c_i.append(np.flatnonzero(ok))
             v_i.append(sign * val[ok])
     nr = len(rows)
-    A = sparse.csr_matrix((np.concatenate(v_i), (np.concatenate(r_i), np.concatenate(c_i))), shape=(nr, len(u)))
+    v_i, r_i, c_i = np.concatenate(v_i), np.concatenate(r_i), np.concatenate(c_i)
+    nz = np.abs(v_i) > ZERO  # round-off of exact zeros (a ray's moment about an axis it meets)
+    A = sparse.csr_matrix((v_i[nz], (r_i[nz], c_i[nz])), shape=(nr, len(u)))
     b = np.zeros(nr)
     live = np.zeros(nr)
     row_scale = np.where(rows[:, 1] < 3, 1.0, 1.0 / bodies.size[rows[:, 0]]) if nr else np.zeros(0)
@@ -300,7 +312,7 @@ def _highspy():
 _HIGHSPY = None
 
 
-def _solve_hipo(c, A_eq, b_eq, A_ub=None, b_ub=None, bounds=None):
+def _solve_hipo(c, A_eq, b_eq, A_ub=None, b_ub=None, bounds=None, presolve: str | None = None):
     """min c x, A_eq x = b_eq, A_ub x <= b_ub, x >= 0 but the last (free), by HiGHS's HiPO
     (``HIPO_OPTIONS``: one thread, no crossover). Returns (status as scipy's linprog: 0
     optimal, 2 infeasible, 3 unbounded, 4 other), message, x, the equality rows' duals.
@@ -330,6 +342,8 @@ def _solve_hipo(c, A_eq, b_eq, A_ub=None, b_ub=None, bounds=None):
     h.setOptionValue("output_flag", False)
     for k, v in HIPO_OPTIONS.items():
         h.setOptionValue(k, v)
+    if presolve is not None:
+        h.setOptionValue("presolve", presolve)
     h.passModel(lp)
     h.run()
     st = h.getModelStatus()
@@ -344,6 +358,10 @@ def _solve_hipo(c, A_eq, b_eq, A_ub=None, b_ub=None, bounds=None):
             s2, m2, _, _ = _solve_hipo(np.zeros(n), A_eq, b_eq, A_ub, b_ub, bounds)
             return (3 if s2 == 0 else 2), msg, None, None
         return 3, msg, None, None
+    if HIPO_OPTIONS.get("presolve") == "off" and presolve is None:
+        # without presolve HiPO cannot tell some infeasible problems (a stone touching nothing:
+        # an empty equilibrium row) from a failure: once more with HiGHS's presolve
+        return _solve_hipo(c, A_eq, b_eq, A_ub, b_ub, bounds, presolve="on")
     return 4, msg, None, None
 
 
