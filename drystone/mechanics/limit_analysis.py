@@ -171,11 +171,15 @@ class Problem:
 
 
 def _basis(n: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    e1 = d - (d @ n) * n
-    if np.linalg.norm(e1) < 1e-9:
-        a = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-        e1 = a - (a @ n) * n
-    e1 = e1 / np.linalg.norm(e1)
+    """Per interface normal n (k, 3): e1 the load direction d's projection on the interface
+    plane (normalised; where d is along n, a fixed axis's), e2 = n x e1."""
+    n = np.asarray(n, float).reshape(-1, 3)
+    e1 = d - (n @ d)[:, None] * n
+    along = np.linalg.norm(e1, axis=1) < 1e-9
+    if along.any():
+        a = np.where((np.abs(n[along, 0]) < 0.9)[:, None], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
+        e1[along] = a - (a * n[along]).sum(axis=1)[:, None] * n[along]
+    e1 /= np.linalg.norm(e1, axis=1)[:, None]
     return e1, np.cross(n, e1)
 
 
@@ -199,18 +203,12 @@ def assemble(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.
     free_w = bodies.mass[~bodies.fixed] * np.linalg.norm(g)
     force_scale = float(free_w.max()) if len(free_w) else 1.0
     ang = 2 * np.pi * np.arange(facets) / facets
-    cx, ci, cn, cdirs = [], [], [], []
-    for k, f in enumerate(ifaces):
-        e1, e2 = _basis(f.normal, d)
-        dirs = np.outer(np.cos(ang), e1) + np.outer(np.sin(ang), e2)
-        cx.append(f.polygon)
-        ci.append(np.full(len(f.polygon), k))
-        cn.append(np.broadcast_to(f.normal, f.polygon.shape))
-        cdirs.append(np.broadcast_to(dirs, (len(f.polygon), facets, 3)))
-    cx = np.concatenate(cx) if cx else np.zeros((0, 3))
-    ci = np.concatenate(ci).astype(np.int64) if ci else np.zeros(0, np.int64)
-    cn = np.concatenate(cn) if cn else np.zeros((0, 3))
-    cdirs = np.concatenate(cdirs) if cdirs else np.zeros((0, facets, 3))
+    cx, ci = _corners(ifaces)
+    normals = np.array([f.normal for f in ifaces], float).reshape(-1, 3)
+    e1, e2 = _basis(normals, d)
+    cn = normals[ci]
+    # (corner, facet, 3): the facet directions of the corner's interface
+    cdirs = (np.cos(ang)[None, :, None] * e1[ci][:, None, :] + np.sin(ang)[None, :, None] * e2[ci][:, None, :])
     nc = len(cx)
     cmu = mu_i[ci]
     if cone:  # corner c's ray k is column c * facets + k
@@ -465,14 +463,25 @@ def solve_coulomb(bodies: Bodies, ifaces: list[Interface], mu, direction, gravit
     return last
 
 
+def _corners(ifaces: list[Interface]) -> tuple[np.ndarray, np.ndarray]:
+    """All interfaces' corners (nc, 3) m and the interface of each."""
+    if not ifaces:
+        return np.zeros((0, 3)), np.zeros(0, np.int64)
+    cx = np.concatenate([f.polygon for f in ifaces])
+    ci = np.repeat(np.arange(len(ifaces)), [len(f.polygon) for f in ifaces])
+    return cx, ci
+
+
 def _normalise(v: np.ndarray, bodies: Bodies, ifaces: list[Interface]) -> np.ndarray:
     """Scale the velocities so that the largest speed at any interface corner is 1."""
+    cx, ci = _corners(ifaces)
     top = 0.0
-    for f in ifaces:
-        for b in (f.a, f.b):
-            if not bodies.fixed[b]:
-                w = v[b, :3] + np.cross(v[b, 3:], f.polygon - bodies.centroid[b])
-                top = max(top, float(np.linalg.norm(w, axis=1).max()))
+    for side in ("a", "b"):
+        body = np.array([getattr(f, side) for f in ifaces], np.int64)[ci]
+        free = ~bodies.fixed[body]
+        body, x = body[free], cx[free]
+        w = v[body, :3] + np.cross(v[body, 3:], x - bodies.centroid[body])
+        top = max(top, float(np.linalg.norm(w, axis=1).max(initial=0.0)))
     return v / top if top > 0 else v
 
 
