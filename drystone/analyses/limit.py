@@ -119,7 +119,7 @@ def one(wall: Wall, towards: str, friction: str, facets: int = la.FACETS) -> tup
                             "cannot carry its own weight (a stone resting on nothing, an overhang)",
                             "unbounded": "no multiplier makes the wall collapse: no stone can move",
                             }.get(r.status, f"the LP solver failed: {r.message}")
-    elif r.status == "not_converged" or r.message.startswith("the lowest"):
+    elif r.status == "not_converged":
         entry["message"] = r.message
     if friction == "coulomb":
         entry["converged"] = r.converged
