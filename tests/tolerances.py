@@ -848,3 +848,9 @@ LIMIT_LP_REL = 1e-6
 #: limit_analysis.LAMBDA_TOL (1e-4) relative between iterations; the value may still move by
 #: that much, so 1e-4 x 10
 LIMIT_ITERATION_REL = 1e-3
+
+#: the limit multiplier of a settled wall against the same wall as built, per metre of the
+#: largest settlement delta over the smallest stone dimension b: lambda of a rocking stack is
+#: a ratio of lengths (b / 2h), each moved by at most delta as the stones settle and tilt, so
+#: |d lambda| / lambda <= delta / b + delta / h <= 2 delta / b
+LIMIT_SETTLED_PER_SETTLEMENT = 2.0
