@@ -844,7 +844,13 @@ SAMPLE_MEAN_SIGMAS = 4.0
 #: stone's size (entries of order one), so the optimum is good to ~1e-7 relative; margin 10
 LIMIT_LP_REL = 1e-6
 #: the non-associative iteration against the associative value where the mechanism is pure
-#: rocking (friction never governs): it stops when lambda changes by less than
-#: limit_analysis.LAMBDA_TOL (1e-4) relative between iterations; the value may still move by
-#: that much, so 1e-4 x 10
+#: rocking (friction never governs): it stops when the change of lambda still to come
+#: (its last step, or the geometric tail of its last steps) is below limit_analysis.LAMBDA_TOL
+#: (1e-4) relative; the estimate can understate a creeping tail, so 1e-4 x 10
 LIMIT_ITERATION_REL = 1e-3
+
+#: the limit multiplier of a settled wall against the same wall as built, per metre of the
+#: largest settlement delta over the smallest stone dimension b: lambda of a rocking stack is
+#: a ratio of lengths (b / 2h), each moved by at most delta as the stones settle and tilt, so
+#: |d lambda| / lambda <= delta / b + delta / h <= 2 delta / b
+LIMIT_SETTLED_PER_SETTLEMENT = 2.0

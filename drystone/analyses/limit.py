@@ -5,7 +5,8 @@ body force lambda x (self-weight), both frictions, in seconds (no YADE, no run).
 writes results/<case>/limit/: limit.json, mechanism_<dir>_<friction>.png (stones coloured by
 their virtual speed on the wall's elevation and in 3D) and report.html.
 
-The wall is the case's geometry as built (any input path: block file, generators,
+The wall is the case's geometry as built, or with ``--settled`` after the case's settling
+run (``settled_wall``: YADE, the modal analysis's settling stages) (any input path: block file, generators,
 outlines, DXF, meshes; a stone of several convex parts is one body), its stones' masses
 from the case's materials, friction per pair as the runs take it
 (``drystone.mechanics.contact.pair_properties``: the smaller mu, a joint's own mu where the
@@ -41,7 +42,9 @@ NAME = "limit"
 class Wall:
     """A case's wall for the analysis: ``bodies`` and ``ifaces`` (``limit_analysis``), ``mu``
     per interface, ``gravity`` m/s^2 (magnitude), ``parts`` per body (convex parts, m),
-    ``roles`` per body, ``name`` and ``ignored`` (the case's loads this analysis leaves out)."""
+    ``roles`` per body, ``name`` and ``ignored`` (the case's loads this analysis leaves out);
+    ``settlement_m``: the largest vertex displacement of a settled wall from as built (None
+    as built)."""
     name: str
     bodies: la.Bodies
     ifaces: list
@@ -50,6 +53,7 @@ class Wall:
     parts: list
     roles: list
     ignored: list
+    settlement_m: float | None = None
 
 
 def wall_of(bs: bf.BlockSet, mats: dict, gravity: float, name: str = "", ignored=()) -> Wall:
@@ -89,6 +93,55 @@ def load_wall(case_path, overrides=()) -> Wall:
     return wall_of(bs, mats, case["physics"]["gravity"], case["case"]["name"], ignored)
 
 
+def settled_wall(case_path, overrides=(), root=None, log=print) -> Wall:
+    """The wall of a case after the modal analysis's settling run (its gravity stages, YADE;
+    the run in ``root``/runs/settle, ``root`` default the analysis folder, reused when its
+    inputs are unchanged): the stones at
+    their settled positions (platform frame), masses and centroids of the moved stones,
+    friction as built, and the interfaces by the face test on the settled stones with the
+    tolerance of the largest settlement (a vertex's displacement from as built), at least
+    ``interfaces.TOL``: faces that settling tilted or pressed into each other by up to that
+    much still count as touching, their common polygon (on the first stone's face) the
+    interface."""
+    from drystone.analyses import common
+    from drystone.analyses import modal as modal_analysis
+    from drystone.mechanics import modal as modal_mech
+    from drystone.postprocess import identification as idf
+    from drystone.postprocess import summary as summ
+    from drystone.simulate import RunError
+
+    case_path = Path(case_path).expanduser().resolve()
+    built = load_wall(case_path, overrides)
+    stages, _ = modal_analysis.settle_stages(case_path, overrides)
+    root = common.output_dir(case_path, NAME, root)
+    done = common.run_jobs(case_path, [("settle", [modal_analysis.stages_override(stages)])], root, "limit_settle",
+                           list(overrides), log=log)
+    st = done["settle"]
+    if st["status"] != "done" or st.get("collapsed"):
+        raise RunError(f"{case_path}: the settling run " + ("failed: " + str(st.get("error")) if st["status"] != "done"
+                                                              else f"collapsed (stones {st.get('collapsed_stones')})"))
+    run_dir = Path(st["run_dir"])
+    asm = idf.wall_assembly(run_dir, time_s=float(np.asarray(summ.load_histories(run_dir)["t"])[-1]))
+    by_id = {bid: k for k, bid in enumerate(asm.ids)}
+    parts, cen = [], []
+    moved = 0.0
+    for b, bid in enumerate(built.bodies.ids):
+        k = by_id[bid]
+        v = asm.vertices[k]
+        ps = [np.asarray(p, float) for p in (v if isinstance(v, list) else [v])]
+        parts.append(ps)
+        moved = max(moved, max(float(np.abs(p - q).max()) for p, q in zip(ps, built.parts[b])))
+        cen.append(modal_mech.mass_properties(ps, float(asm.density[k]))[1])
+    tol = max(itf.TOL, moved)
+    bodies = la.Bodies(built.bodies.ids, built.bodies.mass, np.array(cen), built.bodies.fixed, built.bodies.blocked,
+                       built.bodies.size)
+    ifaces = itf.find(parts, bodies.fixed, tol)
+    mu_of = {tuple(sorted((f.a, f.b))): m for f, m in zip(built.ifaces, built.mu)}
+    mu_default = float(built.mu.min()) if len(built.mu) else 0.0
+    mu = np.array([mu_of.get(tuple(sorted((f.a, f.b))), mu_default) for f in ifaces])
+    return Wall(built.name, bodies, ifaces, mu, built.gravity, parts, built.roles, built.ignored, moved)
+
+
 def directions(towards) -> list[str]:
     """The load directions asked for: names of TOWARDS, or "all"."""
     out = []
@@ -119,7 +172,7 @@ def one(wall: Wall, towards: str, friction: str, facets: int = la.FACETS) -> tup
                             "cannot carry its own weight (a stone resting on nothing, an overhang)",
                             "unbounded": "no multiplier makes the wall collapse: no stone can move",
                             }.get(r.status, f"the LP solver failed: {r.message}")
-    elif r.status == "not_converged" or r.message.startswith("the lowest"):
+    elif r.status == "not_converged":
         entry["message"] = r.message
     if friction == "coulomb":
         entry["converged"] = r.converged
@@ -281,9 +334,11 @@ def markdown(wall: Wall, data: dict, figures: list[str]) -> str:
     return "\n".join(lines)
 
 
-def limit(case, towards=("+y",), friction=FRICTIONS, out=None, overrides=(), facets: int = la.FACETS) -> dict:
+def limit(case, towards=("+y",), friction=FRICTIONS, out=None, overrides=(), facets: int = la.FACETS,
+          settled: bool = False) -> dict:
     """Run the analysis on a case file; writes limit.json, the figures and report.html into
-    the analysis folder (``common.output_dir``); returns what limit.json holds."""
+    the analysis folder (``common.output_dir``); returns what limit.json holds. ``settled``:
+    the wall after its settling run (``settled_wall``; YADE) instead of as built."""
     from drystone.analyses import common
 
     frictions = tuple(f for f in FRICTIONS if f in friction)
@@ -293,9 +348,10 @@ def limit(case, towards=("+y",), friction=FRICTIONS, out=None, overrides=(), fac
     if not (isinstance(facets, int) and facets >= 3):
         raise CaseError(f"--facets: an integer >= 3 (the friction pyramid's edges), got {facets!r}")
     out_dir = common.output_dir(case, NAME, out)
-    wall = load_wall(case, overrides)
+    wall = settled_wall(case, overrides, out_dir) if settled else load_wall(case, overrides)
     data, results = analyse(wall, dirs, frictions, facets)
-    data.update({"case": str(case), "geometry": "as built", "stones": int((~wall.bodies.fixed).sum()),
+    data.update({"case": str(case), "geometry": "settled" if settled else "as built",
+                 "settlement_m": wall.settlement_m, "stones": int((~wall.bodies.fixed).sum()),
                  "fixed_bodies": int(wall.bodies.fixed.sum()), "interfaces": len(wall.ifaces),
                  "corners": int(sum(len(f.polygon) for f in wall.ifaces)), "facets": facets,
                  "mu_range": [float(wall.mu.min()), float(wall.mu.max())] if len(wall.mu) else [0.0, 0.0],
@@ -329,11 +385,16 @@ def add_arguments(p) -> None:
     p.add_argument("--facets", type=int, default=la.FACETS,
                    help=f"edges of the friction pyramid at each corner (default {la.FACETS}: exact along the load, "
                         "at most 7.6 %% low between; 4: about twice as fast, up to 29 %% low at 45 deg)")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--settled", action="store_true",
+                   help="the wall after its settling run (YADE: the case's gravity stages, seconds once the kernels "
+                        "are compiled), interfaces by the face test within the settlement")
+    g.add_argument("--as-built", action="store_true", help="the wall as built (the default)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override a case key")
 
 
 def main(args) -> int:
-    d = limit(args.case, args.towards or ["+y"], args.friction, args.out, args.set, args.facets)
+    d = limit(args.case, args.towards or ["+y"], args.friction, args.out, args.set, args.facets, settled=args.settled)
     for t, e in d["directions"].items():
         for fr, x in e["by_friction"].items():
             if x["multiplier"] is not None:

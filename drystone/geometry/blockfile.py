@@ -511,9 +511,16 @@ def _clip_convex(poly: np.ndarray, clip: np.ndarray) -> np.ndarray:
 
 
 def _ccw(p: np.ndarray) -> np.ndarray:
-    x, y = p[:, 0], p[:, 1]
-    twice = float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+    q = np.concatenate((p[1:], p[:1]))
+    twice = float(np.dot(p[:, 0], q[:, 1]) - np.dot(q[:, 0], p[:, 1]))
     return p if twice >= 0 else p[::-1]
+
+
+def _face_max(dist: np.ndarray, polygons: list) -> np.ndarray:
+    """Per face (its corner indices in ``polygons``), the largest of its corners' rows of ``dist``."""
+    sizes = [len(p) for p in polygons]
+    starts = np.r_[0, np.cumsum(sizes)[:-1]]
+    return np.maximum.reduceat(dist[np.concatenate(polygons)], starts, axis=0)
 
 
 def face_patches(va, fa: ph.Faces, vb, fb: ph.Faces, tol: float = OVERLAP_TOL):
@@ -523,25 +530,24 @@ def face_patches(va, fa: ph.Faces, vb, fb: ph.Faces, tol: float = OVERLAP_TOL):
     plane). Yields (outward normal of the face of ``va`` (3,), the patch (k, 3) m,
     counter-clockwise about that normal, in that face's plane, area m^2, perimeter m)."""
     va, vb = np.asarray(va, float), np.asarray(vb, float)
-    for na, da, pa in zip(fa.normals, fa.offsets, fa.polygons):
-        qa = va[pa]
-        for nb, db, pb in zip(fb.normals, fb.offsets, fb.polygons):
-            if np.dot(na, nb) >= 0:
-                continue
-            qb = vb[pb]
-            if np.max(np.abs(qb @ na + da)) > tol or np.max(np.abs(qa @ nb + db)) > tol:
-                continue
-            e1 = np.cross(na, [1.0, 0, 0] if abs(na[0]) < 0.9 else [0, 1.0, 0])
-            e1 /= np.linalg.norm(e1)
-            e2 = np.cross(na, e1)
-            basis = np.stack([e1, e2], axis=1)
-            patch = _clip_convex(_ccw(qa @ basis), _ccw(qb @ basis))
-            if len(patch) < 3:
-                continue
-            x, y = patch[:, 0], patch[:, 1]
-            area = 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y)))
-            perimeter = float(np.linalg.norm(np.roll(patch, -1, axis=0) - patch, axis=1).sum())
-            yield np.asarray(na, float), patch @ basis.T - da * np.asarray(na, float), area, perimeter
+    # all face pairs at once: opposite normals, each face's corners within tol of the other's plane
+    far_b = _face_max(np.abs(vb @ fa.normals.T + fa.offsets), fb.polygons)  # (faces of b, faces of a)
+    far_a = _face_max(np.abs(va @ fb.normals.T + fb.offsets), fa.polygons)  # (faces of a, faces of b)
+    touch = (fa.normals @ fb.normals.T < 0) & (far_b.T <= tol) & (far_a <= tol)
+    for i, j in zip(*np.nonzero(touch)):
+        na, da, pa = fa.normals[i], fa.offsets[i], fa.polygons[i]
+        qa, qb = va[pa], vb[fb.polygons[j]]
+        e1 = ph._cross(na, [1.0, 0, 0] if abs(na[0]) < 0.9 else [0, 1.0, 0])
+        e1 /= np.linalg.norm(e1)
+        e2 = ph._cross(na, e1)
+        basis = np.stack([e1, e2], axis=1)
+        patch = _clip_convex(_ccw(qa @ basis), _ccw(qb @ basis))
+        if len(patch) < 3:
+            continue
+        nxt = np.concatenate((patch[1:], patch[:1]))
+        area = 0.5 * abs(float(np.dot(patch[:, 0], nxt[:, 1]) - np.dot(nxt[:, 0], patch[:, 1])))
+        perimeter = float(np.sqrt(((nxt - patch) ** 2).sum(axis=1)).sum())
+        yield np.asarray(na, float), patch @ basis.T - da * np.asarray(na, float), area, perimeter
 
 
 def joined(va, fa: ph.Faces, vb, fb: ph.Faces, tol: float = OVERLAP_TOL, min_width: float = JOIN_MIN_WIDTH) -> bool:

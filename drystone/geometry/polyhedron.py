@@ -145,6 +145,13 @@ def planes_overlap(pa: tuple[np.ndarray, np.ndarray], pb: tuple[np.ndarray, np.n
 FACE_DECIMALS = 9
 
 
+def _cross(a, b) -> np.ndarray:
+    """a x b for 3-vectors or (n, 3) arrays (np.cross's overhead dominates on small arrays)."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1], a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
+                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)
+
+
 class Faces(NamedTuple):
     """The planar faces of a convex hull (``faces``)."""
     normals: np.ndarray  # (f, 3) outward unit normals
@@ -161,25 +168,29 @@ def faces(vertices, h: ConvexHull | None = None) -> Faces:
     v = np.asarray(vertices, dtype=float)
     h = hull(v) if h is None else h
     tri = v[h.simplices]
-    tri_area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
-    groups: dict[tuple, list[int]] = {}
-    for k, eq in enumerate(h.equations):
-        groups.setdefault(tuple(np.round(eq, FACE_DECIMALS)), []).append(k)
-    normals, offsets, polys, areas = [], [], [], []
-    for ks in groups.values():
-        eq = h.equations[ks[0]]
-        n = eq[:3]
-        idx = np.unique(h.simplices[ks])
-        p = v[idx]
-        c = p.mean(axis=0)
-        a = np.cross(n, [1.0, 0, 0] if abs(n[0]) < 0.9 else [0, 1.0, 0])
-        a /= np.linalg.norm(a)
-        b = np.cross(n, a)  # (a, b, n) right-handed: increasing angle is counter-clockwise about n
-        polys.append(idx[np.argsort(np.arctan2((p - c) @ b, (p - c) @ a))])
-        normals.append(n)
-        offsets.append(eq[3])
-        area = 0.0
-        for k in ks:
-            area += tri_area[k]
-        areas.append(area)
-    return Faces(np.array(normals), np.array(offsets), polys, np.array(areas))
+    tri_area = 0.5 * np.linalg.norm(_cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    # the triangles of one face: equal rounded planes, faces in the order of their first triangle
+    _, first, which = np.unique(np.round(h.equations, FACE_DECIMALS), axis=0, return_index=True,
+                                return_inverse=True)
+    order = np.argsort(first, kind="stable")
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    tri_face = rank[which.ravel()]
+    nf = len(order)
+    eq = h.equations[first[order]]
+    normals, offsets = eq[:, :3], eq[:, 3]
+    areas = np.bincount(tri_face, tri_area, minlength=nf)
+    # each face's distinct vertices, sorted by angle about its centroid
+    pairs = np.unique(tri_face[:, None] * len(v) + h.simplices)
+    face, idx = pairs // len(v), pairs % len(v)
+    count = np.bincount(face, minlength=nf)
+    c = np.stack([np.bincount(face, v[idx, k], minlength=nf) for k in range(3)], axis=1) / count[:, None]
+    ref = np.where((np.abs(normals[:, 0]) < 0.9)[:, None], [1.0, 0, 0], [0, 1.0, 0])
+    a = _cross(normals, ref)
+    a /= np.linalg.norm(a, axis=1)[:, None]
+    b = _cross(normals, a)  # (a, b, n) right-handed: increasing angle is counter-clockwise about n
+    d = v[idx] - c[face]
+    angle = np.arctan2(np.einsum("ij,ij->i", d, b[face]), np.einsum("ij,ij->i", d, a[face]))
+    idx = idx[np.lexsort((angle, face))]
+    polys = np.split(idx, np.cumsum(count)[:-1])
+    return Faces(normals, offsets, polys, areas)

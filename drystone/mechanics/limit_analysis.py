@@ -37,24 +37,26 @@ the corners not opening) and sliding (tangential velocity at the hinge).
 
 Non-associative Coulomb friction (``solve_coulomb``): associative flow makes sliding dilate
 (opening mu x slip), which the joints of a real wall do not, so the associative lambda is
-an upper estimate where sliding governs. The iterative scheme of Gilbert, Casapulla &
+an upper estimate where sliding governs. After the iterative scheme of Gilbert, Casapulla &
 Ahmed (2006, Computers & Structures 84, 873-887): repeatedly solve the problem with each
-corner's friction replaced by a modified joint whose shear capacity is fixed by the previous
-normal forces, sum_k s_vk <= (1 - s) mu N_v^(k-1) + s mu N_v, under-relaxed (N^k <- omega
-N^k + (1 - omega) N^(k-1)). The start is the wall at rest (lambda = 0) carrying its weight
-with the least total normal force, not the associative collapse state, whose lateral
-self-stress across vertical joints (paid for by associative dilatancy) would otherwise
-persist as friction a real joint does not have. Two passes of ``MAX_ITER`` / 2 LPs: s = 0
-(Gilbert's fixed capacities: a non-dilatant mechanism), then s = ``SLOPE`` (a small residual
-friction that keeps the normal forces from jumping between the LP's many equivalent
-distributions), each from the wall at rest. Converged: lambda changes by less than
-``LAMBDA_TOL`` (relative) and, per interface, the corners' shear exceeds mu x the
-interface's own normal force by less than ``FORCE_TOL`` x the largest mu N. Reported: the
-lowest iterate whose forces satisfy Coulomb with their own normal forces (within
-``FORCE_TOL``); its mechanism slips only where the shear is at the capacity mu N_prev <= mu N,
-so the value is on the safe side for that mechanism and exact at a fixed point (N = N_prev).
-No such iterate: ``not_converged`` with the last. The scheme finds a solution of the
-non-associative problem, not provably the lowest (docs/limit-analysis.md).
+interface's friction capped by the previous normal forces: per interface, the shear of its
+corners sum_v mu N_v^rays <= mu N_prev (its total normal force of the previous iterate),
+besides each corner's own pyramid (shear <= mu x its own normal force: the columns are the
+pyramid's rays plus a pure normal force per corner, so every iterate satisfies Coulomb with
+its own normal forces by construction). Where the cap governs, the mechanism slips without
+opening (non-associative); at a fixed point (N = N_prev per interface) the forces are
+Coulomb-admissible and the mechanism slips only where the shear is at mu N. The start is
+the wall at rest (lambda = 0) carrying its weight with the least total normal force, and
+each iterate's forces are, among the LP's optimal ones, those of least total normal force
+at its lambda (a second LP): a normal force nothing asks for, a squeeze across a joint
+that the mechanism does not load, would otherwise become friction capacity and ratchet
+lambda up towards the associative value. No under-relaxation (``RELAX`` = 1). Converged:
+the estimated change still to come (``_remaining``: the last step, or the tail of the
+geometric series its last two steps make) below ``LAMBDA_TOL`` relative. Not converged in
+``MAX_ITER`` LPs: ``not_converged`` with the last iterate (Coulomb-admissible). The value is
+never above the associative one (the capped set is inside the associative pyramids; an
+excess of solver tolerance is cut). The scheme finds a solution of the non-associative
+problem, not provably the lowest (docs/limit-analysis.md).
 
 Units: SI (kg, m, N); velocities are dimensionless (normalised).
 """
@@ -75,25 +77,47 @@ FACETS = 8
 MOVING = 1e-3
 #: an interface opens / slides where the relative speed exceeds this fraction of the largest
 ACTIVE = 1e-3
-#: non-associative iteration: relative change of lambda and of the normal forces (of the
-#: largest) below which it has converged; under-relaxation omega; most iterations
+#: non-associative iteration: estimated change of lambda still to come (relative) below which
+#: it has converged; the Coulomb check per interface (shear above mu N, of the largest mu N;
+#: zero by construction, checked); under-relaxation of the normal forces; most iterations
 LAMBDA_TOL = 1e-4
 FORCE_TOL = 1e-3
-RELAX = 0.5
-#: the modified joint's residual friction: shear <= (1 - SLOPE) mu N_prev + SLOPE mu N (Coulomb
-#: where N = N_prev, the fixed point; a dilatancy of atan(SLOPE mu) in the mechanism)
-SLOPE = 0.3
+RELAX = 1.0
+#: each non-associative iterate's forces: the least total normal force at lambda (1 -
+#: LEAN_BACKOFF), lambda the iterate's (its optimum is feasible only to the LP's tolerance,
+#: 1e-8), by a second LP with HiGHS's IPX after presolve (LEAN_OPTIONS: HiPO fails on these
+#: LPs, "Solve error"). A small penalty on the normal forces in the first LP instead (one LP
+#: per iteration) did not keep the split columns' vertical joint free of normal force
+LEAN_BACKOFF = 1e-7
+LEAN_OPTIONS = {"solver": "ipx", "presolve": "on"}
 MAX_ITER = 60
 _LETTERS = "xyzXYZ"
+#: coefficients of the equilibrium rows (forces over the heaviest weight, moments over the
+#: body's size: order 1) below this are round-off of exact zeros and left out (HiGHS drops
+#: those under 1e-9 itself)
+ZERO = 1e-12
 #: HiGHS's interior-point method with crossover (a vertex solution and its duals): on these
 #: problems, degenerate (many corners with the same lever), 5-10 times faster than its
 #: dual simplex (``make bench``, section limit)
 METHOD = "highs-ipm"
 #: where highspy and highspy-extras are installed (requirements.txt), HiGHS 1.15's direct
-#: interior point HiPO instead: the 1000-stone wall's LP in about 15 CPU s instead of more
-#: than 3 min (``make bench``, section limit); no crossover (the duals of the interior
-#: solution: a collapse mechanism, possibly a combination of equivalent ones), one thread
-HIPO_OPTIONS = {"solver": "hipo", "run_crossover": "off", "threads": 1}
+#: interior point HiPO instead: no crossover (the duals of the interior solution: a collapse
+#: mechanism, possibly a combination of equivalent ones), one thread, its Newton systems as
+#: normal equations (one row per body DOF: 6 per stone) ordered by AMD, no presolve. The
+#: 1000-stone wall's LP (``make bench``, section limit; CPU s, one process): 16.5 with HiPO's
+#: default (augmented system, 96 600 unknowns, 5 s of ordering), 11.9 as normal equations after
+#: presolve (its reductions spoil the ordering: 3.4 M non-zeros in the factor), 4.4 as here
+#: (1.5 M; METIS 5.1, RCM 15); 22 interior-point iterations each way; more than 3 min with
+#: scipy's HiGHS 1.2. The same LP, so the same lambda (to the solver's tolerance, 1e-8)
+HIPO_OPTIONS = {"solver": "hipo", "run_crossover": "off", "threads": 1, "presolve": "off",
+                "hipo_system": "normaleq", "hipo_ordering": "amd"}
+#: where HiPO so set up ends neither optimal, infeasible nor unbounded (HiGHS's "Solve error"
+#: or "Unknown": without presolve it cannot tell a stone touching nothing from a failure; the
+#: normal equations of the non-associative iteration's capped LPs can break down), the same
+#: LP once more with each of these changes in turn: presolve on, HiPO's augmented system,
+#: HiGHS's other interior point (IPX, no crossover)
+HIPO_FALLBACKS = ({"presolve": "on"}, {"hipo_system": "augmented", "hipo_ordering": "choose"},
+                  {"solver": "ipx"})
 
 
 @dataclass
@@ -144,8 +168,9 @@ class Problem:
     in units of ``force_scale``, moment rows divided by the body's size: ``row_scale``) of
     the corner force columns: with ``cone``, per corner the ``facets`` edge rays
     n + mu t_k of its friction pyramid (associative: every force in the pyramid is a
-    non-negative combination of them, no further row); else per corner its normal force
-    (along n) then the ``facets`` tangential directions t_k (their sum capped by a row)."""
+    non-negative combination of them, no further row); else the same rays followed by a
+    pure normal force (along n) per corner, for the non-associative iteration's caps (the
+    rays' sum times mu is the corner's shear, at most mu x its normal force)."""
     A: sparse.csr_matrix
     b: np.ndarray
     live: np.ndarray
@@ -161,11 +186,15 @@ class Problem:
 
 
 def _basis(n: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    e1 = d - (d @ n) * n
-    if np.linalg.norm(e1) < 1e-9:
-        a = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-        e1 = a - (a @ n) * n
-    e1 = e1 / np.linalg.norm(e1)
+    """Per interface normal n (k, 3): e1 the load direction d's projection on the interface
+    plane (normalised; where d is along n, a fixed axis's), e2 = n x e1."""
+    n = np.asarray(n, float).reshape(-1, 3)
+    e1 = d - (n @ d)[:, None] * n
+    along = np.linalg.norm(e1, axis=1) < 1e-9
+    if along.any():
+        a = np.where((np.abs(n[along, 0]) < 0.9)[:, None], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
+        e1[along] = a - (a * n[along]).sum(axis=1)[:, None] * n[along]
+    e1 /= np.linalg.norm(e1, axis=1)[:, None]
     return e1, np.cross(n, e1)
 
 
@@ -189,26 +218,20 @@ def assemble(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.
     free_w = bodies.mass[~bodies.fixed] * np.linalg.norm(g)
     force_scale = float(free_w.max()) if len(free_w) else 1.0
     ang = 2 * np.pi * np.arange(facets) / facets
-    cx, ci, cn, cdirs = [], [], [], []
-    for k, f in enumerate(ifaces):
-        e1, e2 = _basis(f.normal, d)
-        dirs = np.outer(np.cos(ang), e1) + np.outer(np.sin(ang), e2)
-        cx.append(f.polygon)
-        ci.append(np.full(len(f.polygon), k))
-        cn.append(np.broadcast_to(f.normal, f.polygon.shape))
-        cdirs.append(np.broadcast_to(dirs, (len(f.polygon), facets, 3)))
-    cx = np.concatenate(cx) if cx else np.zeros((0, 3))
-    ci = np.concatenate(ci).astype(np.int64) if ci else np.zeros(0, np.int64)
-    cn = np.concatenate(cn) if cn else np.zeros((0, 3))
-    cdirs = np.concatenate(cdirs) if cdirs else np.zeros((0, facets, 3))
+    cx, ci = _corners(ifaces)
+    normals = np.array([f.normal for f in ifaces], float).reshape(-1, 3)
+    e1, e2 = _basis(normals, d)
+    cn = normals[ci]
+    # (corner, facet, 3): the facet directions of the corner's interface
+    cdirs = (np.cos(ang)[None, :, None] * e1[ci][:, None, :] + np.sin(ang)[None, :, None] * e2[ci][:, None, :])
     nc = len(cx)
     cmu = mu_i[ci]
     if cone:  # corner c's ray k is column c * facets + k
         u = (cn[:, None, :] + cmu[:, None, None] * cdirs).reshape(-1, 3)
         col_corner = np.repeat(np.arange(nc), facets)
-    else:  # corner c's normal is column c, its direction k column nc + c * facets + k
-        u = np.concatenate([cn, cdirs.reshape(-1, 3)])
-        col_corner = np.concatenate([np.arange(nc), np.repeat(np.arange(nc), facets)])
+    else:  # corner c's ray k is column c * facets + k, its pure normal force column nc * facets + c
+        u = np.concatenate([(cn[:, None, :] + cmu[:, None, None] * cdirs).reshape(-1, 3), cn])
+        col_corner = np.concatenate([np.repeat(np.arange(nc), facets), np.arange(nc)])
     x = cx[col_corner]
     ia = np.array([f.a for f in ifaces], np.int64)[ci[col_corner]]
     ib = np.array([f.b for f in ifaces], np.int64)[ci[col_corner]]
@@ -223,7 +246,9 @@ def assemble(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.
             c_i.append(np.flatnonzero(ok))
             v_i.append(sign * val[ok])
     nr = len(rows)
-    A = sparse.csr_matrix((np.concatenate(v_i), (np.concatenate(r_i), np.concatenate(c_i))), shape=(nr, len(u)))
+    v_i, r_i, c_i = np.concatenate(v_i), np.concatenate(r_i), np.concatenate(c_i)
+    nz = np.abs(v_i) > ZERO  # round-off of exact zeros (a ray's moment about an axis it meets)
+    A = sparse.csr_matrix((v_i[nz], (r_i[nz], c_i[nz])), shape=(nr, len(u)))
     b = np.zeros(nr)
     live = np.zeros(nr)
     row_scale = np.where(rows[:, 1] < 3, 1.0, 1.0 / bodies.size[rows[:, 0]]) if nr else np.zeros(0)
@@ -233,10 +258,12 @@ def assemble(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.
     return Problem(A, b, live, rows, ci, cx, cmu, nc, facets, cone, force_scale, row_scale)
 
 
-def _solve(p: Problem, capacity=None, slope: float = 0.0, rest: bool = False) -> tuple[Result, np.ndarray | None]:
+def _solve(p: Problem, capacity=None, slope: float = 0.0, rest: bool = False,
+           at: float | None = None) -> tuple[Result, np.ndarray | None]:
     """One LP: maximise lambda. ``capacity`` (N, per interface) only with the capped layout:
-    sum over the interface's corners v and directions k of s_vk <= capacity + slope mu N
-    (N the interface's normal force). Returns the
+    the shear of the interface's corners (mu x their rays) <= capacity + slope mu N (N the
+    interface's normal force). ``rest``: the least total normal force at lambda = 0; ``at``:
+    the same at lambda = at. Returns the
     result (normal force per corner, N; the tangential force sum per interface, N, in
     ``shear``) and the equilibrium rows' duals (or None)."""
     t0 = time.perf_counter()
@@ -244,12 +271,13 @@ def _solve(p: Problem, capacity=None, slope: float = 0.0, rest: bool = False) ->
     # A f + (weights) + lambda (unit loads) = 0, i.e. A f - lambda live = b (assemble: b = -weights, live = -loads)
     A_eq = sparse.hstack([p.A, sparse.csr_matrix(-p.live.reshape(-1, 1))]).tocsr()
     A_ub = b_ub = None
-    if not p.cone:  # per interface, the corners' tangential forces sum to at most its capacity
+    if not p.cone:  # per interface: shear = sum over its corners of mu x (the corner's rays) <= capacity
+        # + slope mu N, N = its corners' rays + normals
         nc, m = p.ncorner, p.facets
-        ni = nc
-        rows = np.concatenate([np.repeat(np.arange(nc), m), np.arange(nc)])
-        cols = np.concatenate([nc + np.arange(nc * m), np.arange(nc)])
-        vals = np.concatenate([np.ones(nc * m), -slope * p.mu])
+        ni = int(p.corner_iface.max(initial=-1)) + 1
+        rows = np.concatenate([np.repeat(p.corner_iface, m), p.corner_iface])
+        cols = np.arange(nc * m + nc)
+        vals = np.concatenate([np.repeat((1 - slope) * p.mu, m), -slope * p.mu])
         A_ub = sparse.csr_matrix((vals, (rows, cols)), shape=(ni, ncol + 1))
         b_ub = np.asarray(capacity, float) / p.force_scale
     c = np.zeros(ncol + 1)
@@ -257,12 +285,14 @@ def _solve(p: Problem, capacity=None, slope: float = 0.0, rest: bool = False) ->
     bounds = np.zeros((ncol + 1, 2))
     bounds[:, 1] = np.inf
     bounds[-1] = (-np.inf, np.inf)
-    if rest:  # the wall at rest (lambda = 0) with the least total normal force: no self-stress
+    if rest or at is not None:  # at rest (lambda = 0), or at lambda = at, the least total normal
+        # force: no self-stress
         c[:] = 0.0
-        c[:p.ncorner if not p.cone else ncol] = 1.0
-        bounds[-1] = (0.0, 0.0)
+        c[:ncol] = 1.0
+        bounds[-1] = (at or 0.0, at or 0.0)
     if _highspy() is not None:
-        status, message, x, y = _solve_hipo(c, A_eq, p.b, A_ub, b_ub, bounds)
+        status, message, x, y = _solve_hipo(c, A_eq, p.b, A_ub, b_ub, bounds,
+                                            first=LEAN_OPTIONS if at is not None else None)
     else:
         res = linprog(c, A_ub=A_ub, b_ub=b_ub, A_eq=A_eq, b_eq=p.b, bounds=bounds, method=METHOD)
         status, message, x = res.status, res.message, res.x
@@ -276,10 +306,11 @@ def _solve(p: Problem, capacity=None, slope: float = 0.0, rest: bool = False) ->
         return Result("failed", None, message, solve_s=dt), None
     lam = float(x[-1])
     xs = x[:-1] * p.force_scale
-    normal = xs.reshape(p.ncorner, p.facets).sum(axis=1) if p.cone else xs[:p.ncorner]
+    rays = xs[:p.ncorner * p.facets].reshape(p.ncorner, p.facets).sum(axis=1)
+    normal = rays if p.cone else rays + xs[p.ncorner * p.facets:]
     r = Result("collapse" if lam >= 0 else "cannot_stand", lam, message, normal=normal, solve_s=dt)
     if not p.cone:
-        r.shear = xs[p.ncorner:].reshape(p.ncorner, p.facets).sum(axis=1)
+        r.shear = p.mu * rays
     return r, y
 
 
@@ -300,7 +331,7 @@ def _highspy():
 _HIGHSPY = None
 
 
-def _solve_hipo(c, A_eq, b_eq, A_ub=None, b_ub=None, bounds=None):
+def _solve_hipo(c, A_eq, b_eq, A_ub=None, b_ub=None, bounds=None, attempt: int = 0, first: dict | None = None):
     """min c x, A_eq x = b_eq, A_ub x <= b_ub, x >= 0 but the last (free), by HiGHS's HiPO
     (``HIPO_OPTIONS``: one thread, no crossover). Returns (status as scipy's linprog: 0
     optimal, 2 infeasible, 3 unbounded, 4 other), message, x, the equality rows' duals.
@@ -330,6 +361,8 @@ def _solve_hipo(c, A_eq, b_eq, A_ub=None, b_ub=None, bounds=None):
     h.setOptionValue("output_flag", False)
     for k, v in HIPO_OPTIONS.items():
         h.setOptionValue(k, v)
+    for k, v in (HIPO_FALLBACKS[attempt - 1] if attempt else first or {}).items():
+        h.setOptionValue(k, v)
     h.passModel(lp)
     h.run()
     st = h.getModelStatus()
@@ -344,6 +377,8 @@ def _solve_hipo(c, A_eq, b_eq, A_ub=None, b_ub=None, bounds=None):
             s2, m2, _, _ = _solve_hipo(np.zeros(n), A_eq, b_eq, A_ub, b_ub, bounds)
             return (3 if s2 == 0 else 2), msg, None, None
         return 3, msg, None, None
+    if attempt < len(HIPO_FALLBACKS):
+        return _solve_hipo(c, A_eq, b_eq, A_ub, b_ub, bounds, attempt + 1)
     return 4, msg, None, None
 
 
@@ -381,7 +416,7 @@ def solve(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.0, 
 
 def solve_coulomb(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.0, 0.0, -9.81),
                   facets: int = FACETS, relax: float = RELAX, max_iter: int = MAX_ITER,
-                  lambda_tol: float = LAMBDA_TOL, force_tol: float = FORCE_TOL, slopes=(0.0, SLOPE)) -> Result:
+                  lambda_tol: float = LAMBDA_TOL, force_tol: float = FORCE_TOL, slope: float = 0.0) -> Result:
     """Non-associative Coulomb friction by the iterative scheme of the module docstring."""
     t0 = time.perf_counter()
     r = solve(bodies, ifaces, mu, direction, gravity, facets)
@@ -389,72 +424,103 @@ def solve_coulomb(bodies: Bodies, ifaces: list[Interface], mu, direction, gravit
         r.solve_s = time.perf_counter() - t0
         return r
     p = assemble(bodies, ifaces, mu, direction, gravity, facets, cone=False)
-    mu_i = np.broadcast_to(np.asarray(mu, float), (len(ifaces),))
-    mu_i = p.mu  # per corner
+    mu_c = p.mu  # per corner
+    mu_i = np.zeros(len(ifaces))
+    mu_i[p.corner_iface] = mu_c
+    per_iface = lambda x: np.bincount(p.corner_iface, x, minlength=len(ifaces))  # noqa: E731
     hist = [r.multiplier]
     # the start: the normal forces of the wall at rest carrying its weight with the least total
     # normal force (no self-stress locked across joints that nothing loads)
     r0, _ = _solve(assemble(bodies, ifaces, mu, direction, gravity, facets), rest=True)
-    n_rest = r0.normal if r0.normal is not None else r.normal
+    n_prev = per_iface(r0.normal if r0.normal is not None else r.normal)
     converged = False
-    dl = res_c = float("nan")
-    best = None  # the lowest iterate whose forces satisfy Coulomb with their own normal forces
-    runs = [(sl, n) for sl in slopes for n in range(max_iter // len(slopes))]
-    for slope, k in runs:
-        if converged:
-            break
-        if k == 0:  # each residual friction starts afresh from the wall at rest
-            n_prev = n_rest
-        r, y = _solve(p, capacity=(1 - slope) * mu_i * n_prev, slope=slope)
-        if r.multiplier is None:  # no admissible forces with the capped joints
-            r.iterations = len(hist) + 1
-            r.history = hist
-            r.solve_s = time.perf_counter() - t0
-            return r
+    rest_c = remaining = float("nan")
+    y = None
+    for k in range(max_iter):
+        # a corner's capacity below round-off of the largest is none (HiGHS: "excessively small row bounds")
+        cap = (1 - slope) * mu_i * n_prev
+        cap[cap < ZERO * max(float(cap.max(initial=0.0)), 1e-300)] = 0.0
+        rk, yk = _solve(p, capacity=cap, slope=slope)
+        if rk.multiplier is None:  # no admissible forces with the capped joints
+            if k == 0:
+                rk.iterations, rk.history, rk.solve_s = len(hist) + 1, hist, time.perf_counter() - t0
+                return rk
+            break  # keep the last good iterate
+        r, y = rk, yk
         hist.append(r.multiplier)
-        n_new = r.normal
-        # Coulomb with the iterate's own normal forces, per interface: its corners' shear above
-        # mu x its normal force, of the largest mu N of an interface
-        shear_i = np.bincount(p.corner_iface, r.shear, minlength=len(ifaces))
-        mun_i = np.bincount(p.corner_iface, mu_i * n_new, minlength=len(ifaces))
-        res_c = float(np.max(shear_i - mun_i, initial=0.0)) / max(float(np.max(mun_i, initial=0.0)), 1e-300)
-        dl = abs(hist[-1] - hist[-2]) / max(abs(hist[-1]), 1e-12) if k > 0 else float("nan")
-        n_prev = relax * n_new + (1 - relax) * n_prev
-        r.coulomb_residual = res_c
-        if res_c <= force_tol and (best is None or r.multiplier < best[0].multiplier):
-            best = (r, y)
-        if k > 0 and dl <= lambda_tol and res_c <= force_tol:
+        # among the LP's optimal forces (many: the problem is degenerate), those with the least
+        # total normal force: a normal force that nothing asks for (a squeeze across a joint
+        # that the mechanism does not load) would become friction capacity in the next LP and
+        # ratchet lambda up towards the associative value
+        lean, _ = _solve(p, capacity=cap, slope=slope, at=r.multiplier * (1 - LEAN_BACKOFF))
+        if lean.normal is not None:
+            r.normal, r.shear = lean.normal, lean.shear
+        # Coulomb with the iterate's own normal forces, per interface (by construction; checked):
+        # its corners' shear above mu x its normal force, of the largest mu N of an interface
+        shear_i, n_i = per_iface(r.shear), per_iface(r.normal)
+        mun_i = mu_i * n_i
+        rest_c = float(np.max(shear_i - mun_i, initial=0.0)) / max(float(np.max(mun_i, initial=0.0)), 1e-300)
+        r.coulomb_residual = rest_c
+        n_prev = relax * n_i + (1 - relax) * n_prev
+        remaining = _remaining(hist[1:])
+        if remaining <= lambda_tol and rest_c <= force_tol:
             converged = True
-    if best is None:
-        last = r
-        last.status = "not_converged"
-        last.message = (f"the non-associative iteration did not converge in {max_iter} steps and no iterate "
-                        f"satisfied Coulomb (last relative change of lambda {dl:.2g}; shear above mu N "
-                        f"{res_c:.2g} of the largest mu N)")
-    else:
-        final = hist[-1]
-        last, y = best
-        if not converged or last.multiplier != final:
-            last.message = (f"the lowest of {len(hist) - 1} iterates whose forces satisfy Coulomb with their own "
-                            f"normal forces; the iteration " + (f"converged to {final:.6g}" if converged else
-                            f"did not settle (last relative change of lambda {dl:.2g})"))
+            break
+    a_lam = hist[0]
+    if r.multiplier > a_lam:  # the capped joints' forces are inside the associative pyramids: an excess
+        # is the solvers' tolerance (a few 1e-6 relative: LEAN, 1e-8 of each LP)
+        r.multiplier = a_lam
+    if not converged:
+        r.status = "not_converged"
+        r.message = (f"the non-associative iteration did not settle in {len(hist) - 1} LPs (estimated change "
+                     f"still to come {remaining:.2g} of lambda; shear above mu N {rest_c:.2g} of the largest "
+                     f"mu N); the value is the last iterate, whose forces satisfy Coulomb with their own normal forces")
     if y is not None:
-        last.velocity = _normalise(_velocities(p, y, bodies), bodies, ifaces)
-    last.iterations = len(hist)
-    last.history = hist
-    last.converged = converged
-    last.solve_s = time.perf_counter() - t0
-    return last
+        r.velocity = _normalise(_velocities(p, y, bodies), bodies, ifaces)
+    r.iterations = len(hist)
+    r.history = hist
+    r.converged = converged
+    r.solve_s = time.perf_counter() - t0
+    return r
+
+
+def _remaining(h: list) -> float:
+    """How much (relative to the last value) the sequence h may still move: its last step,
+    or, where the last steps shrink geometrically with ratio rho < 1 (the iteration's
+    linear convergence), the tail of that series, |step| rho / (1 - rho), if larger; inf
+    with fewer than two values."""
+    if len(h) < 2:
+        return float("inf")
+    scale = max(abs(h[-1]), 1e-12)
+    d1 = h[-1] - h[-2]
+    out = abs(d1) / scale
+    if len(h) >= 3:
+        d0 = h[-2] - h[-1 - 2]
+        if d0 != 0.0 and 0.0 < d1 / d0 < 1.0:
+            rho = d1 / d0
+            out = max(out, abs(d1) * rho / (1.0 - rho) / scale)
+    return out
+
+
+def _corners(ifaces: list[Interface]) -> tuple[np.ndarray, np.ndarray]:
+    """All interfaces' corners (nc, 3) m and the interface of each."""
+    if not ifaces:
+        return np.zeros((0, 3)), np.zeros(0, np.int64)
+    cx = np.concatenate([f.polygon for f in ifaces])
+    ci = np.repeat(np.arange(len(ifaces)), [len(f.polygon) for f in ifaces])
+    return cx, ci
 
 
 def _normalise(v: np.ndarray, bodies: Bodies, ifaces: list[Interface]) -> np.ndarray:
     """Scale the velocities so that the largest speed at any interface corner is 1."""
+    cx, ci = _corners(ifaces)
     top = 0.0
-    for f in ifaces:
-        for b in (f.a, f.b):
-            if not bodies.fixed[b]:
-                w = v[b, :3] + np.cross(v[b, 3:], f.polygon - bodies.centroid[b])
-                top = max(top, float(np.linalg.norm(w, axis=1).max()))
+    for side in ("a", "b"):
+        body = np.array([getattr(f, side) for f in ifaces], np.int64)[ci]
+        free = ~bodies.fixed[body]
+        body, x = body[free], cx[free]
+        w = v[body, :3] + np.cross(v[body, 3:], x - bodies.centroid[body])
+        top = max(top, float(np.linalg.norm(w, axis=1).max(initial=0.0)))
     return v / top if top > 0 else v
 
 
