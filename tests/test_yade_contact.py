@@ -75,13 +75,13 @@ def test_push_below_friction_sticks_elastically(outdir):
 
 
 def test_push_above_friction_slides_with_coulomb_acceleration(outdir):
-    """0.8 W with mu = 0.7: uniform acceleration (0.8 - 0.7) g, within 2 % (fitted over 0.9 s
+    """0.8 W with mu = 0.7: uniform acceleration (0.8 - 0.7) g, within 2 % (fitted over 0.6 s
     from 0.1 s after the push)."""
-    s, h, _ = run_case(case(TWO[:1], SETTLE + [{"type": "rest", "duration": 1.0}],
+    s, h, _ = run_case(case(TWO[:1], SETTLE + [{"type": "rest", "duration": 0.7}],
                             [{"block": 1, "force": [0.8 * W, 0.0, 0.0], "start": PUSH_T}]), outdir)
     t = h["t"]
     x = disp(h, 1)[:, 0]
-    win = (t > PUSH_T + 0.1) & (t < PUSH_T + 1.0)
+    win = (t > PUSH_T + 0.1) & (t < PUSH_T + 0.7)
     a = 2 * np.polyfit(t[win], x[win], 2)[0]
     assert a == pytest.approx(0.1 * G, rel=tol.COULOMB_ACCELERATION_REL)
 
@@ -101,12 +101,13 @@ def test_stacked_blocks_penetrations(outdir):
 def test_drop_comes_to_rest_and_energy_never_grows(outdir):
     """A slab dropped from 1 mm: kinetic + potential + elastic energy (recorded at the
     half step) never grows by more than 1e-3 of the drop energy, and the slab comes to
-    rest at its static penetration. The step is 2e-5 s, 1/16 of the automatic one: at
+    rest at its static penetration (0.2 s: kinetic energy 3e-12 of the drop energy, 0.15 s
+    is not enough). The step is 2e-5 s, 1/16 of the automatic one: at
     the automatic step the slab moves 45 um in the step it touches down, ten times its
     static penetration, and that first step alone adds ~10 % of the drop energy (the
     penalty force starts one step late: explicit integration, not the law)."""
     boxes = [{"id": 1, "center_xy": [0.0, 0.0], "size": SLAB, "z0": 0.001}]
-    c = case(boxes, [{"type": "gravity", "duration": 0.3, "ramp": 0.0}], damping=0.08, interval=2e-4)
+    c = case(boxes, [{"type": "gravity", "duration": 0.2, "ramp": 0.0}], damping=0.08, interval=2e-4)
     c["time"] = {"step": 2e-5}
     s, h, _ = run_case(c, outdir)
     e = h["kinetic"] + h["potential"] + h["elastic"]
