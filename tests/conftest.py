@@ -45,7 +45,7 @@ _WARM_CASE = {"case": {"name": "numba_warm", "geometry": {"generator": "boxes_on
 #: 2-core machine, so only their ratios matter; files not here (under 3 s) are costed by marks
 #: (``_COST_S``, the same units). A stale figure only makes the two workers finish less together.
 _FILE_COST_S = {
-    "test_site_study.py": 89, "test_yade_contact.py": 86, "test_analyses_assess.py": 76, "test_shape_study.py": 69,
+    "test_site_study.py": 89, "test_yade_contact.py": 75, "test_analyses_assess.py": 76, "test_shape_study.py": 69,
     "test_docs_runnable.py": 52, "test_analyses_fragility.py": 49, "test_multipart_runs.py": 48,
     "test_tilt_block.py": 47, "test_restitution.py": 43, "test_yade_compiled.py": 35,
     "test_analyses_collapse.py": 34, "test_energy.py": 33, "test_analyses_tilt.py": 31,
