@@ -40,19 +40,25 @@ requires_yade = pytest.mark.skipif(not have_yade(), reason="YADE is not installe
 _WARM_CASE = {"case": {"name": "numba_warm", "geometry": {"generator": "boxes_on_platform", "mu": 0.6, "boxes": [
     {"id": 1, "center_xy": [0.0, 0.0], "size": [0.4, 0.4, 0.2]}]}},
     "stages": [{"type": "gravity", "duration": 0.002, "ramp": 0.001}], "output": {"interval": 0.001}}
-#: cost of the longest test files (s), to order the files for ``-n N``: one process (nice) on
-#: a loaded 2-core machine, so only their ratios matter; files not here are costed by marks
+#: cost of the test files (s), to order the files for ``-n N``: each file's tests' durations summed
+#: (setup, call, teardown) in one serial run of the whole suite (``-p no:xdist``, nice) on a shared
+#: 2-core machine, so only their ratios matter; files not here (under 3 s) are costed by marks
 #: (``_COST_S``, the same units). A stale figure only makes the two workers finish less together.
 _FILE_COST_S = {
-    "test_yade_contact.py": 240, "test_docs_runnable.py": 215, "test_multipart_runs.py": 200,
-    "test_analyses_collapse.py": 190, "test_analyses_fragility.py": 175, "test_site_study.py": 140,
-    "test_shape_study.py": 135, "test_analyses_tilt.py": 115,
-    "test_yade_compiled.py": 105, "test_earth_pressure_runs.py": 100, "test_sweep.py": 100, "test_damping.py": 90,
-    "test_energy.py": 85, "test_tilt_block.py": 80, "test_restitution.py": 75, "test_analyses_assess.py": 70,
-    "test_reliability_site.py": 60, "test_sacsayhuaman.py": 60, "test_reliability_run.py": 55,
-    "test_reliability_output.py": 55, "test_crosscheck.py": 55, "test_report.py": 50, "test_fragility.py": 45, "test_excitation.py": 40}
+    "test_site_study.py": 89, "test_yade_contact.py": 75, "test_analyses_assess.py": 76, "test_shape_study.py": 69,
+    "test_docs_runnable.py": 52, "test_analyses_fragility.py": 49, "test_multipart_runs.py": 48,
+    "test_tilt_block.py": 47, "test_restitution.py": 43, "test_yade_compiled.py": 35,
+    "test_analyses_collapse.py": 34, "test_energy.py": 33, "test_analyses_tilt.py": 31,
+    "test_reliability_site.py": 27, "test_damping.py": 25, "test_earth_pressure_runs.py": 25, "test_sweep.py": 24,
+    "test_fragility.py": 21, "test_reliability_run.py": 18, "test_report.py": 15, "test_reliability_output.py": 15,
+    "test_excitation.py": 15, "test_sacsayhuaman.py": 15, "test_cases_valid.py": 15, "test_regression.py": 14,
+    "test_verification.py": 12, "test_crosscheck.py": 11, "test_motions_catalogue.py": 11,
+    "test_analyses_modal.py": 10, "test_broad_phase.py": 9, "test_ogawa_3d.py": 7, "test_rocking_pulse.py": 7,
+    "test_reliability_geometry.py": 7, "test_left_model_removed.py": 6, "test_fragility_measures.py": 5,
+    "test_ogawa_study.py": 5, "test_identification.py": 5, "test_layers.py": 5, "test_polygonal_wall.py": 5,
+    "test_dxf.py": 4, "test_modal.py": 4, "test_reliability_vertices.py": 3}
 #: cost of a test (s) by its marks, for the files not in ``_FILE_COST_S``
-_COST_S = {"slow": 60.0, "yade": 15.0, "other": 0.3}
+_COST_S = {"slow": 30.0, "yade": 3.0, "other": 0.3}
 
 
 def pytest_configure(config):

@@ -1,7 +1,8 @@
 """``python -m drystone tilt`` (drystone/analyses/tilt.py) on one stone whose collapse angle
 has a closed form: the 0.2 m cube of one_block.json (mu 0.4 < b/h = 1) slides at
 atan(0.4) = 21.80 deg towards any direction. One analysis (two directions, each with its
-rate check) is run once for the module."""
+rate check) is run once for the module; its runs tilt at 5 deg/s to 15 deg (the stone stands
+still there: 15 deg is 6.8 deg below its sliding angle), then at the rate measured."""
 import json
 import math
 from pathlib import Path
@@ -20,7 +21,7 @@ CASE = paths.ROOT / "cases" / "examples" / "one_block_tilt.toml"
 def result(tmp_path_factory):
     out = tmp_path_factory.mktemp("tilt") / "tilt"
     return T.tilt(CASE, ["+y", "-x"], out=out, workers=1, rate=1.0, max_deg=30.0, rate_check=True, check_rate=0.5,
-                  log=lambda *a, **k: None)
+                  lead=(15.0, 5.0), log=lambda *a, **k: None)
 
 
 @requires_yade

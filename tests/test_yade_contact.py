@@ -44,7 +44,10 @@ def case(boxes, stages, forces=(), law="penalty_coulomb", mu=0.7, damping=0.8, i
 
 
 TWO = [{"id": 1, "center_xy": [0.0, 0.0], "size": SLAB}, {"id": 2, "center_xy": [0.6, 0.0], "size": SLAB}]
-SETTLE = [{"type": "gravity", "duration": 0.5, "ramp": 0.2}]
+#: gravity ramped over 0.2 s and held to 0.3 s: the slabs' normal (235 Hz) and shear (166 Hz)
+#: modes on the platform die out within a few hundredths of a second
+SETTLE = [{"type": "gravity", "duration": 0.3, "ramp": 0.2}]
+PUSH_T = 0.3
 
 
 def disp(h, block):
@@ -55,29 +58,30 @@ def disp(h, block):
 @pytest.mark.slow
 def test_push_below_friction_sticks_elastically(outdir):
     """0.4 W with mu = 0.7: the block deflects by F / (K_t A) (elastic joint) and stops:
-    drift between 0.5 s and 2 s after the push < 1e-7 m; the unloaded neighbour moves
-    < 1e-9 m (with YADE's stock law it creeps: test_stock_law_leaks_shear)."""
+    drift between 0.25 s and 1 s after the push below 1e-7 m per 1.5 s; the unloaded
+    neighbour moves < 1e-9 m (with YADE's stock law it creeps: test_stock_law_leaks_shear)."""
     F = 0.4 * W
-    # the run ends 2 s after the push, at the end of the drift window
-    s, h, _ = run_case(case(TWO, SETTLE + [{"type": "rest", "duration": 2.0}],
-                            [{"block": 1, "force": [F, 0.0, 0.0], "start": 0.5}]), outdir)
+    # the run ends 1 s after the push, at the end of the drift window
+    s, h, _ = run_case(case(TWO, SETTLE + [{"type": "rest", "duration": 1.0}],
+                            [{"block": 1, "force": [F, 0.0, 0.0], "start": PUSH_T}]), outdir)
     t = h["t"]
     x = disp(h, 1)[:, 0]
-    i1, i2 = np.searchsorted(t, 1.0), len(t) - 1
-    assert t[i2] == pytest.approx(2.5, abs=0.5 * (t[1] - t[0]))
-    assert abs(x[i2] - x[i1]) < tol.STICK_DRIFT_M
+    i1, i2 = np.searchsorted(t, PUSH_T + 0.25), len(t) - 1
+    assert t[i2] == pytest.approx(PUSH_T + 1.0, abs=0.5 * (t[1] - t[0]))
+    assert abs(x[i2] - x[i1]) < tol.STICK_DRIFT_RATE_M_S * (t[i2] - t[i1])
     # elastic deflection F / (K_t A); 3 % covers the slab's tilt under the push (1.5 %)
     assert x[i2] == pytest.approx(F / (1e8 * 0.16), rel=tol.ELASTIC_DEFLECTION_REL)
     assert np.abs(disp(h, 2)[:, :2]).max() < tol.NEIGHBOUR_M  # horizontal: it only settles vertically
 
 
 def test_push_above_friction_slides_with_coulomb_acceleration(outdir):
-    """0.8 W with mu = 0.7: uniform acceleration (0.8 - 0.7) g, within 2 %."""
-    s, h, _ = run_case(case(TWO[:1], SETTLE + [{"type": "rest", "duration": 1.0}],
-                            [{"block": 1, "force": [0.8 * W, 0.0, 0.0], "start": 0.5}]), outdir)
+    """0.8 W with mu = 0.7: uniform acceleration (0.8 - 0.7) g, within 2 % (fitted over 0.6 s
+    from 0.1 s after the push)."""
+    s, h, _ = run_case(case(TWO[:1], SETTLE + [{"type": "rest", "duration": 0.7}],
+                            [{"block": 1, "force": [0.8 * W, 0.0, 0.0], "start": PUSH_T}]), outdir)
     t = h["t"]
     x = disp(h, 1)[:, 0]
-    win = (t > 0.6) & (t < 1.5)
+    win = (t > PUSH_T + 0.1) & (t < PUSH_T + 0.7)
     a = 2 * np.polyfit(t[win], x[win], 2)[0]
     assert a == pytest.approx(0.1 * G, rel=tol.COULOMB_ACCELERATION_REL)
 
@@ -86,7 +90,7 @@ def test_stacked_blocks_penetrations(outdir):
     """Two stacked slabs: joint penetrations W/(K_n A) (top) and 2W/(K_n A) (bottom), 1 %."""
     boxes = [{"id": 1, "center_xy": [0.0, 0.0], "size": SLAB},
              {"id": 2, "center_xy": [0.0, 0.0], "size": SLAB, "z0": 0.04}]
-    c = case(boxes, [{"type": "gravity", "duration": 1.0, "ramp": 0.4}],
+    c = case(boxes, [{"type": "gravity", "duration": 0.5, "ramp": 0.2}],
              contacts=[{"name": "top", "blocks": [1, 2]}, {"name": "bottom", "blocks": [0, 1]}])
     s, h, spec = run_case(c, outdir)
     d0 = W / (2e8 * 0.16)
@@ -97,12 +101,13 @@ def test_stacked_blocks_penetrations(outdir):
 def test_drop_comes_to_rest_and_energy_never_grows(outdir):
     """A slab dropped from 1 mm: kinetic + potential + elastic energy (recorded at the
     half step) never grows by more than 1e-3 of the drop energy, and the slab comes to
-    rest at its static penetration. The step is 2e-5 s, 1/16 of the automatic one: at
+    rest at its static penetration (0.2 s: kinetic energy 3e-12 of the drop energy, 0.15 s
+    is not enough). The step is 2e-5 s, 1/16 of the automatic one: at
     the automatic step the slab moves 45 um in the step it touches down, ten times its
     static penetration, and that first step alone adds ~10 % of the drop energy (the
     penalty force starts one step late: explicit integration, not the law)."""
     boxes = [{"id": 1, "center_xy": [0.0, 0.0], "size": SLAB, "z0": 0.001}]
-    c = case(boxes, [{"type": "gravity", "duration": 0.3, "ramp": 0.0}], damping=0.08, interval=2e-4)
+    c = case(boxes, [{"type": "gravity", "duration": 0.2, "ramp": 0.0}], damping=0.08, interval=2e-4)
     c["time"] = {"step": 2e-5}
     s, h, _ = run_case(c, outdir)
     e = h["kinetic"] + h["potential"] + h["elastic"]

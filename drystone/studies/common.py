@@ -49,10 +49,27 @@ def search_params(cap_g: float, resolution_g: float) -> dict:
             "max_runs": MAX_RUNS}
 
 
-def tilt_protocol(case) -> dict:
+#: the small configs' shortened protocol (a pipeline check, not a result): gravity ramped over
+#: 0.5 s and held to 1 s (the cases': 1 s and 2 s), and their tilts 4 deg/s to 5 deg, then 2
+#: deg/s until collapse and 1.5 s after it (the cases': 2 and 1 deg/s, 3 s): about half the
+#: simulated time of a tilt run, a sixth less of a seismic run
+QUICK_GRAVITY = {"duration": 1.0, "ramp": 0.5}
+QUICK_TILT = {"rate": 2.0, "lead_rate": 4.0, "after_collapse": 1.5}
+
+
+def quick_gravity(quick: bool) -> list[str]:
+    """The overrides of the first (gravity) stage that shorten it to ``QUICK_GRAVITY`` where
+    ``quick`` (a small config), none otherwise."""
+    from drystone import tomlio
+
+    return [f"stages.0.{k}={tomlio.value(v)}" for k, v in QUICK_GRAVITY.items()] if quick else []
+
+
+def tilt_protocol(case, quick: bool = False) -> dict:
     """The keywords of drystone.analyses.tilt.tilt that make the tilt of a study's tilt case
     (its stages after gravity: a lead-in tilt ``to_deg``, then a tilt ``until_collapse``): the
-    same run as the case itself (towards, rates, largest tilt, time after the collapse)."""
+    same run as the case itself (towards, rates, largest tilt, time after the collapse);
+    ``quick`` (a small config): the rates and the time after the collapse of ``QUICK_TILT``."""
     from drystone.model import case as casemod
 
     st = [x for x in casemod.load(case)["stages"] if x.get("type") == "tilt"]
@@ -60,8 +77,12 @@ def tilt_protocol(case) -> dict:
     if not last.get("until_collapse") or len(st) > 2 or (len(st) == 2 and "to_deg" not in st[0]):
         raise ValueError(f"{case}: a study's tilt case has a lead-in tilt (to_deg) and a tilt until_collapse")
     lead = (float(st[0]["to_deg"]), float(st[0]["rate_deg_s"])) if len(st) == 2 else None
-    return {"towards": (last["towards"],), "rate": float(last["rate_deg_s"]), "lead": lead,
-            "max_deg": float(last["max_deg"]), "after_collapse": float(last["after_collapse"])}
+    p = {"towards": (last["towards"],), "rate": float(last["rate_deg_s"]), "lead": lead,
+         "max_deg": float(last["max_deg"]), "after_collapse": float(last["after_collapse"])}
+    if quick:
+        p.update(rate=QUICK_TILT["rate"], after_collapse=QUICK_TILT["after_collapse"],
+                 lead=lead and (lead[0], QUICK_TILT["lead_rate"]))
+    return p
 
 
 def _run_cost(run_dir: Path) -> dict:

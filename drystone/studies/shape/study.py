@@ -69,8 +69,9 @@ def tilt_wall(cfg, variant: str, seed: int, workers=1, backend="local", address=
 
     cfg = planmod.get(cfg)
     return tilt.tilt(planmod.TILT_CASE, out=planmod.wall_dir(cfg, variant, seed) / "tilt", workers=workers,
-                     backend=backend, address=address, overrides=planmod.wall_overrides(cfg, variant, seed), log=log,
-                     **sc.tilt_protocol(planmod.TILT_CASE))
+                     backend=backend, address=address, log=log,
+                     overrides=sc.quick_gravity(cfg.quick) + planmod.wall_overrides(cfg, variant, seed),
+                     **sc.tilt_protocol(planmod.TILT_CASE, cfg.quick))
 
 
 def collapse_wall(cfg, plan: dict, variant: str, seed: int, workers=None, backend="local", address=None,
@@ -521,7 +522,10 @@ def report(config="full") -> Path:
           "data/records/user/.", "",
           "## Method", "",
           "* Tilt: the `tilt` analysis with cases/shape/tilt.toml's protocol (gravity, 2 deg/s to 5 deg, then 1 deg/s "
-          "out of plane until collapse): the collapse angle as the tilt study measures it (onset of the motion that led to collapse, "
+          "out of plane until collapse)"
+          + (f"; here gravity held {sc.QUICK_GRAVITY['duration']:g} s, {sc.QUICK_TILT['lead_rate']:g} then "
+             f"{sc.QUICK_TILT['rate']:g} deg/s (every run's gravity shortened alike)" if cfg.quick else "")
+          + ": the collapse angle as the tilt study measures it (onset of the motion that led to collapse, "
           "drystone/mechanics/collapse.py), the reaction-drop angle beside it.",
           f"* PGA at collapse: the `collapse` analysis (drystone/analyses/collapse.py), its search set to a "
           f"{cfg.resolution_g:g} g grid: the first run at {cfg.pga_cap_g / 2:g} g, the cap {cfg.pga_cap_g:g} g next "

@@ -45,7 +45,7 @@ import numpy as np
 
 from drystone import atomic
 from drystone import paths, tomlio
-from drystone.studies.common import StudyFolders, write_if_changed
+from drystone.studies.common import StudyFolders, quick_gravity, write_if_changed
 from drystone.studies.shape import plan as shape_plan
 
 CASES = paths.CASES / "site"
@@ -85,6 +85,7 @@ class Config(StudyFolders):
     tilt: bool = True
     record_duration_s: float | None = None     # cut the window further (small config only)
     rest_max_s: float | None = None            # cap the rest stage below the case's (small config only)
+    quick: bool = False                        # the shortened gravity and tilt (common.QUICK_*; small config only)
     notes: tuple = ()
     results_root: str | None = None            # instead of results/ (tests)
 
@@ -94,9 +95,10 @@ CONFIGS = {
     "small": Config(name="small", out="site_small", records=("ancash1970",),
                     polarities={"free": ("+",), "retained": ("+",)}, pga_cap_g={"free": 3.2, "retained": 0.6},
                     resolution_g={"free": 1.6, "retained": 0.3}, refine_g={}, level_resolution_m=2.0,
-                    record_duration_s=0.75, rest_max_s=1.5,
+                    record_duration_s=0.75, rest_max_s=1.5, quick=True,
                     notes=("1 record cut to 0.75 s, as recorded only, 1.6 g (free) and 0.3 g (retained) brackets, "
-                           "a 2 m water-level bracket, rest at most 1.5 s: a pipeline check, not a result",)),
+                           "a 2 m water-level bracket, rest at most 1.5 s, gravity held 1 s in the seismic and tilt "
+                           "runs, tilts at 4 then 2 deg/s: a pipeline check, not a result",)),
 }
 
 
@@ -136,8 +138,10 @@ def record_case(wall: str) -> Path:
 
 
 def common_overrides(cfg: Config) -> list[str]:
-    """Every seismic run's overrides: the record and the rest cut to the config's durations."""
-    return tomlio.stage_durations({EXCITATION_STAGE: cfg.record_duration_s, REST_STAGE: cfg.rest_max_s})
+    """Every seismic run's overrides: the record and the rest cut to the config's durations,
+    gravity shortened in a quick config."""
+    return (quick_gravity(cfg.quick)
+            + tomlio.stage_durations({EXCITATION_STAGE: cfg.record_duration_s, REST_STAGE: cfg.rest_max_s}))
 
 
 def site_overrides(site: str) -> list[str]:

@@ -435,8 +435,11 @@ def write(config="full") -> Path:
         L.append(f"| {name} | {src} | {r['window_s'][0]:.2f}-{r['window_s'][1]:.2f} | {dur:.2f} | {r['pga_g']:.3f} |")
     L += ["", "## Method", "",
           "* Tilt: the platform tilted towards -y, the retained wall's open side (cases/site/tilt.toml, "
-          "retained_tilt.toml; 2 deg/s to 5 deg, then 1 deg/s until collapse): the onset and the reaction drop as the "
-          "tilt study measures them. Towards the soil is not run: the load has no passive resistance, so it cannot "
+          "retained_tilt.toml; 2 deg/s to 5 deg, then 1 deg/s until collapse"
+          + (f"; here gravity held {sc.QUICK_GRAVITY['duration']:g} s, {sc.QUICK_TILT['lead_rate']:g} then "
+             f"{sc.QUICK_TILT['rate']:g} deg/s" if cfg.quick else "")
+          + "): the onset and the reaction drop as the tilt study measures them. Towards the soil is not run: the "
+          "load has no passive resistance, so it cannot "
           "represent the soil holding a wall that leans into it. Where the onset of motion came before the tilt began "
           "(\"before the tilt\": the retained wall's stones creep as its soil's load comes on with gravity, and the "
           "onset rule dates the motion there), the reaction drop is the angle to compare.",

@@ -57,7 +57,7 @@ def tilt_wall(cfg, wall: str, backend="local", address=None, log=print) -> dict:
 
     case = planmod.WALLS[wall][2]
     return tilt.tilt(case, out=planmod.tilt_dir(cfg, wall), workers=1, backend=backend, address=address, log=log,
-                     **sc.tilt_protocol(case))
+                     overrides=sc.quick_gravity(cfg.quick), **sc.tilt_protocol(case, cfg.quick))
 
 
 def collapse_search(cfg, plan: dict, wall: str, site: str, record: str, polarity: str, backend="local",
