@@ -234,3 +234,31 @@ def test_coulomb_iterates_are_admissible_and_below_associative():
     assert rc.coulomb_residual <= la.FORCE_TOL
     assert rc.multiplier <= ra.multiplier
     assert all(x <= ra.multiplier * (1 + LIMIT_LP_REL) for x in rc.history[1:])
+
+
+@pytest.mark.parametrize("b, h, mu", [(0.4, 1.6, 0.6), (1.0, 0.5, 0.4)])
+def test_cone_bracket_of_a_single_block(b, h, mu):
+    """The exact cone's multiplier is bracketed by the inscribed and circumscribed pyramids:
+    a slender block topples at b/h whatever the friction; a squat block slides along the
+    load, where both pyramids touch the cone (the inscribed one's edge, the circumscribed
+    one's face): the bracket closes on min(mu, b/h) either way."""
+    w = _wall([PLATFORM, _box(1, [0.0, 0.0, h / 2], [0.7, b, h])], mu)
+    entry, _ = lim.one(w, "+y", "associative")
+    lo, hi = entry["cone_bracket"]["multiplier"]
+    assert lo == pytest.approx(min(mu, b / h), rel=LIMIT_LP_REL)
+    assert hi == pytest.approx(min(mu, b / h), rel=LIMIT_LP_REL)
+
+
+def test_cone_bracket_holds_the_finer_pyramids():
+    """On the DXF example wall, whose stones slip off the load direction, the 8-facet bracket
+    is wide (19.8-21.7 deg) and holds the 16- and 32-facet values, which rise towards the
+    cone's and whose own brackets nest inside it."""
+    from drystone import paths
+
+    w = lim.load_wall(paths.ROOT / "cases" / "examples" / "dxf_wall.toml")
+    brackets = {f: lim.one(w, "+y", "associative", facets=f)[0]["cone_bracket"]["multiplier"] for f in (8, 16, 32)}
+    tol = LIMIT_LP_REL * brackets[8][1]
+    assert brackets[8][1] > brackets[8][0] * 1.05  # off-load slip: the pyramid matters here
+    for f in (16, 32):
+        assert brackets[8][0] - tol <= brackets[f][0] <= brackets[f][1] <= brackets[8][1] + tol
+    assert brackets[16][0] - tol <= brackets[32][0] <= brackets[32][1] <= brackets[16][1] + tol

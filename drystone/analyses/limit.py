@@ -174,6 +174,8 @@ def one(wall: Wall, towards: str, friction: str, facets: int = la.FACETS) -> tup
                             }.get(r.status, f"the LP solver failed: {r.message}")
     elif r.status == "not_converged":
         entry["message"] = r.message
+    if friction == "associative" and r.status == "collapse":
+        entry["cone_bracket"] = cone_bracket(wall, towards, facets, r.multiplier)
     if friction == "coulomb":
         entry["converged"] = r.converged
         entry["coulomb_residual"] = r.coulomb_residual
@@ -184,6 +186,23 @@ def one(wall: Wall, towards: str, friction: str, facets: int = la.FACETS) -> tup
     else:
         entry["mechanism"] = None
     return entry, r
+
+
+def cone_bracket(wall: Wall, towards: str, facets: int, inscribed: float) -> dict:
+    """Where the exact Coulomb cone's associative multiplier lies: between the inscribed
+    pyramid's (``inscribed``, the analysis's own: every force it admits is inside the cone)
+    and the circumscribed pyramid's (``la.assemble``'s ``outer``: it admits every force of the
+    cone; a face touches the cone along the load). Maximising lambda over a larger admissible
+    set never gives less, so the cone's lambda is in [inscribed, circumscribed]; one more LP."""
+    g = (0.0, 0.0, -wall.gravity)
+    r = la.solve(wall.bodies, wall.ifaces, wall.mu, TOWARDS[towards], g, facets, outer=True)
+    hi = r.multiplier if r.status == "collapse" else None
+    return {"multiplier": [inscribed, hi],
+            "angle_deg": [math.degrees(math.atan(inscribed)), None if hi is None else math.degrees(math.atan(hi))],
+            "circumscribed_status": r.status,
+            "note": (f"the exact Coulomb cone's associative multiplier lies between the inscribed {facets}-facet "
+                     "pyramid's (the analysis's) and the circumscribed one's; a wide bracket: the stones slip "
+                     "off the load direction, refine with --facets 16 or 32")}
 
 
 def analyse(wall: Wall, towards=("+y",), frictions=FRICTIONS, facets: int = la.FACETS) -> tuple[dict, dict]:
@@ -202,7 +221,7 @@ def analyse(wall: Wall, towards=("+y",), frictions=FRICTIONS, facets: int = la.F
 def beside_dem(case_path, towards, overrides=()) -> dict:
     """The rigid limit angles of a case's wall as built, per direction, to set beside a DEM
     tilt angle: {dir: {"associative_deg", "coulomb_deg", "associative_status",
-    "coulomb_status", "note"}} (an angle None where the status is not a collapse, or
+    "coulomb_status", "associative_cone_deg" (the exact cone's bracket, ``cone_bracket``), "note"}} (an angle None where the status is not a collapse, or
     not_converged: the note says why). A wall this analysis cannot read gives
     {"error": one line} instead (the DEM analysis goes on)."""
     from drystone.geometry.blockfile import GeometryError
@@ -219,6 +238,8 @@ def beside_dem(case_path, towards, overrides=()) -> dict:
             collapse = entry["status"] == "collapse"
             e[f"{fr}_deg"] = entry["angle_deg"] if collapse else None
             e[f"{fr}_status"] = entry["status"]
+            if entry.get("cone_bracket"):
+                e["associative_cone_deg"] = entry["cone_bracket"]["angle_deg"]
             if not collapse:
                 e.setdefault("note", entry.get("message", entry["status"]))
         e["note"] = e.get("note", "rigid stones, the geometry as built (docs/limit-analysis.md)")
@@ -318,14 +339,20 @@ def markdown(wall: Wall, data: dict, figures: list[str]) -> str:
              "atan(lambda) is the same load on rigid blocks. Formulation and limits: docs/limit-analysis.md.", ""]
     if wall.ignored:
         lines += [f"The case's {', '.join(wall.ignored)} are not part of this analysis.", ""]
-    lines += ["| direction | friction | status | lambda | tilt angle (deg) | moving stones | modes | solve (s) |",
-              "|---|---|---|---|---|---|---|---|"]
+    lines += ["| direction | friction | status | lambda | tilt angle (deg) | exact cone within (deg) | moving stones | "
+              "modes | solve (s) |",
+              "|---|---|---|---|---|---|---|---|---|"]
     for t, e in data["directions"].items():
         for fr, x in e["by_friction"].items():
             m = x["mechanism"] or {}
+            cone = (x.get("cone_bracket") or {}).get("angle_deg")
+            cone = "—" if not cone or cone[1] is None else f"{cone[0]:.1f}–{cone[1]:.1f}"
             lines.append(f"| {t} | {fr} | {x['status']} | {_fmt(x['multiplier'])} | {_fmt(x['angle_deg'], 1)} | "
-                         f"{len(m.get('moving_stones', []))} | {', '.join(m.get('modes', []))} | {x['solve_s']:.2f} |")
-    lines.append("")
+                         f"{cone} | {len(m.get('moving_stones', []))} | {', '.join(m.get('modes', []))} | "
+                         f"{x['solve_s']:.2f} |")
+    lines += ["", f"Exact cone within: the associative multiplier of Coulomb's circular cone lies between this "
+              f"{data['facets']}-facet inscribed pyramid's and the circumscribed pyramid's (one more LP); where the "
+              "range is wide the stones slip off the load direction: refine with `--facets 16` or `32`.", ""]
     for t, e in data["directions"].items():
         for fr, x in e["by_friction"].items():
             if x.get("message"):
@@ -399,7 +426,9 @@ def main(args) -> int:
         for fr, x in e["by_friction"].items():
             if x["multiplier"] is not None:
                 m = x["mechanism"] or {}
-                print(f"{t} {fr:11s} lambda {x['multiplier']:.4f}  tilt {x['angle_deg']:.2f} deg  "
+                cone = (x.get("cone_bracket") or {}).get("angle_deg")
+                cone = f" (cone {cone[0]:.2f}-{cone[1]:.2f})" if cone and cone[1] is not None else ""
+                print(f"{t} {fr:11s} lambda {x['multiplier']:.4f}  tilt {x['angle_deg']:.2f} deg{cone}  "
                       f"{len(m.get('moving_stones', []))} stones move ({', '.join(m.get('modes', []))})  "
                       f"{x['solve_s']:.2f} s" + (f"  [{x['status']}]" if x["status"] != "collapse" else ""))
             else:

@@ -39,6 +39,7 @@ import time
 from pathlib import Path
 
 from drystone.analyses import common
+from drystone.mechanics.limit_analysis import FACETS
 
 HELP = "collapse angle on a tilting platform, per direction, with a rate check -> tilt.json, report.html"
 
@@ -271,7 +272,11 @@ def _limit_cell(lim: dict | None) -> str:
         return "-"
     if "error" in lim:
         return lim["error"]
+    cone = lim.get("associative_cone_deg") or [None, None]
+    # the exact cone's upper end where the pyramid's friction matters (more than 0.1 deg)
+    wide = cone[1] is not None and lim.get("associative_deg") is not None and cone[1] - lim["associative_deg"] > 0.1
     return f"{_f(lim.get('associative_deg'))} / {_f(lim.get('coulomb_deg'))}" + (
+        f" (exact cone up to {_f(cone[1])})" if wide else "") + (
         "" if lim.get("coulomb_status") == lim.get("associative_status") == "collapse"
         else f" ({lim.get('associative_status')} / {lim.get('coulomb_status')})")
 
@@ -285,7 +290,10 @@ def report_markdown(data: dict) -> str:
          "vertical reaction of the moving stones 5 % below their weight) and the detection angle are details.", "",
          "Rigid limit: the tilt angle atan(lambda) at which the same wall of rigid stones, as built, collapses "
          "(drystone/analyses/limit.py; associative / Coulomb friction): usually above the DEM's reaction drop, "
-         "the DEM's joints being compliant, but not a bound (docs/limit-analysis.md).", "",
+         "the DEM's joints being compliant, but not a bound (docs/limit-analysis.md). "
+         f"The limit uses a {FACETS}-facet "
+         "friction pyramid inside Coulomb's cone; where stones slip off the load direction the exact cone's angle "
+         "can be higher, up to the value given.", "",
          "| towards | headline (onset) deg | reaction drop deg | detected deg | first stone | collapsed stones | "
          "rate check | rigid limit deg (assoc. / Coulomb) |", "|---|---|---|---|---|---|---|---|"]
     for d, r in data["directions"].items():

@@ -199,9 +199,12 @@ def _basis(n: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def assemble(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.0, 0.0, -9.81),
-             facets: int = FACETS, cone: bool = True) -> Problem:
+             facets: int = FACETS, cone: bool = True, outer: bool = False) -> Problem:
     """The LP's matrices for a load along ``direction`` (unit horizontal vector); ``mu``
-    per interface (or one value); ``gravity`` m/s^2; ``cone``: the column layout (``Problem``)."""
+    per interface (or one value); ``gravity`` m/s^2; ``cone``: the column layout (``Problem``).
+    ``outer``: the pyramid circumscribed about Coulomb's cone instead of inscribed in it (its
+    rays at mu / cos(pi / facets), turned by half a facet so that a face, not an edge, touches
+    the cone along the load: sliding along the load stays exact), for ``cone_bracket``."""
     d = np.asarray(direction, float)
     d = d / np.linalg.norm(d)
     g = np.asarray(gravity, float)
@@ -218,6 +221,9 @@ def assemble(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.
     free_w = bodies.mass[~bodies.fixed] * np.linalg.norm(g)
     force_scale = float(free_w.max()) if len(free_w) else 1.0
     ang = 2 * np.pi * np.arange(facets) / facets
+    if outer:
+        ang = ang + np.pi / facets
+        mu_i = mu_i / np.cos(np.pi / facets)
     cx, ci = _corners(ifaces)
     normals = np.array([f.normal for f in ifaces], float).reshape(-1, 3)
     e1, e2 = _basis(normals, d)
@@ -402,10 +408,11 @@ def point_velocity(v: np.ndarray, bodies: Bodies, body: int, x) -> np.ndarray:
 
 
 def solve(bodies: Bodies, ifaces: list[Interface], mu, direction, gravity=(0.0, 0.0, -9.81),
-          facets: int = FACETS) -> Result:
-    """Associative friction: the largest multiplier and its mechanism (module docstring)."""
+          facets: int = FACETS, outer: bool = False) -> Result:
+    """Associative friction: the largest multiplier and its mechanism (module docstring);
+    ``outer``: with the circumscribed pyramid (``assemble``)."""
     t0 = time.perf_counter()
-    p = assemble(bodies, ifaces, mu, direction, gravity, facets)
+    p = assemble(bodies, ifaces, mu, direction, gravity, facets, outer=outer)
     r, y = _solve(p)
     if y is not None:
         r.velocity = _normalise(_velocities(p, y, bodies), bodies, ifaces)
