@@ -262,3 +262,23 @@ def test_cone_bracket_holds_the_finer_pyramids():
     for f in (16, 32):
         assert brackets[8][0] - tol <= brackets[f][0] <= brackets[f][1] <= brackets[8][1] + tol
     assert brackets[16][0] - tol <= brackets[32][0] <= brackets[32][1] <= brackets[16][1] + tol
+
+
+def test_limit_beside_a_tilt_is_kept_until_the_wall_changes(tmp_path, monkeypatch):
+    """beside_dem with a cache folder solves once, reuses the kept angles for the same wall
+    (no LP the second time), and solves again when what it depends on changes (here the
+    directions; the wall, the pyramid and the code are in the same digest)."""
+    from drystone import paths
+
+    case = paths.ROOT / "cases" / "examples" / "one_block_tilt.toml"
+    first = lim.beside_dem(case, ["+y"], cache_dir=tmp_path)
+    assert first["+y"]["associative_deg"] == pytest.approx(math.degrees(math.atan(0.4)), rel=LIMIT_LP_REL)
+    assert (tmp_path / "limit_beside_dem.json").is_file()
+    calls = []
+    real = lim.one
+    monkeypatch.setattr(lim, "one", lambda *a, **k: calls.append(a[1:3]) or real(*a, **k))
+    assert lim.beside_dem(case, ["+y"], cache_dir=tmp_path) == first
+    assert calls == []
+    both = lim.beside_dem(case, ["+y", "-x"], cache_dir=tmp_path)  # other directions: solved again
+    assert ("-x", "associative") in calls and ("+y", "associative") in calls
+    assert both["-x"]["associative_deg"] == pytest.approx(first["+y"]["associative_deg"], rel=LIMIT_LP_REL)

@@ -20,6 +20,7 @@ stages, [[forces]] and [[loads]] are not part of this analysis (listed as ``igno
 """
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -218,20 +219,52 @@ def analyse(wall: Wall, towards=("+y",), frictions=FRICTIONS, facets: int = la.F
     return {"directions": out}, results
 
 
-def beside_dem(case_path, towards, overrides=()) -> dict:
+def _wall_key(wall: Wall, dirs: list[str]) -> str:
+    """A digest of everything the limit angles depend on: the wall's bodies, interfaces and
+    friction, the directions, the pyramid and this analysis's code."""
+    import hashlib
+
+    h = hashlib.sha256()
+    b = wall.bodies
+    for a in (b.mass, b.centroid, b.fixed, b.size, np.asarray(wall.mu, float)):
+        h.update(np.ascontiguousarray(a).tobytes())
+    h.update(repr(b.blocked).encode())
+    for f in wall.ifaces:
+        h.update(np.ascontiguousarray(f.polygon).tobytes() + np.ascontiguousarray(f.normal).tobytes())
+        h.update(f"{f.a},{f.b};".encode())
+    h.update(f"{dirs}|{la.FACETS}|{wall.gravity!r}".encode())
+    for src in (Path(la.__file__), Path(__file__)):
+        h.update(src.read_bytes())
+    return h.hexdigest()
+
+
+def beside_dem(case_path, towards, overrides=(), cache_dir=None) -> dict:
     """The rigid limit angles of a case's wall as built, per direction, to set beside a DEM
     tilt angle: {dir: {"associative_deg", "coulomb_deg", "associative_status",
-    "coulomb_status", "associative_cone_deg" (the exact cone's bracket, ``cone_bracket``), "note"}} (an angle None where the status is not a collapse, or
+    "coulomb_status", "associative_cone_deg" (the exact cone's bracket, ``cone_bracket``), "note"}}
+    (an angle None where the status is not a collapse, or
     not_converged: the note says why). A wall this analysis cannot read gives
-    {"error": one line} instead (the DEM analysis goes on)."""
+    {"error": one line} instead (the DEM analysis goes on). ``cache_dir``: the angles are
+    kept in its ``limit_beside_dem.json`` and reused while the wall, the directions and this
+    code are unchanged (a digest of them: ``_wall_key``)."""
     from drystone.geometry.blockfile import GeometryError
 
     try:
         wall = load_wall(case_path, overrides)
     except (CaseError, GeometryError, ValueError) as e:
         return {"error": f"the limit analysis could not read the wall: {str(e).splitlines()[0]}"}
+    dirs = directions(towards)
+    cache = Path(cache_dir) / "limit_beside_dem.json" if cache_dir is not None else None
+    key = _wall_key(wall, dirs) if cache is not None else None
+    if cache is not None and cache.is_file():
+        try:
+            kept = json.loads(cache.read_text())
+            if kept.get("key") == key:
+                return kept["limits"]
+        except (OSError, ValueError, KeyError, AttributeError):
+            pass  # unreadable: computed again and rewritten
     out = {}
-    for t in directions(towards):
+    for t in dirs:
         e = {}
         for fr in FRICTIONS:
             entry, _ = one(wall, t, fr)
@@ -244,6 +277,12 @@ def beside_dem(case_path, towards, overrides=()) -> dict:
                 e.setdefault("note", entry.get("message", entry["status"]))
         e["note"] = e.get("note", "rigid stones, the geometry as built (docs/limit-analysis.md)")
         out[t] = e
+    if cache is not None:
+        from drystone.analyses import common
+
+        cache.parent.mkdir(parents=True, exist_ok=True)
+        common.write_json(cache, {"key": key, "case": str(case_path), "overrides": list(overrides), "limits": out},
+                          overrides=overrides)
     return out
 
 

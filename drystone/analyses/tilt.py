@@ -153,7 +153,7 @@ def tilt(case, towards=("+y",), out=None, workers=None, backend: str = "local", 
             for d in dirs]
     from drystone.analyses import limit as limitmod
 
-    limits = limitmod.beside_dem(case_path, dirs, overrides)  # seconds, before the runs
+    limits = limitmod.beside_dem(case_path, dirs, overrides, cache_dir=out_dir)  # seconds, before the runs
     log(f"[tilt] {len(runs)} direction(s) at {rate:g} deg/s: {', '.join(dirs)}")
     res = common.run_jobs(case_path, runs, out_dir, "tilt", list(overrides), workers, backend, address, log)
     directions = {d: _direction(res[_run_name(d)], _run_name(d)) for d in dirs}
