@@ -193,8 +193,8 @@ def identification(results: Path) -> str:
         out.append(first_table_after(p, "(b) Transfer functions"))
     except Missing:
         pass
-    gap = [ln for ln in p.read_text().splitlines() if ln.startswith("**The gap.**")]
-    out += gap[:1]  # why the linearised modes and the transfer functions differ (drystone/studies/sacsayhuaman)
+    gap = [ln for ln in p.read_text().splitlines() if ln.startswith("**Linear model and runs.**")]
+    out += gap[:1]  # the linearised modes beside the transfer functions (drystone/studies/sacsayhuaman)
     return "\n\n".join(out) + "\n\n" + _source_note(p, results=results)
 
 
