@@ -45,8 +45,10 @@ def _wall(seed=0):
 MAT = {"kn": 2e8, "kt": 1e8, "mu": 0.4, "damping": 0.8}
 
 
-@pytest.mark.parametrize("seed", [0, 1])
-def test_compiled_forces_equal_numpy_law(seed):
+@pytest.mark.parametrize("seed,area_scaling", [(0, False), (1, False), (0, True)])
+def test_compiled_forces_equal_numpy_law(seed, area_scaling):
+    """``area_scaling``: the opt-in law's carried force scaled where the patch shrinks
+    (contact.carried_share, law penalty_coulomb_area), the same in both steps."""
     local, mass, inertia, pos, quat, vel, angvel, moving = _wall(seed)
     nb = len(mass)
     joint = {"mu": 0.2, "damping": 0.3}
@@ -56,10 +58,12 @@ def test_compiled_forces_equal_numpy_law(seed):
     def pair_props(a, b):
         return jprops if {a, b} == {1, 5} else props
 
-    ref = cs.NumpyStep(pair_props, mass, local, "native", inertia)
+    ref = cs.NumpyStep(pair_props, mass, local, "native", inertia, area_scaling=area_scaling)
     table = np.array([[[props[k] for k in ("kn", "kt", "mu", "damping")]]])
     fast = cs.CompiledStep(mass, inertia, local, np.zeros(nb, int), table,
-                           {(1, 5): [jprops[k] for k in ("kn", "kt", "mu", "damping")]})
+                           {(1, 5): [jprops[k] for k in ("kn", "kt", "mu", "damping")]}, area_scaling=area_scaling)
+    rel = tol.AREA_SCALED_REL if area_scaling else tol.NUMERICAL_REL
+    shrank = 0  # contacts carrying a shear force whose area shrank (their force scaled, with area_scaling)
     dt = 2e-4
     slipped = stuck = 0
     twisted = 0.0  # the largest twisting moment compared, N m
@@ -67,25 +71,29 @@ def test_compiled_forces_equal_numpy_law(seed):
     for step in range(40):
         rot = rotations.to_matrix(quat)
         st = (pos, vel, angvel, rot)
+        before = dict(ref._shear)
         F0, T0 = ref.forces(ref.native_geometry(st), st, dt)
+        if area_scaling:
+            shrank += sum(1 for k, v in ref._shear.items()
+                          if k in before and before[k][4] > v[4] and np.any(before[k][:3] != 0.0))
         F1, T1 = fast.forces(pos, rot, vel, angvel, dt)
         fscale = np.abs(F0).max()
         tscale = np.abs(T0).max()
         assert fscale > 0
-        np.testing.assert_allclose(F1, F0, rtol=0, atol=tol.NUMERICAL_REL * fscale)
-        np.testing.assert_allclose(T1, T0, rtol=0, atol=tol.NUMERICAL_REL * tscale)
+        np.testing.assert_allclose(F1, F0, rtol=0, atol=rel * fscale)
+        np.testing.assert_allclose(T1, T0, rtol=0, atol=rel * tscale)
         a, b = ref.state, fast.state
         np.testing.assert_array_equal(a.id1, b.id1)
         np.testing.assert_array_equal(a.slipping, b.slipping)
-        np.testing.assert_allclose(b.shear, a.shear, rtol=0, atol=tol.NUMERICAL_REL * fscale)
-        assert fast.elastic[1] == pytest.approx(ref.elastic[1], rel=tol.NUMERICAL_REL)
+        np.testing.assert_allclose(b.shear, a.shear, rtol=0, atol=rel * fscale)
+        assert fast.elastic[1] == pytest.approx(ref.elastic[1], rel=rel)
         # the twisting moments about n (contact.twist_spring), in the contacts' order
         mt0 = np.array([v[3] for v in ref._shear.values()])
-        np.testing.assert_allclose(fast.shear_store[:, 3], mt0, rtol=0, atol=tol.NUMERICAL_REL * tscale)
+        np.testing.assert_allclose(fast.shear_store[:, 3], mt0, rtol=0, atol=rel * tscale)
         twisted = max(twisted, float(np.abs(mt0).max()))
         # the energy balance's terms (drystone/mechanics/energy.py): damping wrenches on each body, slip work
-        np.testing.assert_allclose(fast.last["Fd"], ref.last["Fd"], rtol=0, atol=tol.NUMERICAL_REL * fscale)
-        np.testing.assert_allclose(fast.last["Td"], ref.last["Td"], rtol=0, atol=tol.NUMERICAL_REL * tscale)
+        np.testing.assert_allclose(fast.last["Fd"], ref.last["Fd"], rtol=0, atol=rel * fscale)
+        np.testing.assert_allclose(fast.last["Td"], ref.last["Td"], rtol=0, atol=rel * tscale)
         slip_work[0] += ref.last["slip"]
         slip_work[1] += fast.last["slip"]
         slipped += int(a.slipping.sum())
@@ -96,8 +104,9 @@ def test_compiled_forces_equal_numpy_law(seed):
         quat /= np.linalg.norm(quat, axis=1)[:, None]
         vel = vel * 0.97
     assert slipped > 0 and stuck > 0  # both branches of the law were compared
+    assert shrank > 0 or not area_scaling  # and the scaling of the carried force
     assert twisted > tol.NUMERICAL_REL * tscale  # and twisting moments
-    assert slip_work[0] > 0 and slip_work[1] == pytest.approx(slip_work[0], rel=tol.NUMERICAL_REL)
+    assert slip_work[0] > 0 and slip_work[1] == pytest.approx(slip_work[0], rel=rel)
 
 
 def _one(mass, inertia, blocked="", moving=True):

@@ -65,7 +65,12 @@ def test_engine_and_detection_choices():
     assert ours.engine("compiled", "native") == "compiled"
     assert ours.engine("python", "native") == ours.engine("compiled", "yade") == "python"
     assert stock.engine("compiled", "yade") == "yade" and stock.default_detection == "yade"
-    with pytest.raises(KeyError, match="known: penalty_coulomb, stock_volumetric"):
+    area = laws.get("penalty_coulomb_area")  # the opt-in scaling of the carried shear force (docs/energy.md)
+    assert area.area_scaling and not ours.area_scaling
+    assert [area.engine(r, d) for r in ("compiled", "python") for d in ("native", "yade")] == \
+        [ours.engine(r, d) for r in ("compiled", "python") for d in ("native", "yade")]
+    assert area.yade_material(MAT, 0.5) == ours.yade_material(MAT, 0.5)
+    with pytest.raises(KeyError, match="known: penalty_coulomb, penalty_coulomb_area, stock_volumetric"):
         laws.get("hertz")
 
 

@@ -211,6 +211,25 @@ def twist_spring(mt0, wn, jp, area, kt, mu, fn_el, fs_mag, dt):
     return mt, (mt0 + mt) * (trial - mt) / (2.0 * k)
 
 
+@njit(cache=True)
+def carried_share(before, now, f2, kt, both=False):
+    """The share r of a contact's carried shear force (or twisting moment) that its patch
+    still holds when its area (or polar moment) went from ``before`` to ``now`` (m^2 or
+    m^4), and the elastic energy that leaves with the rest, J: (1 - r) f2 / (2 K_t before),
+    f2 the carried force's square (N^2, or N^2 m^2), kt N/m^3. Where the patch shrank, r =
+    now / before (the springs that left let go of their share of a uniform traction): the
+    stored energy f^2 / (2 K_t A) falls to r times its value instead of growing; where it
+    grew, r = 1 (the springs that came in carry nothing yet), unless ``both`` (the carried
+    elastic displacement, f = K_t A u_s: the force follows the area both ways). The
+    opt-in law ``penalty_coulomb_area`` (drystone/mechanics/laws.py; docs/energy.md)."""
+    if before <= 0.0 or now <= 0.0 or kt <= 0.0:
+        return 1.0, 0.0
+    r = now / before
+    if r >= 1.0 and not both:
+        return 1.0, 0.0
+    return r, (1.0 - r) * f2 / (2.0 * kt * before)
+
+
 def skew(r) -> np.ndarray:
     """(m,3,3) matrices [r]x with [r]x u = r x u."""
     r = np.asarray(r, float)

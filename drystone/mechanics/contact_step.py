@@ -81,8 +81,9 @@ class NumpyStep:
     the overlap's extent (``drystone.mechanics.contact.contact_area``).
     """
 
-    def __init__(self, pair_props, mass, local_vertices, detection, inertia=None, owner=None):
+    def __init__(self, pair_props, mass, local_vertices, detection, inertia=None, owner=None, area_scaling=False):
         self.pair_props = pair_props
+        self.area_scaling = area_scaling  # the carried force scaled by the patch (contact.carried_share)
         self.mass = np.asarray(mass, float)
         self.moving = np.isfinite(self.mass)
         # principal moments (kg m^2) in the body frame; non-moving bodies: no inverse
@@ -207,22 +208,33 @@ class NumpyStep:
         v_rel = (vel[ib] + law.cross(angvel[ib], rb)) - (vel[ia] + law.cross(angvel[ia], ra))
         fn = kn * vol
         # each contact's history: its shear force (N) and twisting moment about n (N m)
-        hist = np.array([self._shear.get(k, (0.0, 0.0, 0.0, 0.0)) for k in keys], float).reshape(-1, 4)
+        # (with ``area_scaling``, its area A_c and polar moment J_p too: contact.carried_share)
+        ncol = 6 if self.area_scaling else 4
+        hist = np.array([self._shear.get(k, (0.0,) * ncol) for k in keys], float).reshape(-1, ncol)
         fs_prev = hist[:, :3]
+        jp = np.array([law.polar_moment(n[k], pj[k]) for k in range(len(ia))])
+        slip = 0.0
+        if self.area_scaling:
+            for k in range(len(ia)):
+                r, e_drop = law.carried_share(hist[k, 4], area[k], float(fs_prev[k] @ fs_prev[k]), kt[k])
+                rj, e_twist = law.carried_share(hist[k, 5], jp[k], hist[k, 3] ** 2, kt[k])
+                fs_prev[k] *= r
+                hist[k, 3] *= rj
+                slip += e_drop + e_twist
         fs_new, slipping = law.shear_spring(n, v_rel, fs_prev, area, kt, mu, fn, dt)
         # the slip's plastic work: the elastic trial of shear_spring against its capped force
         f0 = law.rotate_into_plane(fs_prev, n)
         f_trial = f0 - (kt * area)[:, None] * (v_rel - law.dot(v_rel, n)[:, None] * n) * dt
-        slip = float(np.sum(energy.slip_work(f0, f_trial, fs_new, kt, area)))
+        slip += float(np.sum(energy.slip_work(f0, f_trial, fs_new, kt, area)))
         # the twist spring on the patch (contact.twist_spring)
-        jp = np.array([law.polar_moment(n[k], pj[k]) for k in range(len(ia))])
         wn = law.dot(angvel[ib] - angvel[ia], n)
         fs_mag = np.linalg.norm(fs_new, axis=1)
         tw = [law.twist_spring(hist[k, 3], wn[k], jp[k], parea[k], kt[k], mu[k], fn[k], fs_mag[k], dt)
               for k in range(len(ia))]
         mt = np.array([t[0] for t in tw])
         slip += float(sum(t[1] for t in tw))
-        self._shear = dict(zip(keys, np.concatenate([fs_new, mt[:, None]], axis=1)))
+        kept = [fs_new, mt[:, None]] + ([area[:, None], jp[:, None]] if self.area_scaling else [])
+        self._shear = dict(zip(keys, np.concatenate(kept, axis=1)))
 
         # damping distributed over the patch, at its centroid p
         pa_, pb_ = pc - pos[ia], pc - pos[ib]
@@ -347,7 +359,11 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
     # and its damping's modal basis (zeros for a new contact: no basis, a cold solve, also at
     # the next step if it is not damped now)
     prev = _previous(keys, prev_keys)
-    fs_prev = np.zeros((m, 4))
+    # with the carried force scaled by the patch (``area_scaling``, contact.carried_share), two
+    # more columns: the contact's area A_c (4) and polar moment J_p (5) at the step
+    ncol = prev_shear.shape[1]
+    scaled = ncol >= 6
+    fs_prev = np.zeros((m, ncol))
     basis = np.zeros((m, 6, 6))
     warm = prev >= 0
     for k in range(m):
@@ -355,7 +371,7 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
             fs_prev[k] = prev_shear[prev[k]]
             basis[k] = prev_basis[prev[k]]
     fn = kn * vol
-    fs = np.empty((m, 4))
+    fs = np.zeros((m, ncol))
     jp = np.empty(m)
     slipping = np.zeros(m, np.bool_)
     ra = np.empty((m, 3))
@@ -401,6 +417,16 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
         pm = np.sqrt(p0 ** 2 + p1 ** 2 + p2 ** 2)
         sc = mag / pm if pm > 0.0 else 0.0
         kta = kt[k] * area[k]
+        jp[k] = law.polar_moment(nk, pj[k])
+        if scaled:  # the part of the carried force and moment the patch's springs still hold
+            r, e_drop = law.carried_share(f0[4], area[k], mag * mag, kt[k], ncol > 6)
+            sc *= r
+            slip += e_drop
+            rj, e_drop = law.carried_share(f0[5], jp[k], f0[3] * f0[3], kt[k], ncol > 6)
+            f0[3] *= rj
+            slip += e_drop
+            fs[k, 4] = area[k]
+            fs[k, 5] = jp[k]
         fs[k, 0] = p0 * sc - kta * (vr[0] - vn * nk[0]) * dt
         fs[k, 1] = p1 * sc - kta * (vr[1] - vn * nk[1]) * dt
         fs[k, 2] = p2 * sc - kta * (vr[2] - vn * nk[2]) * dt
@@ -417,7 +443,6 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
             for q in range(3):
                 fs[k, q] *= s
         # the twist spring on the patch (contact.twist_spring)
-        jp[k] = law.polar_moment(nk, pj[k])
         wn = (angvel[b, 0] - angvel[a, 0]) * nk[0] + (angvel[b, 1] - angvel[a, 1]) * nk[1] \
             + (angvel[b, 2] - angvel[a, 2]) * nk[2]
         fs[k, 3], w_twist = law.twist_spring(f0[3], wn, jp[k], area[k], kt[k], mu[k], fn[k],
@@ -499,7 +524,7 @@ class CompiledStep:
     neighbour list's (``drystone.mechanics.neighbours``; ``neighbours``)."""
 
     def __init__(self, mass, inertia, local_vertices, material, table, joints=None, size=None, owner=None,
-                 skin=nbr.SKIN):
+                 skin=nbr.SKIN, area_scaling=False):
         self.mass = np.asarray(mass, float)
         self.moving = np.isfinite(self.mass)
         self.inv_mass = np.where(self.moving, 1.0 / np.where(self.moving, self.mass, 1.0), 0.0)
@@ -517,7 +542,9 @@ class CompiledStep:
         self.jkeys = np.array([k for k, _ in keys], np.int64)
         self.jvals = np.array([v for _, v in keys], float).reshape(-1, 4)
         self.keys = np.zeros(0, np.int64)
-        self.shear_store = np.zeros((0, 4))  # shear force (N) and twisting moment (N m) per contact
+        # shear force (N) and twisting moment (N m) per contact; with ``area_scaling`` (the
+        # carried force scaled by the patch, contact.carried_share) its area and polar moment too
+        self.shear_store = np.zeros((0, 6 if area_scaling else 4))
         self.basis_store = np.zeros((0, 6, 6))  # each contact's damping modes (contact.damping_wrenches_warm)
         self.size = np.full(ns, np.inf) if size is None else np.asarray(size, float)
         self.depth_ratio = 0.0

@@ -66,6 +66,9 @@ class PenaltyCoulomb(ContactLaw):
     meaning = "the paper's law, per-contact shear and damping"
     detections = ("native", "yade")
     engines = ("compiled", "python")
+    #: the carried shear force and twisting moment scaled down where the patch shrinks
+    #: (drystone.mechanics.contact.carried_share)
+    area_scaling = False
 
     def engine(self, requested, detection):
         return "compiled" if requested == "compiled" and detection == "native" else "python"
@@ -76,6 +79,21 @@ class PenaltyCoulomb(ContactLaw):
         # its shared shear every step (the shear and damping are ours); poisson is unused
         # but must be > 0 (0 gives NaN in Ip2)
         return {"young": 2.0 * mat["kn"], "poisson": 0.5, "frictionAngle": 0.0}
+
+
+@register
+class PenaltyCoulombArea(PenaltyCoulomb):
+    """``penalty_coulomb`` with the carried shear force and twisting moment scaled by the
+    area (polar moment) ratio where a contact's patch shrinks (contact.carried_share): the
+    stored shear energy cannot grow without work at a joint that opens under shear (a block
+    rocking with uplift), but barely touching wedge joints, whose area follows their depth,
+    couple their normal motion to their shear and a settled wall creeps (docs/energy.md).
+    Opt-in, not the default."""
+
+    name = "penalty_coulomb_area"
+    meaning = ("the paper's law with the carried shear force scaled down where the contact area shrinks "
+               "(no shear energy from nowhere at opening joints; settled walls creep: docs/energy.md)")
+    area_scaling = True
 
 
 @register

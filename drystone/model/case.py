@@ -49,8 +49,8 @@ SECTIONS: dict[str, dict[str, Key]] = {
         "law": Key(laws.DEFAULT, "-", " or ".join(f"{n} ({law.meaning})" for n, law in laws.REGISTRY.items())
                    + " (drystone/mechanics/laws.py)", str, tuple(laws.REGISTRY)),
         "detection": Key("auto", "-", "contact geometry: native (drystone/mechanics/overlap.py: exact overlap volume, "
-                         "normal and area from its gradient, compiled; penalty_coulomb only), yade (YADE's "
-                         "polyhedra intersection, CGAL) or auto (native with penalty_coulomb, yade with the "
+                         "normal and area from its gradient, compiled; the project's laws only), yade (YADE's "
+                         "polyhedra intersection, CGAL) or auto (native with the project's laws, yade with the "
                          "stock law)", str, ("auto", "native", "yade")),
         **CONTACT_OVERRIDE,
     },

@@ -44,7 +44,7 @@ import yade
 
 from drystone.mechanics import contact as law
 from drystone.mechanics import contact_step as cs
-from drystone.mechanics import energy, integration, monitors, rotations, stability
+from drystone.mechanics import energy, integration, laws, monitors, rotations, stability
 from drystone.yade_scripts import contact_engine as ce
 from drystone.yade_scripts import quiet_steps as quiet
 
@@ -261,7 +261,8 @@ class NumpyEngine(Engine):
     def __init__(self, run):
         super().__init__(run)
         self.step = ce.PenaltyCoulomb(lambda a, b: pair_properties(run, a, b), run.mass, run.local_v,
-                                      run.spec.detection, run.inertia, run.owner)
+                                      run.spec.detection, run.inertia, run.owner,
+                                      area_scaling=laws.get(run.spec.law).area_scaling)
         self.ledger = energy.Ledger(run.mass, self._free_directions()[0])
 
     def forces(self, t, g):
@@ -354,7 +355,8 @@ class CompiledEngine(Engine):
         self.mass_int = np.where(np.isfinite(run.mass), run.mass, 1.0)  # never divided for non-moving bodies
         self.inertia_int = np.where(np.isfinite(run.mass)[:, None], run.inertia, 1.0)
         self.step = ce.Compiled(run.mass, run.inertia, run.local_v, *law_tables(run),
-                                run.shape_size * stability.TUNNEL_FRACTION, run.owner)
+                                run.shape_size * stability.TUNNEL_FRACTION, run.owner,
+                                area_scaling=laws.get(run.spec.law).area_scaling)
         self.F = self.T = self.F_ext = None
         self.c = None  # the loads' coefficients of the step being taken (None: no loads)
         self._normalise_orientations()
