@@ -768,7 +768,9 @@ BALANCE_SHADOW = 0.5
 #: than this fraction of the joints' depth scale rho g H / K_n (H the wall's height: the
 #: bottom joints' static depth under a full column, 0.45 mm for the 4 m Sacsayhuaman section
 #: at K_n 2e8). Measured 0.01 um (2e-5 of it) with the law's carried shear force; a carried
-#: force scaled with the contact area crept 70 um (docs/energy.md)
+#: force scaled with the contact area both ways crept 70 um (an earlier round); the opt-in
+#: penalty_coulomb_area law (scaled where the area shrinks only) 3.7 um, 82 % of this bound
+#: (docs/energy.md)
 SETTLED_DRIFT_DEPTH_FRACTION = 0.01
 #: second-order convergence (the balance's bounded leapfrog error): halving dt quarters it,
 #: a ratio of 4; the next order's share moves it by up to a quarter: 3-5
