@@ -221,22 +221,7 @@ def search(nl, buf, nv, nf, faces, fk, tol, touching):
         if lo[i, 0] > hi[j, 0] or lo[j, 0] > hi[i, 0] or lo[i, 1] > hi[j, 1] or lo[j, 1] > hi[i, 1] \
                 or lo[i, 2] > hi[j, 2] or lo[j, 2] > hi[i, 2]:
             continue
-        if touching and ov._apart(GV[i], nv[i], GN[i], GD[i], nf[i], GV[j], nv[j], GN[j], GD[j], nf[j], tol):
-            continue
-        na, nt = ov._clip_pair(GV[i], nv[i], faces[i], fk[i], nf[i], GN[i], GD[i], GV[j], nv[j], faces[j], fk[j],
-                               nf[j], GN[j], GD[j], tol, polys, counts, A, B, S)
-        v = ov._volume(polys, counts, na, nt, cen[m], g)
-        if v <= 0.0:
-            continue
-        ga = np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
-        if ga <= 0.0:
-            continue
-        ov._patch(polys, counts, na, nt, cen[m], g, pc[m], pj[m])
-        id1[m] = i
-        id2[m] = j
-        vol[m] = v
-        for a in range(3):
-            nrm[m, a] = -g[a] / ga
-        area[m] = ga
-        m += 1
+        if ov.pair_contact(GV, GN, GD, nv, nf, faces, fk, i, j, tol, touching, polys, counts, A, B, S, g, id1, id2,
+                           vol, cen, nrm, area, pc, pj, m):
+            m += 1
     return m, buf
