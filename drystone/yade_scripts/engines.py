@@ -354,7 +354,8 @@ class CompiledEngine(Engine):
         self.mass_int = np.where(np.isfinite(run.mass), run.mass, 1.0)  # never divided for non-moving bodies
         self.inertia_int = np.where(np.isfinite(run.mass)[:, None], run.inertia, 1.0)
         self.step = ce.Compiled(run.mass, run.inertia, run.local_v, *law_tables(run),
-                                run.shape_size * stability.TUNNEL_FRACTION, run.owner)
+                                run.shape_size * stability.TUNNEL_FRACTION, run.owner,
+                                threads=int(run.O.numThreads))
         self.F = self.T = self.F_ext = None
         self.c = None  # the loads' coefficients of the step being taken (None: no loads)
         self._normalise_orientations()
