@@ -178,9 +178,11 @@ def test_non_moving_body_moves_with_its_velocity():
 def test_two_threads_give_the_one_thread_history_bit_for_bit():
     """The contact search shares the listed pairs among threads, each pair clipped with the
     same arithmetic into its own row, the rows then gathered in the list's order by one
-    thread (drystone/mechanics/neighbours.py, ``search``): a run on 2 threads is the run on
-    1 by construction, so its history is compared exactly (the 3-course wall pressed into
-    its joints, 5 x 20 steps of ``advance`` under gravity)."""
+    thread (drystone/mechanics/neighbours.py, ``search``), and the damping solves one range
+    of contacts per thread (contact.damping_wrenches_warm); the sums on the bodies stay on
+    one thread in the contacts' order. A run on 2 threads is the run on 1 by construction,
+    so its history is compared exactly (the 3-course wall pressed into its joints, 5 x 20
+    steps of ``advance`` under gravity)."""
     hist = []
     for threads in (1, 2):
         local, mass, inertia, pos, quat, vel, angvel, moving = _wall(0)

@@ -434,7 +434,7 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
         for q in range(3):
             twist[k, 3 + q] = angvel[b, q] - angvel[a, q]
     fd, md, om = law.damping_wrenches_warm(n, area, pj, kn, kt, xi, ~slipping, pa, pb, inv_mass[oa], inv_mass[ob],
-                                           iia, iib, twist, fn, fs, mu, lever, basis, warm)
+                                           iia, iib, twist, fn, fs, mu, lever, basis, warm, buf[8].shape[0])
     F = np.zeros((nb, 3))
     T = np.zeros((nb, 3))
     Fd = np.zeros((nb, 3))  # the damping wrenches alone, summed on each body (energy.account)
@@ -498,7 +498,7 @@ class CompiledStep:
     shapes; its forces act on the shapes' bodies. ``state`` is the last step's contacts
     as a ``ContactState`` (built when asked for; ids of bodies). ``skin`` (m): the
     neighbour list's (``drystone.mechanics.neighbours``; ``neighbours``). ``threads``: the
-    threads the contact search's clip runs on (1 by default; at most numba's,
+    threads the contact search's clip and the damping run on (1 by default; at most numba's,
     ``numba.config.NUMBA_NUM_THREADS``, the machine's cores unless set: more are not
     started); every result is the same bit for bit for any number (``neighbours.search``)."""
 
