@@ -498,10 +498,15 @@ def damping_wrenches(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, 
     contact's highest modal frequency omega_max (m,) rad/s. Arguments as in ``mobility``,
     ``patch_stiffness``, ``damping_matrix`` and ``cap_damping``; ``twist`` (m,6) is B's
     velocity and angular velocity relative to A at the patch centroid. Every contact is
-    solved from scratch (``damping_wrenches_warm`` reuses each contact's modes)."""
+    solved from scratch (``damping_wrenches_warm`` reuses each contact's modes), on one
+    thread (its callers run in YADE's Python engines)."""
     m = len(parea)
-    return damping_wrenches_warm(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, iib, twist, fn_el, fs,
-                                 mu, lever, np.zeros((m, 6, 6)), np.zeros(m, np.bool_))
+    fd = np.zeros((m, 3))
+    md = np.zeros((m, 3))
+    om = np.zeros(m)
+    _damp_range(0, m, n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, iib, twist, fn_el, fs, mu, lever,
+                np.zeros((m, 6, 6)), np.zeros(m, np.bool_), fd, md, om)
+    return fd, md, om
 
 
 @njit(cache=True, parallel=True)
