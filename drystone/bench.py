@@ -283,6 +283,10 @@ WALLS = ("running_bond", "irregular", "polygonal")
 #: generator's repairs make a 2000-stone face slow to draw: more than 15 min)
 WALL_SIZES = {"polygonal": (500, 2000)}
 POLYGONAL_TILES = {2000: 4}
+#: walls of these sizes are also run on ``THREADS_2`` threads (the compiled step's search
+#: over threads: ``contact_step.CompiledStep``'s ``threads``): ms/step and the parallel
+#: efficiency t1 / (2 t2)
+THREADED_SIZES = (2000,)
 #: the polygonal wall (drystone/geometry/polygonal_wall.py): a 12 x 5 m face of stones 0.25-0.5 m
 #: in equivalent diameter (500 stones at seed 0), re-entrant stones (several convex parts)
 #: r = 0.5 of the convex ones, LAYOUT's thickness
@@ -505,8 +509,13 @@ def step_times(run_dir: Path, budget_s: float = 1.0) -> dict:
     free = np.where(moving[:, None], 1.0, 0.0) * np.ones((nb, 3))
     m_int = np.where(moving, mass, 1.0)
     state = [pos.copy(), vel.copy(), w.copy(), np.zeros((nb, 3)), np.tile([0.0, 0.0, 0.0, 1.0], (nb, 1)), rot.copy()]
-    return {"contacts": int(len(step.keys)),
-            "forces_ms": _best_ms(lambda: step.forces(pos, rot, vel, w, dt), budget_s),
+    step2 = cs.CompiledStep(mass, inertia, [s.verts[i, :s.nv[i]] for i in range(len(s.nv))], np.zeros(nb, int), table,
+                            owner=owner, threads=2)
+    step2.forces(pos, rot, vel, w, dt)
+    t1 = _best_ms(lambda: step.forces(pos, rot, vel, w, dt), budget_s)
+    t2 = _best_ms(lambda: step2.forces(pos, rot, vel, w, dt), budget_s)
+    return {"contacts": int(len(step.keys)), "forces_ms": t1, "forces_ms_2_threads": t2,
+            "forces_efficiency": t1 / (2.0 * t2), "threads_available": step2.threads,
             "integrate_ms": _best_ms(lambda: integration.integrate(dt, np.zeros(3), F, T, m_int, inertia, free, free,
                                                           moving.copy(), *state), budget_s / 2)}
 
@@ -547,6 +556,14 @@ def scale_section(workdir: Path, sizes=SIZES, walls=WALLS, steps: int = 300, eng
             run_dir = Path(r.pop("out"))
             r["search"] = contact_search_times(run_dir)
             r["split"] = step_times(run_dir)
+            if size in THREADED_SIZES:  # the same run on 2 threads
+                try:
+                    r2 = timed_run(scale_case(run_geo, dt, scale_steps(steps, size)), workdir, tag + "_2", 2,
+                                   ["contact.law=penalty_coulomb", "contact.detection=native"], engine)
+                    r["ms_per_step_2_threads"] = r2["ms_per_step"]
+                    r["parallel_efficiency"] = r["ms_per_step"] / (2.0 * r2["ms_per_step"])
+                except runner.RunError as exc:
+                    r["threads_failed"] = str(exc)
             r["search_share"] = r["search"]["search_ms"] / r["ms_per_step"]
             r["broad_phase_share"] = (r["search"]["geometry_ms"] + r["search"]["broad_phase_ms"]) / r["ms_per_step"]
             rows.append(r)
@@ -561,6 +578,9 @@ def scale_section(workdir: Path, sizes=SIZES, walls=WALLS, steps: int = 300, eng
                   f"{sr['clip_ms']:.2f} ms" + (f"; the former all-pairs search {sr['all_pairs_ms']:.2f} ms" if "all_pairs_ms" in sr else "") + "\n"
                   f"  {'':21s} step in two halves alone: contact forces (search, law, damping) "
                   f"{r['split']['forces_ms']:.3f} ms, integration of {n} stones {r['split']['integrate_ms']:.3f} ms"
+                  + (f"\n  {'':21s} 2 threads: {r['ms_per_step_2_threads']:.2f} ms/step, parallel efficiency t1/(2 t2) "
+                     f"{r['parallel_efficiency']:.2f}; contact forces alone {r['split']['forces_ms_2_threads']:.3f} ms "
+                     f"(efficiency {r['split']['forces_efficiency']:.2f})" if "parallel_efficiency" in r else "")
                   + (f"\n  {'':21s} memory: peak {r['max_rss_mib']:.0f} MiB, {r['kib_per_stone']:.0f} KiB per stone"
                      if "kib_per_stone" in r else ""), flush=True)
     fits, marginal = {}, {}

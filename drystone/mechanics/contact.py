@@ -48,7 +48,7 @@ centroid and second moment come from the exact overlap (``drystone.mechanics.ove
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from drystone.geometry import blockfile as bf
 
@@ -517,26 +517,47 @@ def damping_wrenches(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, 
     contact's highest modal frequency omega_max (m,) rad/s. Arguments as in ``mobility``,
     ``patch_stiffness``, ``damping_matrix`` and ``cap_damping``; ``twist`` (m,6) is B's
     velocity and angular velocity relative to A at the patch centroid. Every contact is
-    solved from scratch (``damping_wrenches_warm`` reuses each contact's modes)."""
+    solved from scratch (``damping_wrenches_warm`` reuses each contact's modes), on one
+    thread (its callers run in YADE's Python engines)."""
     m = len(parea)
-    return damping_wrenches_warm(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, iib, twist, fn_el, fs,
-                                 mu, lever, np.zeros((m, 6, 6)), np.zeros(m, np.bool_))
+    fd = np.zeros((m, 3))
+    md = np.zeros((m, 3))
+    om = np.zeros(m)
+    _damp_range(0, m, n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, iib, twist, fn_el, fs, mu, lever,
+                np.zeros((m, 6, 6)), np.zeros(m, np.bool_), fd, md, om)
+    return fd, md, om
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def damping_wrenches_warm(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, iib, twist,
-                          fn_el, fs, mu, lever, basis, warm):
+                          fn_el, fs, mu, lever, basis, warm, chunks=1):
     """``damping_wrenches`` with each contact's modal basis carried between steps:
     ``basis`` (m,6,6) holds on entry, where ``warm``, the contact's eigenvectors of the
     previous step (of B = L^T K L, the scaled stiffness), and on exit this step's, for every
     contact damped here (``_jacobi_sqrt``). A basis that is not one (zeros, NaN) gives a cold
     solve. The result is the cold solve's to ~1e-9 of the largest wrench (while a contact
     slips the twist about n has no stiffness: the square root of B's zero eigenvalue
-    amplifies round-off)."""
+    amplifies round-off).
+
+    Threads: the contacts are cut into ``chunks`` contiguous ranges, shared among numba's
+    threads (``numba.set_num_threads``; one range per thread the caller may run), each
+    damped with its own work arrays (``_damp_range``); a contact's arithmetic does not
+    depend on its range or thread: the same numbers for any count."""
     m = len(parea)
     fd = np.zeros((m, 3))
     md = np.zeros((m, 3))
     om = np.zeros(m)
+    nt = max(1, chunks)  # (numba.get_num_threads() here would keep numba from caching the kernels)
+    for t in prange(nt):
+        _damp_range(t * m // nt, (t + 1) * m // nt, n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, iib,
+                    twist, fn_el, fs, mu, lever, basis, warm, fd, md, om)
+    return fd, md, om
+
+
+@njit(cache=True)
+def _damp_range(c0, c1, n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, iib, twist, fn_el, fs, mu, lever,
+                basis, warm, fd, md, om):
+    """``damping_wrenches_warm``'s contacts c0 <= c < c1 into fd, md, om (and basis)."""
     W = np.empty((6, 6))
     K = np.empty((6, 6))
     L = np.empty((6, 6))
@@ -550,7 +571,7 @@ def damping_wrenches_warm(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, 
     SJ = np.empty((3, 3))
     y = np.empty(6)
     z = np.empty(6)
-    for c in range(m):
+    for c in range(c0, c1):
         if xi[c] <= 0.0 or parea[c] <= 0.0:
             continue
         W[:, :] = 0.0

@@ -17,6 +17,7 @@ Units SI; quaternions (x, y, z, w) like YADE's; body arrays indexed by YADE body
 """
 from __future__ import annotations
 
+import numba
 import numpy as np
 from numba import njit
 
@@ -458,7 +459,7 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
         for q in range(3):
             twist[k, 3 + q] = angvel[b, q] - angvel[a, q]
     fd, md, om = law.damping_wrenches_warm(n, area, pj, kn, kt, xi, ~slipping, pa, pb, inv_mass[oa], inv_mass[ob],
-                                           iia, iib, twist, fn, fs, mu, lever, basis, warm)
+                                           iia, iib, twist, fn, fs, mu, lever, basis, warm, buf[8].shape[0])
     F = np.zeros((nb, 3))
     T = np.zeros((nb, 3))
     Fd = np.zeros((nb, 3))  # the damping wrenches alone, summed on each body (energy.account)
@@ -521,10 +522,16 @@ class CompiledStep:
     contact is a pair of shapes of different bodies, its shear history kept per pair of
     shapes; its forces act on the shapes' bodies. ``state`` is the last step's contacts
     as a ``ContactState`` (built when asked for; ids of bodies). ``skin`` (m): the
-    neighbour list's (``drystone.mechanics.neighbours``; ``neighbours``)."""
+    neighbour list's (``drystone.mechanics.neighbours``; ``neighbours``). ``threads``: the
+    threads the contact search's clip and the damping run on (1 by default; at most numba's,
+    ``numba.config.NUMBA_NUM_THREADS``, the machine's cores unless set: more are not
+    started); every result is the same bit for bit for any number (``neighbours.search``)."""
 
     def __init__(self, mass, inertia, local_vertices, material, table, joints=None, size=None, owner=None,
-                 skin=nbr.SKIN, area_scaling=False):
+                 skin=nbr.SKIN, area_scaling=False, threads: int = 1):
+        if int(threads) != threads or threads < 1:
+            raise ValueError(f"threads {threads!r}: a whole number >= 1")
+        self.threads = min(int(threads), max(1, int(numba.config.NUMBA_NUM_THREADS)))
         self.mass = np.asarray(mass, float)
         self.moving = np.isfinite(self.mass)
         self.inv_mass = np.where(self.moving, 1.0 / np.where(self.moving, self.mass, 1.0), 0.0)
@@ -566,6 +573,7 @@ class CompiledStep:
         self.neighbours.invalidate()
 
     def _search_state(self) -> tuple:
+        numba.set_num_threads(self.threads)  # the search's (numba's setting is per calling thread)
         nl = self.neighbours
         return nl.arrays, nl.contacts
 

@@ -33,7 +33,8 @@ Units: metres.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+import numba
+from numba import njit, prange
 
 from drystone.mechanics import overlap as ov
 
@@ -91,16 +92,18 @@ class NeighbourList:
 
 
 def contact_buffers(cap: int, maxf: int) -> tuple:
-    """The search's output and clip work arrays for ``cap`` candidate pairs (``_search``)."""
-    return _buffers(cap, maxf)
+    """The search's output and clip work arrays for ``cap`` candidate pairs (``search``),
+    the clip's work arrays once per thread numba may run (``numba.config.NUMBA_NUM_THREADS``)."""
+    return _buffers(cap, maxf, max(1, int(numba.config.NUMBA_NUM_THREADS)))
 
 
 @njit(cache=True)
-def _buffers(cap, maxf):
+def _buffers(cap, maxf, nt):
     polys, counts, A, B, S = ov._work(maxf)
     return (np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty(cap), np.empty((cap, 3)),
-            np.empty((cap, 3)), np.empty(cap), np.empty((cap, 3)), np.empty((cap, 3, 3)), polys, counts, A, B, S,
-            np.empty(3))
+            np.empty((cap, 3)), np.empty(cap), np.empty((cap, 3)), np.empty((cap, 3, 3)),
+            np.empty((nt,) + polys.shape), np.zeros((nt,) + counts.shape, np.int64), np.empty((nt,) + A.shape),
+            np.empty((nt,) + B.shape), np.empty((nt,) + S.shape), np.empty((nt, 3)), np.zeros(cap, np.bool_))
 
 
 @njit(cache=True)
@@ -200,43 +203,53 @@ def update(nl, verts, nv, normals, offsets, nf, owner, pos, rot):
     return (la, lb, meta, ref_pos, ref_rot, radius, hs, moving_s, GV, GN, GD, lo, hi, ok)
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def search(nl, buf, nv, nf, faces, fk, tol, touching):
     """This step's contacts among the listed pairs (``update`` first): the pairs whose
-    closed boxes overlap and whose shapes are finite, clipped in the list's order, as
-    ``overlap._contacts_of_pairs`` on the sweep's candidates. Returns (the number of
+    closed boxes overlap and whose shapes are finite, clipped (``overlap.pair_contact``)
+    as ``overlap._contacts_of_pairs`` on the sweep's candidates. Returns (the number of
     contacts m, ``buf``: its first m rows of id1, id2, vol, cen, nrm, area, pc, pj hold
-    them; grown to the list's length where it was shorter)."""
+    them, in the list's order; grown to the list's length where it was shorter).
+
+    Threads: the listed pairs are shared among numba's threads (``numba.set_num_threads``),
+    each clipping with its own work arrays into the pair's own row; the rows that hold a
+    contact are then moved up in the list's order by one thread. A pair's arithmetic does
+    not depend on the thread that does it: the contacts are the same bit for bit for any
+    number of threads."""
     la, lb, meta, ref_pos, ref_rot, radius, hs, moving_s, GV, GN, GD, lo, hi, ok = nl
     n = meta[0]
     if len(buf[0]) < n:
-        buf = _buffers(n + n // 4 + 16, GN.shape[1])
-    id1, id2, vol, cen, nrm, area, pc, pj, polys, counts, A, B, S, g = buf
-    m = 0
-    for k in range(n):
+        buf = _buffers(n + n // 4 + 16, GN.shape[1], buf[8].shape[0])
+    id1, id2, vol, cen, nrm, area, pc, pj, polys, counts, A, B, S, g, hit = buf
+    for k in prange(n):
+        t = numba.get_thread_id()
         i = la[k]
         j = lb[k]
-        if not (ok[i] and ok[j]):
-            continue
-        if lo[i, 0] > hi[j, 0] or lo[j, 0] > hi[i, 0] or lo[i, 1] > hi[j, 1] or lo[j, 1] > hi[i, 1] \
-                or lo[i, 2] > hi[j, 2] or lo[j, 2] > hi[i, 2]:
-            continue
-        if touching and ov._apart(GV[i], nv[i], GN[i], GD[i], nf[i], GV[j], nv[j], GN[j], GD[j], nf[j], tol):
-            continue
-        na, nt = ov._clip_pair(GV[i], nv[i], faces[i], fk[i], nf[i], GN[i], GD[i], GV[j], nv[j], faces[j], fk[j],
-                               nf[j], GN[j], GD[j], tol, polys, counts, A, B, S)
-        v = ov._volume(polys, counts, na, nt, cen[m], g)
-        if v <= 0.0:
-            continue
-        ga = np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
-        if ga <= 0.0:
-            continue
-        ov._patch(polys, counts, na, nt, cen[m], g, pc[m], pj[m])
-        id1[m] = i
-        id2[m] = j
-        vol[m] = v
-        for a in range(3):
-            nrm[m, a] = -g[a] / ga
-        area[m] = ga
-        m += 1
+        hit[k] = False
+        if ok[i] and ok[j] and not (lo[i, 0] > hi[j, 0] or lo[j, 0] > hi[i, 0] or lo[i, 1] > hi[j, 1]
+                                    or lo[j, 1] > hi[i, 1] or lo[i, 2] > hi[j, 2] or lo[j, 2] > hi[i, 2]):
+            hit[k] = ov.pair_contact(GV, GN, GD, nv, nf, faces, fk, i, j, tol, touching, polys[t], counts[t], A[t],
+                                     B[t], S[t], g[t], id1, id2, vol, cen, nrm, area, pc, pj, k)
+    m = 0
+    for k in range(n):
+        if hit[k]:
+            if m < k:
+                _move_row(buf, k, m)
+            m += 1
     return m, buf
+
+
+@njit(cache=True)
+def _move_row(buf, k, m):
+    """Row k of the contacts' outputs into row m (a copy: the same numbers)."""
+    id1, id2, vol, cen, nrm, area, pc, pj = buf[:8]
+    id1[m] = id1[k]
+    id2[m] = id2[k]
+    vol[m] = vol[k]
+    area[m] = area[k]
+    for a in range(3):
+        cen[m, a] = cen[k, a]
+        nrm[m, a] = nrm[k, a]
+        pc[m, a] = pc[k, a]
+        for b in range(3):
+            pj[m, a, b] = pj[k, a, b]

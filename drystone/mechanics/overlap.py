@@ -530,6 +530,35 @@ def _apart(VA, nva, NA, DA, nfa, VB, nvb, NB, DB, nfb, tol):
 
 
 @njit(cache=True)
+def pair_contact(GV, GN, GD, nv, nf, faces, fk, i, j, tol, touching, polys, counts, A, B, S, g, id1, id2, vol, cen,
+                 nrm, area, pc, pj, m):
+    """A listed pair's contact: shapes i and j (their global vertices GV, planes GN, GD)
+    clipped (``_clip_pair``, the work arrays polys .. S and g), and where the overlap's
+    volume and its gradient are positive, the contact written into row m of id1, id2, vol,
+    cen, nrm, area, pc, pj (as ``pair_patch``); returns whether it was. ``touching``: a
+    pair that touches within ``tol`` or is apart (``_apart``) is no contact, without a
+    clip (module docstring, "Touching"). Row m of cen may be written when it is not."""
+    if touching and _apart(GV[i], nv[i], GN[i], GD[i], nf[i], GV[j], nv[j], GN[j], GD[j], nf[j], tol):
+        return False
+    na, nt = _clip_pair(GV[i], nv[i], faces[i], fk[i], nf[i], GN[i], GD[i], GV[j], nv[j], faces[j], fk[j], nf[j],
+                        GN[j], GD[j], tol, polys, counts, A, B, S)
+    v = _volume(polys, counts, na, nt, cen[m], g)
+    if v <= 0.0:
+        return False
+    ga = np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
+    if ga <= 0.0:
+        return False
+    _patch(polys, counts, na, nt, cen[m], g, pc[m], pj[m])  # its area is |g| (module docstring)
+    id1[m] = i
+    id2[m] = j
+    vol[m] = v
+    for a in range(3):
+        nrm[m, a] = -g[a] / ga
+    area[m] = ga
+    return True
+
+
+@njit(cache=True)
 def _contacts_of_pairs(GV, GN, GD, nv, nf, faces, fk, ia, ib, tol, touching):
     """The exact overlaps (as ``pair_patch``) of the candidate pairs (ia, ib), kept where the
     volume and its gradient are positive, in the candidates' order. ``touching``: pairs
@@ -548,26 +577,9 @@ def _contacts_of_pairs(GV, GN, GD, nv, nf, faces, fk, ia, ib, tol, touching):
     g = np.empty(3)
     m = 0
     for k in range(cap):
-        i = ia[k]
-        j = ib[k]
-        if touching and _apart(GV[i], nv[i], GN[i], GD[i], nf[i], GV[j], nv[j], GN[j], GD[j], nf[j], tol):
-            continue
-        na, nt = _clip_pair(GV[i], nv[i], faces[i], fk[i], nf[i], GN[i], GD[i], GV[j], nv[j], faces[j], fk[j], nf[j],
-                            GN[j], GD[j], tol, polys, counts, A, B, S)
-        v = _volume(polys, counts, na, nt, cen[m], g)
-        if v <= 0.0:
-            continue
-        ga = np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
-        if ga <= 0.0:
-            continue
-        _patch(polys, counts, na, nt, cen[m], g, pc[m], pj[m])  # its area is |g| (module docstring)
-        id1[m] = i
-        id2[m] = j
-        vol[m] = v
-        for a in range(3):
-            nrm[m, a] = -g[a] / ga
-        area[m] = ga
-        m += 1
+        if pair_contact(GV, GN, GD, nv, nf, faces, fk, ia[k], ib[k], tol, touching, polys, counts, A, B, S, g,
+                        id1, id2, vol, cen, nrm, area, pc, pj, m):
+            m += 1
     return id1[:m], id2[:m], vol[:m], cen[:m], nrm[:m], area[:m], pc[:m], pj[:m]
 
 

@@ -356,7 +356,7 @@ class CompiledEngine(Engine):
         self.inertia_int = np.where(np.isfinite(run.mass)[:, None], run.inertia, 1.0)
         self.step = ce.Compiled(run.mass, run.inertia, run.local_v, *law_tables(run),
                                 run.shape_size * stability.TUNNEL_FRACTION, run.owner,
-                                area_scaling=laws.get(run.spec.law).area_scaling)
+                                area_scaling=laws.get(run.spec.law).area_scaling, threads=int(run.O.numThreads))
         self.F = self.T = self.F_ext = None
         self.c = None  # the loads' coefficients of the step being taken (None: no loads)
         self._normalise_orientations()
