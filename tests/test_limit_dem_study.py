@@ -48,3 +48,13 @@ def test_compliance_table_from_stored_results():
     assert cells[0][5] == "19.00 [19.00–19.50]" and cells[0][6] == "18.50"
     assert cells[0][7] == "3.00" and cells[1][7] == "0.75"  # the associative limit minus the reaction drop
     assert cells[2][2:4] == ["not run", "not run"] and cells[2][4] == "18.60"
+
+
+def test_report_keeps_the_parts_not_recomputed():
+    before = ("# old\n\nintro\n\n" + ld.HEADINGS["tilt"] + "\n\n| t |\n|---|\n| 1 |\n\n"
+              + ld.HEADINGS["shape"] + "\n\n| s |\n|---|\n| 2 |\n")
+    assert ld.sections(before)[ld.HEADINGS["shape"]] == "| s |\n|---|\n| 2 |"
+    text = ld.report(parts=(), previous=before)
+    assert ld.sections(text) == {h: b for h, b in ld.sections(before).items()}
+    assert text.index(ld.HEADINGS["tilt"]) < text.index(ld.HEADINGS["shape"])
+    assert ld.HEADINGS["compliance"] not in text  # never computed, not invented
