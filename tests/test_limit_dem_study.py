@@ -58,3 +58,23 @@ def test_report_keeps_the_parts_not_recomputed():
     assert ld.sections(text) == {h: b for h, b in ld.sections(before).items()}
     assert text.index(ld.HEADINGS["tilt"]) < text.index(ld.HEADINGS["shape"])
     assert ld.HEADINGS["compliance"] not in text  # never computed, not invented
+
+
+def test_crosscheck_angles_read_the_generated_table():
+    text = ("x\n<!-- begin:crosscheck -->\n| wall (seed) | LMGC90 (rigid) | package K_n 2e+08 | package K_n 2e+09 |\n"
+            "|---|---|---|---|\n| 0 | 19.03 | 14.83 | 17.40 |\n| 1 | 19.27 | — | 17.48 |\n\nExperiment 14.33\n"
+            "<!-- end:crosscheck -->\n")
+    got = ld.crosscheck_angles(text)
+    assert got[0] == {"lmgc90": 19.03, 2e8: 14.83, 2e9: 17.40}
+    assert got[1] == {"lmgc90": 19.27, 2e9: 17.48}  # a dash is no angle
+    assert ld.crosscheck_angles("no block") == {}
+
+
+def test_crosscheck_angles_of_the_shipped_docs_are_onsets_of_the_varying_walls():
+    """Its K_n 2e8 column is the tilt study's published onset of the same seed (the same
+    runs' measure): the columns set beside each other measure the same thing."""
+    xc, dem = ld.crosscheck_angles(), ld.tilt_dem_angles()
+    common = [s for s in xc if 2e8 in xc[s] and s in dem.get("varying", {})]
+    assert common
+    for s in common:
+        assert xc[s][2e8] == pytest.approx(dem["varying"][s][0], abs=tol.PRINTED_2_DECIMALS)

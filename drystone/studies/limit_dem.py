@@ -105,6 +105,31 @@ def tilt_dem_angles() -> dict:
     return out
 
 
+def crosscheck_angles(text: str | None = None) -> dict:
+    """{seed: {"lmgc90": deg, kn (N/m^3): deg}} of the LMGC90 cross-check's tilt walls (the
+    tilt-table wall of varying depth, onset angles: LMGC90's rigid blocks and this package at
+    the K_n of each column) from its generated table in docs/beyond-the-papers.md; {} where
+    the block has no table."""
+    if text is None:
+        text = (paths.ROOT / "docs" / "beyond-the-papers.md").read_text()
+    if "<!-- begin:crosscheck -->" not in text:
+        return {}
+    block = text.split("<!-- begin:crosscheck -->", 1)[1].split("<!-- end:crosscheck -->", 1)[0]
+    rows = [[c.strip() for c in ln.strip().strip("|").split("|")] for ln in block.splitlines() if ln.startswith("|")]
+    if len(rows) < 3 or not rows[0][0].startswith("wall (seed)"):
+        return {}
+    keys = []
+    for h in rows[0][1:]:
+        m = re.match(r"package K_n ([0-9.e+-]+)", h)
+        keys.append("lmgc90" if h.startswith("LMGC90") else float(m.group(1)) if m else None)
+    out = {}
+    for r in rows[2:]:
+        if not r[0].isdigit():
+            continue
+        out[int(r[0])] = {k: float(c) for k, c in zip(keys, r[1:]) if k is not None and re.fullmatch(r"-?[0-9.]+", c)}
+    return out
+
+
 def tilt_limit_angles(overrides, seed: int) -> dict:
     from drystone.studies.tilt import study
 
@@ -119,17 +144,23 @@ def _cell(e: dict) -> str:
 
 
 def tilt_table(seeds=None, log=print) -> str:
-    """Per group and seed; ``seeds`` default: those with published DEM angles."""
+    """Per group and seed; ``seeds`` default: those with published DEM angles. Beside the
+    limit: the tilt study's DEM angles (K_n 2e8 N/m^3) and, for the walls of varying depth
+    (the cross-check's), LMGC90's rigid onset and this package's onset at K_n x 10."""
     dem = tilt_dem_angles()
+    xc = crosscheck_angles()
     rows = ["| tilt-table wall | seed | limit, associative (deg) | limit, Coulomb (deg) | DEM onset (deg) | "
-            "DEM reaction drop (deg) |", "|---|---|---|---|---|---|"]
+            "DEM reaction drop (deg) | DEM onset, K_n × 10 (deg) | LMGC90 onset, rigid (deg) |",
+            "|---|---|---|---|---|---|---|---|"]
+    f = (lambda x: "not run" if x is None else f"{x:.2f}")
     for group, label, over in TILT_GROUPS:
         for s in (seeds if seeds is not None else sorted(dem.get(group, {}))):
             e = tilt_limit_angles(over, s)
             log(f"  tilt {group} seed {s}: " + ", ".join(f"{fr} {x['status']} {x['angle_deg']}" for fr, x in e.items()))
             on, drop = dem.get(group, {}).get(s, (None, None))
-            f = (lambda x: "not run" if x is None else f"{x:.2f}")
-            rows.append(f"| {label} | {s} | {_cell(e['associative'])} | {_cell(e['coulomb'])} | {f(on)} | {f(drop)} |")
+            x = xc.get(s, {}) if group == "varying" else {}
+            rows.append(f"| {label} | {s} | {_cell(e['associative'])} | {_cell(e['coulomb'])} | {f(on)} | {f(drop)} | "
+                        f"{f(x.get(2e9))} | {f(x.get('lmgc90'))} |")
     return "\n".join(rows)
 
 
