@@ -176,6 +176,11 @@ def test_limit_dem_block_takes_both_tables(tmp_path):
         "| c |\n|---|\n| 3 |\n")
     out = rt.limit_dem(tmp_path)
     assert "| 1 | 2 |" in out and "| 3 |" in out and "results/limit_dem/report.md" in out
+    assert "Joint compliance" in out and "not run" in out
+    with open(tmp_path / "limit_dem" / "report.md", "a") as f:
+        f.write("\n## Joint compliance: the DEM at K_n × 10 and × 100\n\n| k |\n|---|\n| 4 |\n\nDEM: how.\n")
+    out = rt.limit_dem(tmp_path)
+    assert "| 4 |" in out and "DEM: how." in out and "not run" not in out
 
 
 def test_limit_dem_reads_the_published_tilt_angles():

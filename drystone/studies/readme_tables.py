@@ -271,6 +271,13 @@ def limit_dem(results: Path) -> str:
         out.append("The shape study's walls: not computed in this report (`python -m drystone.studies.limit_dem "
                    "--only shape`); the earlier table, with the older non-associative iteration, is in "
                    "docs/limit-analysis.md.")
+    try:  # the joint-compliance runs: the table, then the paragraph saying how each number is measured
+        out.append(first_table_after(p, "Joint compliance"))
+        body = p.read_text().split("## Joint compliance", 1)[1].split("\n## ", 1)[0]
+        out += [para for para in body.split("\n\n") if para.startswith("DEM: ")][:1]
+    except Missing:
+        out.append("Joint compliance (the DEM at K_n × 10 and × 100): not run in this report "
+                   "(`python -m drystone.studies.limit_dem --only compliance`).")
     return "\n\n".join(out + [_source_note(p, results=results)])
 
 
