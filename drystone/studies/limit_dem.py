@@ -389,7 +389,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="python -m drystone.studies.limit_dem", description=__doc__)
     ap.add_argument("--only", nargs="+", choices=tuple(HEADINGS), default=list(HEADINGS),
                     help="which parts to compute, the others kept from the report written before (default all: tilt and shape minutes each, the non-associative iteration most "
-                         "of it; compliance runs the DEM, about 20 min the first time on the shared machine, then read back)")
+                         "of it; compliance runs the DEM, about 30 min the first time on the shared machine, the tilt-table wall at K_n x 100 18 of them, then read back)")
     a = ap.parse_args(argv)
     prev = OUT / "report.md"
     text = report(a.only, log=lambda *a: print(*a, file=sys.stderr),
