@@ -109,23 +109,13 @@ def _buffers(cap, maxf, nt):
 @njit(cache=True)
 def _shape_geometry(verts, nv, normals, offsets, nf, owner, pos, rot, GV, GN, GD, lo, hi, ok):
     """Every shape's vertices, face planes and box in the global frame, into the work
-    arrays (the arithmetic of ``overlap._global_geometry`` on pos[owner], rot[owner]);
+    arrays (``overlap.place_shape`` at pos[owner], rot[owner]);
     ``ok``: the shape's vertices are finite (a shape of a stone that left the model, or of
     a blown-up body, pairs with nothing)."""
     for s in range(len(nv)):
         b = owner[s]
         V = GV[s]
-        N = GN[s]
-        D = GD[s]
-        for q in range(nv[s]):
-            for a in range(3):
-                V[q, a] = pos[b, a] + rot[b, a, 0] * verts[s, q, 0] + rot[b, a, 1] * verts[s, q, 1] \
-                    + rot[b, a, 2] * verts[s, q, 2]
-        for f in range(nf[s]):
-            for a in range(3):
-                N[f, a] = rot[b, a, 0] * normals[s, f, 0] + rot[b, a, 1] * normals[s, f, 1] \
-                    + rot[b, a, 2] * normals[s, f, 2]
-            D[f] = offsets[s, f] - (N[f, 0] * pos[b, 0] + N[f, 1] * pos[b, 1] + N[f, 2] * pos[b, 2])
+        ov.place_shape(verts, nv, normals, offsets, nf, pos, rot, s, b, V, GN[s], GD[s])
         good = True
         for a in range(3):
             mn = V[0, a]

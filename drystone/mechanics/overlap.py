@@ -397,15 +397,22 @@ def pair_patch(VA, nva, FA, FKA, nfa, NA, DA, VB, nvb, FB, FKB, nfb, NB, DB, tol
 
 
 @njit(cache=True)
+def place_shape(verts, nv, normals, offsets, nf, pos, rot, s, b, V, N, D):
+    """Shape ``s``'s vertices V, face normals N and plane offsets D in the global frame, at
+    body ``b``'s position and rotation (a shape of a multi-part stone sits at its stone's)."""
+    for q in range(nv[s]):
+        for a in range(3):
+            V[q, a] = pos[b, a] + rot[b, a, 0] * verts[s, q, 0] + rot[b, a, 1] * verts[s, q, 1] \
+                + rot[b, a, 2] * verts[s, q, 2]
+    for f in range(nf[s]):
+        for a in range(3):
+            N[f, a] = rot[b, a, 0] * normals[s, f, 0] + rot[b, a, 1] * normals[s, f, 1] + rot[b, a, 2] * normals[s, f, 2]
+        D[f] = offsets[s, f] - (N[f, 0] * pos[b, 0] + N[f, 1] * pos[b, 1] + N[f, 2] * pos[b, 2])
+
+
+@njit(cache=True)
 def _to_global(verts, nv, normals, offsets, nf, pos, rot, i, V, N, D):
-    for q in range(nv[i]):
-        for a in range(3):
-            V[q, a] = pos[i, a] + rot[i, a, 0] * verts[i, q, 0] + rot[i, a, 1] * verts[i, q, 1] \
-                + rot[i, a, 2] * verts[i, q, 2]
-    for f in range(nf[i]):
-        for a in range(3):
-            N[f, a] = rot[i, a, 0] * normals[i, f, 0] + rot[i, a, 1] * normals[i, f, 1] + rot[i, a, 2] * normals[i, f, 2]
-        D[f] = offsets[i, f] - (N[f, 0] * pos[i, 0] + N[f, 1] * pos[i, 1] + N[f, 2] * pos[i, 2])
+    place_shape(verts, nv, normals, offsets, nf, pos, rot, i, i, V, N, D)
 
 
 def all_contacts(verts, nv, normals, offsets, nf, faces, fk, pos, rot, moving, tol):
