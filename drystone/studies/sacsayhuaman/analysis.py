@@ -297,44 +297,40 @@ def white_noise_identification(out: Path) -> dict:
 
 
 def modal_analysis(out: Path, n_modes: int = 12) -> dict:
-    """Linearised modes of the wall on its joint springs (drystone/mechanics/modal.py) at the settled
-    state of a run (end of gravity): the lowest ``n_modes`` frequencies (Hz), effective
-    mass ratios for a base motion out of plane (y) and in plane (x), the out-of-plane
-    displacement of A-D and of every free block's centroid per mode (mass-normalised)."""
+    """Linearised modes of the wall on its joint springs at the settled state of a run (end
+    of gravity), by the package's modal analysis (drystone/analyses/modal.py ``analyse``:
+    its balance check, its finite-difference step, its interpretation): the lowest
+    ``n_modes`` frequencies (Hz), effective mass ratios for a base motion out of plane (y)
+    and in plane (x), and what this study adds: the out-of-plane displacement of A-D and of
+    every free block's centroid per mode (mass-normalised), the damped modes and the
+    transfer function to A."""
     from drystone.postprocess import identification as idf
     from drystone.postprocess import summary as summ
 
     from drystone.analyses import modal as modal_analysis
 
     asm = idf.wall_assembly(out)
-    # the modal analysis's finite-difference step (drystone/analyses/modal.py STEP_REL: its
-    # Newton step to the nearest equilibrium converges there; at 1e-3 it stopped at a residual
-    # of 1e-3 with negative eigenvalues)
-    res_y = asm.modes(rel_step=modal_analysis.STEP_REL, direction=(0, 1, 0))
-    mx = asm.mass_matrix()
-    gamma_x = res_y["shapes"].T @ mx @ asm.influence((1, 0, 0))
+    an = modal_analysis.analyse(asm, modes=n_modes, where=str(out))
+    res = an["_res"]
     h = summ.load_histories(out)
     i = int(np.argmin(np.abs(h["t"] - asm.sample_time_s)))
     cps = {str(n): (int(b["block"]), h["cp"][i, j]) for j, (n, b) in
            enumerate(zip(h["cp_names"], json.loads((Path(out) / "spec.json").read_text())["control_points"]))}
-    order = np.argsort(res_y["frequency_hz"])
-    total = float(asm.mass[asm.moving].sum())
     modes = []
-    for k in order[:n_modes]:
-        phi = res_y["shapes"][:, k]
+    for m in an["modes"]:
+        phi = res["shapes"][:, m["index"]]
         cp_y = {n: float(asm.point_displacement(phi, b, p)[1]) for n, (b, p) in cps.items()}
         blocks_y = {int(asm.ids[b]): float(asm.point_displacement(phi, asm.ids[b], asm.pos0[b])[1])
                     for b in np.flatnonzero(asm.moving)}
-        modes.append({"frequency_hz": float(res_y["frequency_hz"][k]),
-                      "effective_mass_y": float(res_y["effective_mass_ratio"][k]),
-                      "effective_mass_x": float(gamma_x[k] ** 2 / total), "control_points_y": cp_y,
+        modes.append({"frequency_hz": m["frequency_hz"], "effective_mass_y": m["effective_mass_ratio"]["y"],
+                      "effective_mass_x": m["effective_mass_ratio"]["x"], "control_points_y": cp_y,
                       "blocks_y": blocks_y})
     # the same model with the run's contact damping distributed over each patch (as the
     # dynamic law): complex modes and the transfer function base acceleration -> y of A
     spec = json.loads((Path(out) / "spec.json").read_text())
     xi = [spec["materials"][b["material"]]["damping"] for b in spec["blocks"]]
-    q_star = res_y["q_star"]
-    K, M = 0.5 * (res_y["K"] + res_y["K"].T), res_y["M"]
+    q_star = res["q_star"]
+    K, M = 0.5 * (res["K"] + res["K"].T), res["M"]
     C = asm.damping(xi, at=q_star)
     fd, zd, _ = asm.damped_modes(K, C, M)
     freqs = np.linspace(0.2, 20.0, 397)
@@ -347,10 +343,12 @@ def modal_analysis(out: Path, n_modes: int = 12) -> dict:
               "peak_A_hz": float(freqs[int(np.argmax(h_a))])}
     rc = asm.reference_contacts
     damped["median_overlap_depth_m"] = float(np.median(rc["volume"] / rc["area"]))
-    return {"modes": modes, "damped": damped, "ndof": asm.ndof, "contacts": res_y["contacts"],
-            "asymmetry": res_y["asymmetry"],
-            "residual": res_y["residual"], "residual_at_equilibrium": res_y["residual_at_equilibrium"],
-            "equilibrium_iterations": res_y["equilibrium_iterations"],
-            "equilibrium_max_translation_m": res_y["equilibrium_max_translation_m"], "sample_time_s": asm.sample_time_s,
+    nearby = an["model"]["nearby_equilibrium"]
+    return {"modes": modes, "damped": damped, "ndof": asm.ndof, "contacts": res["contacts"],
+            "asymmetry": res["asymmetry"], "residual": res["residual"],
+            "residual_at_equilibrium": nearby["residual"] if nearby else None,
+            "equilibrium_iterations": nearby["iterations"] if nearby else 0,
+            "equilibrium_max_translation_m": nearby["max_translation_m"] if nearby else 0.0,
+            "sample_time_s": asm.sample_time_s, "zero_modes": len(an["zero_modes"]),
             "cumulative_effective_mass_y": float(sum(m["effective_mass_y"] for m in modes)),
-            "negative_modes": int((res_y["frequency_hz"] < 0).sum())}
+            "negative_modes": int((res["frequency_hz"] < 0).sum())}

@@ -179,12 +179,8 @@ def identification_report(out: Path = OUT) -> Path:
               "", "## (c) Linearised modes on the joint springs", "",
               f"drystone/mechanics/modal.py at the settled state (t = {modal['sample_time_s']:.2f} s of {st['modal_run'].name}): "
               f"{modal['ndof']} DOFs, {modal['contacts']} contacts, K_n V normal + K_t A_c tangential springs, gravity's "
-              f"geometric stiffness included. The recorded settled state is out of balance by up to "
-              f"{modal['residual']:.1e} of a block's weight (the tangential forces stored during settling are not "
-              f"recorded); the modes are taken at the static equilibrium next to it (Newton, "
-              f"{modal['equilibrium_iterations']} iterations, stones moved by at most "
-              f"{1e3 * modal['equilibrium_max_translation_m']:.3f} mm, residual "
-              f"{modal['residual_at_equilibrium']:.1e}); stiffness asymmetry {modal['asymmetry']:.1e}, "
+              f"geometric stiffness included, by the package's modal analysis (`python -m drystone modal`, "
+              f"drystone/analyses/modal.py). {_balance_sentence(modal)} Stiffness asymmetry {modal['asymmetry']:.1e}, "
               f"{modal['negative_modes']} negative eigenvalues.", "",
               "| mode | f (Hz) | effective mass y | effective mass x | y of A, B, C, D (normalised) |",
               "|---|---|---|---|---|"]
@@ -602,3 +598,15 @@ def run_all(workers=None, backend="local", address=None) -> Path:
     table3(workers, backend, address)
     return report()
 
+
+
+def _balance_sentence(modal: dict) -> str:
+    """How the settled state the modes are taken at was found (drystone/analyses/modal.py)."""
+    if modal["residual_at_equilibrium"] is None:
+        return (f"The recorded settled state is out of balance by up to {modal['residual']:.1e} of a block's weight "
+                "without its stored joint shear, which the joints carry within friction: the modes are taken there.")
+    return (f"The recorded settled state is out of balance by up to {modal['residual']:.1e} of a block's weight "
+            f"(the tangential forces stored during settling are not recorded) beyond what friction carries: the "
+            f"modes are taken at the static equilibrium next to it (Newton, {modal['equilibrium_iterations']} "
+            f"iterations, stones moved by at most {1e3 * modal['equilibrium_max_translation_m']:.3f} mm, residual "
+            f"{modal['residual_at_equilibrium']:.1e}).")
