@@ -257,7 +257,8 @@ def _simulate(spec_path: Path, threads: int, quiet: bool, engine: str = "compile
                 except BrokenPipeError:  # it died since ``usable``: its exit code is this run's
                     pass
             for line in proc.stdout:
-                if w is not None and line.rstrip("\n") == RUN_END:
+                if w is not None and line.endswith(RUN_END + "\n"):  # after a line the run left open, if any
+                    log.write(line[:-len(RUN_END) - 1])
                     return 0
                 log.write(line)
                 log.flush()  # sweeps read the progress of running jobs from log.txt

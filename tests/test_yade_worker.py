@@ -17,11 +17,17 @@ from drystone import paths, runner, simulate
 
 pytestmark = [requires_yade, pytest.mark.yade]
 
-#: two small runs that differ in what YADE and the step hold: four boxes, and an L-shaped
-#: stone of two parts (a clump) toppling on a tilting platform
-CASES = {"four_blocks": (paths.CASES / "gravity4.toml", ["stages.0.duration=0.2", "stages.0.ramp=0.1"]),
+SHORT = ["stages.0.duration=0.2", "stages.0.ramp=0.1"]
+#: small runs that differ in what YADE and the step hold: four boxes (the compiled step, then
+#: YADE's contact geometry, then YADE's stock law), and an L-shaped stone of two parts (a
+#: clump) toppling on a tilting platform
+CASES = {"four_blocks": (paths.CASES / "gravity4.toml", SHORT),
+         "four_blocks_yade_geometry": (paths.CASES / "gravity4.toml", SHORT + ["contact.detection=yade"]),
+         "four_blocks_stock_law": (paths.CASES / "gravity4.toml", SHORT + ["contact.law=stock_volumetric"]),
          "l_stone": (paths.CASES / "examples" / "l_stone_tilt.toml",
-                     ["stages.0.duration=0.2", "stages.0.ramp=0.1", "stages.1.to_deg=16.5", "stages.1.rate_deg_s=20"])}
+                     SHORT + ["stages.1.to_deg=16.5", "stages.1.rate_deg_s=20"])}
+#: runs that are not bitwise reproducible even between two YADE processes of their own
+NOT_BITWISE = {"four_blocks_stock_law"}
 #: run_info.json's figures of the process and its clock, which differ between any two runs
 TIMINGS = {"wall_time_s", "us_per_step", "python_us_per_step", "kernel_us_per_step", "max_rss_mib"}
 
@@ -43,14 +49,18 @@ def _same(a: dict, b: dict) -> list[str]:
 
 
 def test_later_runs_of_a_worker_are_bit_for_bit_a_fresh_process(tmp_path, monkeypatch):
+    """YADE's stock law runs among them, but its own histories are not compared: they are not
+    bitwise reproducible even between two processes of their own (round-off, 1e-16 m)."""
     monkeypatch.setenv("DRYSTONE_YADE_WORKER", "0")
     fresh = {n: _run(tmp_path, "fresh", n) for n in CASES}
     monkeypatch.setenv("DRYSTONE_YADE_WORKER", "1")
     pids = []
-    for k, name in enumerate(["l_stone", "four_blocks", "l_stone", "four_blocks"]):
+    order = ["l_stone", "four_blocks_yade_geometry", "four_blocks_stock_law", "four_blocks", "l_stone"]
+    for k, name in enumerate(order):
         h, info = _run(tmp_path, f"worker{k}", name)
         pids.append(simulate._WORKERS[1].proc.pid)
-        assert _same(h, fresh[name][0]) == [], f"run {k + 1} of the worker ({name})"
+        if name not in NOT_BITWISE:
+            assert _same(h, fresh[name][0]) == [], f"run {k + 1} of the worker ({name})"
         assert info == fresh[name][1], f"run {k + 1} of the worker ({name})"
     assert len(set(pids)) == 1, "the runs were not made by one worker"
 
