@@ -197,8 +197,8 @@ class _Worker:
         self.proc.stdout.close()
 
 
-def _end_workers() -> None:
-    """At exit: the workers end with this process."""
+def end_workers() -> None:
+    """End this process's workers (at exit, or where a process is done with runs for a while)."""
     while _WORKERS:
         _WORKERS.popitem()[1].end()
 
@@ -213,7 +213,7 @@ def _forget_workers() -> None:
     _WORKERS.clear()
 
 
-atexit.register(_end_workers)
+atexit.register(end_workers)
 os.register_at_fork(after_in_child=_forget_workers)
 
 

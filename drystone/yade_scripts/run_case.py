@@ -237,7 +237,7 @@ def write_run_info(run, wall) -> None:
                  "engine": run.engine.name, "us_per_step": 1e6 * wall / max(1, run.iter),
                  "python_us_per_step": 1e6 * run.python_time / max(1, run.iter),
                  "kernel_us_per_step": 1e6 * run.kernel_time / max(1, run.iter),
-                 # the process's peak resident memory (MiB; ru_maxrss is in KiB on Linux)
+                 # the run's peak resident memory (MiB), in a worker too (peak_memory_mib)
                  "max_rss_mib": peak_memory_mib(),
                  # rebuilds of the compiled step's neighbour list (drystone/mechanics/neighbours.py)
                  "neighbour_list_builds": getattr(getattr(run.engine.step, "neighbours", None), "builds", None)})
