@@ -165,6 +165,10 @@ def die_with_parent(sig: int = 9) -> None:
 #: (drystone/yade_scripts/worker.py): YADE's start, drystone's imports and numba's cache load
 #: paid once, not per run; ``DRYSTONE_YADE_WORKER=0`` runs each case in a YADE process of its own
 _WORKERS: dict = {}
+#: a worker's YADE process grows by its runs (~1.6 MB per short run of a two-part stone, what
+#: ``O.reset()`` keeps): it is replaced by a new one after this many runs or this growth (MiB)
+#: over its size after its first run
+RUNS_PER_WORKER, GROWTH_PER_WORKER_MIB = 100, 1024.0
 #: environment variables that change while a process runs cases and that no run reads
 #: (pytest's note of the running test): a worker is kept when only they changed
 _ENV_IGNORED = ("PYTEST_CURRENT_TEST",)
@@ -182,12 +186,32 @@ class _Worker:
         yade = shutil.which("yade") or "/usr/bin/yade"
         script = paths.PACKAGE / "yade_scripts" / "worker.py"
         self.env, self.root = _env_key(env), paths.ROOT
+        self.runs, self.first_mib = 0, None  # runs made; resident size after the first (MiB)
         self.proc = subprocess.Popen([sys.executable, yade, "-n", "-x", "-j", str(threads), str(script)],
                                      stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
                                      env=env, cwd=paths.ROOT, start_new_session=True, preexec_fn=die_with_parent)
 
     def usable(self, env: dict) -> bool:
-        return self.env == _env_key(env) and self.root == paths.ROOT and self.proc.poll() is None
+        return (self.env == _env_key(env) and self.root == paths.ROOT and self.proc.poll() is None
+                and self.runs < RUNS_PER_WORKER and self.growth_mib() < GROWTH_PER_WORKER_MIB)
+
+    def resident_mib(self) -> float | None:
+        """The YADE process's resident size (MiB; Linux's ``VmRSS``, else None)."""
+        try:
+            with open(f"/proc/{self.proc.pid}/status") as f:
+                return next(float(x.split()[1]) for x in f if x.startswith("VmRSS:")) / 1024.0
+        except (OSError, StopIteration, ValueError, IndexError):
+            return None
+
+    def completed(self) -> None:
+        """A run was completed by this worker."""
+        self.runs += 1
+        if self.runs == 1:
+            self.first_mib = self.resident_mib()
+
+    def growth_mib(self) -> float:
+        now = self.resident_mib()
+        return 0.0 if now is None or self.first_mib is None else now - self.first_mib
 
     def end(self) -> None:
         """Kill the process (a run that failed or was interrupted, a worker no longer usable)."""
@@ -259,6 +283,7 @@ def _simulate(spec_path: Path, threads: int, quiet: bool, engine: str = "compile
             for line in proc.stdout:
                 if w is not None and line.endswith(RUN_END + "\n"):  # after a line the run left open, if any
                     log.write(line[:-len(RUN_END) - 1])
+                    w.completed()
                     return 0
                 log.write(line)
                 log.flush()  # sweeps read the progress of running jobs from log.txt

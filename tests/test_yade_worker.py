@@ -103,3 +103,17 @@ def test_a_forked_child_gets_its_own_worker(tmp_path, monkeypatch):
     assert child_pid != pid and simulate._WORKERS[1].proc.pid == pid
     assert _same(theirs, mine) == [] and _same(_run(tmp_path, "parent_again", "four_blocks")[0], mine) == []
     assert simulate._WORKERS[1].proc.pid == pid
+
+
+def test_a_worker_is_replaced_after_its_share_of_runs(tmp_path, monkeypatch):
+    """A worker's process grows by its runs: after ``RUNS_PER_WORKER`` runs the next run gets a
+    new one (the same histories)."""
+    monkeypatch.setenv("DRYSTONE_YADE_WORKER", "1")
+    monkeypatch.setattr(simulate, "RUNS_PER_WORKER", 2)
+    simulate.end_workers()
+    first = [_run(tmp_path, f"r{k}", "four_blocks")[0] for k in range(2)]
+    pid = simulate._WORKERS[1].proc.pid
+    assert simulate._WORKERS[1].runs == 2 and simulate._WORKERS[1].growth_mib() >= 0.0
+    h, _ = _run(tmp_path, "r2", "four_blocks")
+    assert simulate._WORKERS[1].proc.pid != pid and simulate._WORKERS[1].runs == 1
+    assert _same(first[0], first[1]) == [] and _same(h, first[0]) == []
