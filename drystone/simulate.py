@@ -4,6 +4,7 @@ complete run is swapped in by ``commit``. Nothing here reads histories or summar
 """
 from __future__ import annotations
 
+import atexit
 import json
 import os
 import shutil
@@ -28,6 +29,9 @@ def _yade_command(spec_path: Path, threads: int, engine: str = "compiled") -> li
     script = paths.PACKAGE / "yade_scripts" / "run_case.py"
     return [sys.executable, yade, "-n", "-x", "-j", str(threads), str(script), str(spec_path), engine]
 
+
+#: the line a worker (drystone/yade_scripts/worker.py) ends a completed run's output with
+RUN_END = "\x1edrystone-run-end"
 
 NOISE = ("Welcome to Yade", "TCP python prompt", "XMLRPC info provider", "Running script", "Using python version")
 
@@ -157,26 +161,146 @@ def die_with_parent(sig: int = 9) -> None:
         _PRCTL(1, int(sig), 0, 0, 0)  # PR_SET_PDEATHSIG = 1
 
 
+#: a YADE process per process (and thread count) that runs cases in turn
+#: (drystone/yade_scripts/worker.py): YADE's start, drystone's imports and numba's cache load
+#: paid once, not per run; ``DRYSTONE_YADE_WORKER=0`` runs each case in a YADE process of its own
+_WORKERS: dict = {}
+#: a worker's YADE process grows by its runs (~1.6 MB per short run of a two-part stone, what
+#: ``O.reset()`` keeps): it is replaced by a new one after this many runs or this growth (MiB)
+#: over its size after its first run
+RUNS_PER_WORKER, GROWTH_PER_WORKER_MIB = 100, 1024.0
+#: environment variables that change while a process runs cases and that no run reads
+#: (pytest's note of the running test): a worker is kept when only they changed
+_ENV_IGNORED = ("PYTEST_CURRENT_TEST",)
+
+
+def _env_key(env: dict) -> dict:
+    return {k: v for k, v in env.items() if k not in _ENV_IGNORED}
+
+
+class _Worker:
+    """One YADE process serving runs (drystone/yade_scripts/worker.py), started by this process
+    with this environment (a changed environment, or a forked child, gets another)."""
+
+    def __init__(self, threads: int, env: dict):
+        yade = shutil.which("yade") or "/usr/bin/yade"
+        script = paths.PACKAGE / "yade_scripts" / "worker.py"
+        self.env, self.root = _env_key(env), paths.ROOT
+        self.runs, self.first_mib = 0, None  # runs made; resident size after the first (MiB)
+        self.proc = subprocess.Popen([sys.executable, yade, "-n", "-x", "-j", str(threads), str(script)],
+                                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                                     env=env, cwd=paths.ROOT, start_new_session=True, preexec_fn=die_with_parent)
+
+    def usable(self, env: dict) -> bool:
+        return (self.env == _env_key(env) and self.root == paths.ROOT and self.proc.poll() is None
+                and self.runs < RUNS_PER_WORKER and self.growth_mib() < GROWTH_PER_WORKER_MIB)
+
+    def resident_mib(self) -> float | None:
+        """The YADE process's resident size (MiB; Linux's ``VmRSS``, else None)."""
+        try:
+            with open(f"/proc/{self.proc.pid}/status") as f:
+                return next(float(x.split()[1]) for x in f if x.startswith("VmRSS:")) / 1024.0
+        except (OSError, StopIteration, ValueError, IndexError):
+            return None
+
+    def completed(self) -> None:
+        """A run was completed by this worker."""
+        self.runs += 1
+        if self.runs == 1:
+            self.first_mib = self.resident_mib()
+
+    def growth_mib(self) -> float:
+        now = self.resident_mib()
+        return 0.0 if now is None or self.first_mib is None else now - self.first_mib
+
+    def end(self) -> None:
+        """Kill the process (a run that failed or was interrupted, a worker no longer usable)."""
+        self.proc.kill()
+        self.proc.wait()
+        self.proc.stdin.close()
+        self.proc.stdout.close()
+
+
+def end_workers() -> None:
+    """End this process's workers (at exit, or where a process is done with runs for a while)."""
+    while _WORKERS:
+        _WORKERS.popitem()[1].end()
+
+
+def _forget_workers() -> None:
+    """In a forked child: the parent's workers are the parent's (the child starts its own);
+    close the child's copies of their pipes."""
+    for w in _WORKERS.values():
+        w.proc.returncode = 0  # not this process's child: never waited for here
+        w.proc.stdin.close()  # nothing buffered: the parent writes a request whole
+        w.proc.stdout.close()
+    _WORKERS.clear()
+
+
+atexit.register(end_workers)
+os.register_at_fork(after_in_child=_forget_workers)
+
+
+def _worker(threads: int, env: dict) -> _Worker | None:
+    """This process's worker for ``threads`` (started if needed), or None where runs get a
+    process each: switched off, or outside the main thread (a worker dies with the thread that
+    started it, ``die_with_parent``)."""
+    import threading
+
+    if os.environ.get("DRYSTONE_YADE_WORKER", "1") == "0" or threading.current_thread() is not threading.main_thread():
+        return None
+    w = _WORKERS.get(threads)
+    if w is not None and not w.usable(env):
+        _WORKERS.pop(threads).end()
+        w = None
+    if w is None:
+        w = _WORKERS[threads] = _Worker(threads, env)
+    return w
+
+
 def _simulate(spec_path: Path, threads: int, quiet: bool, engine: str = "compiled") -> int:
     """Run YADE on ``spec_path`` (its log to log.txt beside it); returns YADE's exit code.
     YADE runs in its own session, so a Ctrl-C reaches only this process, which then
     kills YADE (no orphan) and re-raises; if this process is killed outright (kill -9),
-    the kernel kills YADE (``die_with_parent``)."""
+    the kernel kills YADE (``die_with_parent``). The run goes to this process's worker
+    (``_worker``): a run that fails ends it, with the exit code a run alone would have had."""
     env = dict(os.environ, PYTHONUNBUFFERED="1")  # YADE runs this interpreter: drystone is installed
+    w = _worker(threads, env)
     with open(spec_path.parent / "log.txt", "w") as log:
-        proc = subprocess.Popen(_yade_command(spec_path, threads, engine), stdout=subprocess.PIPE,
-                                stderr=subprocess.STDOUT, text=True, env=env, cwd=paths.ROOT,
-                                start_new_session=True, preexec_fn=die_with_parent)
+        if w is None:
+            proc = subprocess.Popen(_yade_command(spec_path, threads, engine), stdout=subprocess.PIPE,
+                                    stderr=subprocess.STDOUT, text=True, env=env, cwd=paths.ROOT,
+                                    start_new_session=True, preexec_fn=die_with_parent)
+        else:
+            proc = w.proc
         try:
+            if w is not None:
+                try:
+                    proc.stdin.write(json.dumps({"spec": str(Path(spec_path).resolve()), "engine": engine}) + "\n")
+                    proc.stdin.flush()
+                except BrokenPipeError:  # it died since ``usable``: its exit code is this run's
+                    pass
             for line in proc.stdout:
+                if w is not None and line.endswith(RUN_END + "\n"):  # after a line the run left open, if any
+                    log.write(line[:-len(RUN_END) - 1])
+                    w.completed()
+                    return 0
                 log.write(line)
                 log.flush()  # sweeps read the progress of running jobs from log.txt
                 if not quiet and not line.startswith(NOISE) and "verletDist is set to 0" not in line:
                     print(line, end="", flush=True)
+            if w is not None:  # the worker ended (a failed run): its exit code is the run's
+                _WORKERS.pop(threads, None)
+                w.end()
+            proc.stdout.close()
             return proc.wait()
         except BaseException:  # Ctrl-C, SIGTERM (sweep workers), errors: never leave YADE running
-            proc.kill()
-            proc.wait()
+            if w is not None:
+                _WORKERS.pop(threads, None)
+                w.end()
+            else:
+                proc.kill()
+                proc.wait()
             raise
 
 

@@ -274,7 +274,8 @@ def _resummarise(job: Job, status: dict) -> None:
 
 
 def run_job(job: Job) -> dict:
-    """Run one job (in a worker process); never raises: returns a status dict."""
+    """Run one job (in a pool worker, or in the sweep's process for one worker); never raises but
+    on an interrupt: returns a status dict."""
     global _IN_RUN
     from drystone import runner
 
@@ -479,7 +480,11 @@ def _execute(jobs: list[Job], workers: int, backend: str, address: str | None):
     """Yield each job's status dict as it completes."""
     if not jobs:
         return
-    if backend == "local":
+    if backend == "local" and workers == 1:
+        # one at a time: in this process, whose YADE worker (drystone.simulate) makes every run in turn
+        for j in jobs:
+            yield run_job(j)
+    elif backend == "local":
         ex = ProcessPoolExecutor(max_workers=workers, initializer=_worker_init, initargs=(os.getpid(),))
         futures = [ex.submit(run_job, j) for j in jobs]
         complete = False

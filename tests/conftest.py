@@ -41,22 +41,23 @@ _WARM_CASE = {"case": {"name": "numba_warm", "geometry": {"generator": "boxes_on
     {"id": 1, "center_xy": [0.0, 0.0], "size": [0.4, 0.4, 0.2]}]}},
     "stages": [{"type": "gravity", "duration": 0.002, "ramp": 0.001}], "output": {"interval": 0.001}}
 #: cost of the test files (s), to order the files for ``-n N``: each file's tests' durations summed
-#: (setup, call, teardown) in one serial run of the whole suite (``-p no:xdist``, nice) on a shared
-#: 2-core machine, so only their ratios matter; files not here (under 3 s) are costed by marks
-#: (``_COST_S``, the same units). A stale figure only makes the two workers finish less together.
+#: (setup, call, teardown) in one run of the whole suite as ``make test`` runs it (``-n 2``, nice)
+#: on a shared 2-core machine, so only their ratios matter; files not here (under 3 s) are costed
+#: by marks (``_COST_S``, the same units). A stale figure only makes the two workers finish less together.
 _FILE_COST_S = {
-    "test_site_study.py": 89, "test_yade_contact.py": 75, "test_analyses_assess.py": 76, "test_shape_study.py": 69,
-    "test_docs_runnable.py": 52, "test_analyses_fragility.py": 49, "test_multipart_runs.py": 48,
-    "test_tilt_block.py": 47, "test_restitution.py": 43, "test_yade_compiled.py": 35,
-    "test_analyses_collapse.py": 34, "test_energy.py": 33, "test_analyses_tilt.py": 31,
-    "test_reliability_site.py": 27, "test_damping.py": 25, "test_earth_pressure_runs.py": 25, "test_sweep.py": 24,
-    "test_fragility.py": 21, "test_reliability_run.py": 18, "test_report.py": 15, "test_reliability_output.py": 15,
-    "test_excitation.py": 15, "test_sacsayhuaman.py": 15, "test_cases_valid.py": 15, "test_regression.py": 14,
-    "test_verification.py": 12, "test_crosscheck.py": 11, "test_motions_catalogue.py": 11,
-    "test_analyses_modal.py": 10, "test_broad_phase.py": 9, "test_ogawa_3d.py": 7, "test_rocking_pulse.py": 7,
-    "test_reliability_geometry.py": 7, "test_left_model_removed.py": 6, "test_fragility_measures.py": 5,
-    "test_ogawa_study.py": 5, "test_identification.py": 5, "test_layers.py": 5, "test_polygonal_wall.py": 5,
-    "test_dxf.py": 4, "test_modal.py": 4, "test_reliability_vertices.py": 3}
+    "test_site_study.py": 192, "test_yade_contact.py": 114, "test_docs_runnable.py": 94, "test_shape_study.py": 85,
+    "test_analyses_assess.py": 56, "test_yade_worker.py": 50, "test_analyses_tilt.py": 33,
+    "test_analyses_fragility.py": 31, "test_sweep.py": 31, "test_fragility.py": 27, "test_reliability_site.py": 24,
+    "test_tilt_block.py": 23, "test_analyses_collapse.py": 23, "test_motions_catalogue.py": 22,
+    "test_cases_valid.py": 22, "test_damping.py": 22, "test_energy.py": 22, "test_restitution.py": 20,
+    "test_rocking_pulse.py": 20, "test_sacsayhuaman.py": 19, "test_fragility_measures.py": 19,
+    "test_multipart_runs.py": 19, "test_broad_phase.py": 19, "test_identification.py": 17, "test_crosscheck.py": 16,
+    "test_reliability_run.py": 15, "test_reliability_output.py": 15, "test_reliability_geometry.py": 14,
+    "test_yade_compiled.py": 14, "test_ogawa_study.py": 13, "test_verification.py": 13, "test_regression.py": 13,
+    "test_report.py": 11, "test_layers.py": 10, "test_earth_pressure_runs.py": 10, "test_polygonal_wall.py": 9,
+    "test_excitation.py": 9, "test_dxf.py": 7, "test_reliability_vertices.py": 7, "test_ogawa_3d.py": 6,
+    "test_analyses_modal.py": 5, "test_decompose.py": 5, "test_bench.py": 4, "test_modal.py": 4,
+    "test_limit_analysis.py": 4, "test_packaging.py": 4, "test_left_model_removed.py": 4, "test_meshes.py": 3}
 #: cost of a test (s) by its marks, for the files not in ``_FILE_COST_S``
 _COST_S = {"slow": 30.0, "yade": 3.0, "other": 0.3}
 
@@ -73,11 +74,12 @@ def pytest_configure(config):
     parallel = getattr(config.option, "numprocesses", None) and not hasattr(config, "workerinput")
     if not parallel or config.option.collectonly or drystone.kernels_cached() or not have_yade():
         return
-    from drystone import runner
+    from drystone import runner, simulate
 
     print("conftest: numba's cache is cold: compiling the contact kernels once (30-60 s)", flush=True)
     with tempfile.TemporaryDirectory(prefix="drystone-warm-") as d:
         runner.run_dict(_WARM_CASE, Path(d) / "warm.toml", out_dir=Path(d) / "out", quiet=True)
+    simulate.end_workers()  # this process runs no test: its YADE worker would idle all session
 
 
 def _cost(item) -> float:

@@ -23,7 +23,7 @@ def test_assess_quick_one_stone(tmp_path):
 
     recs = [pulse_file(tmp_path / "pulse_a.txt", 1.0), pulse_file(tmp_path / "pulse_b.txt", 3.5)]
     res = assess.assess(CASES / "sliding_block_pulse.toml", quick=True, records=recs, out=tmp_path / "out",
-                        workers=2, log=lambda *a: None)
+                        workers=1, log=lambda *a: None)
     out = Path(res["out_dir"])
     data = json.loads((out / "assess.json").read_text())
     p = data["parts"]
@@ -70,7 +70,7 @@ def test_assess_quick_on_a_drawn_wall_with_a_re_entrant_stone(tmp_path):
                     'geometry = {generator = "dxf", file = "wall.dxf", thickness = 0.4}\n\n'
                     '[[stages]]\ntype = "gravity"\nduration = 0.4\nramp = 0.2\n\n[output]\ninterval = 0.02\n')
     recs = [pulse_file(tmp_path / "pulse_a.txt", 1.0), pulse_file(tmp_path / "pulse_b.txt", 3.5)]
-    res = assess.assess(case, quick=True, records=recs, out=tmp_path / "out", workers=2, log=lambda *a: None)
+    res = assess.assess(case, quick=True, records=recs, out=tmp_path / "out", workers=1, log=lambda *a: None)
     out = Path(res["out_dir"])
     data = json.loads((out / "assess.json").read_text())
     p = data["parts"]

@@ -114,7 +114,7 @@ def test_fragility_ida_end_to_end(tmp_path):
 
     recs = [pulse_file(tmp_path / "pulse_a.txt", 1.0), pulse_file(tmp_path / "pulse_b.txt", 3.5)]
     res = FR.fragility(CASES / "sliding_block_pulse.toml", recs, start=0.4, factor=2.0, cap=2.0, tolerance=0.45,
-                       fill=None, n_boot=20, out=tmp_path / "out", workers=2, log=lambda *a: None)
+                       fill=None, n_boot=20, out=tmp_path / "out", workers=1, log=lambda *a: None)
     out = Path(res["out_dir"])
     data = json.loads((out / "fragility.json").read_text())
     assert data["method"] == "ida" and data["im"] == "pga"
@@ -197,7 +197,7 @@ def test_fragility_stripes_uncertain_mu(tmp_path):
 
     recs = [pulse_file(tmp_path / "pulse_a.txt", 1.0), pulse_file(tmp_path / "pulse_b.txt", 3.5)]
     res = FR.fragility(CASES / "sliding_block_pulse.toml", recs, method="stripes", levels=[0.4, 0.8], n_boot=10,
-                       uncertain=("mu",), out=tmp_path / "out", workers=2, log=lambda *a: None)
+                       uncertain=("mu",), out=tmp_path / "out", workers=1, log=lambda *a: None)
     out = Path(res["out_dir"])
     data = json.loads((out / "fragility.json").read_text())
     assert data["uncertain"]["base"]["mu"] == pytest.approx(0.4, rel=tol.FEW_ULP_REL)

@@ -290,52 +290,42 @@ def test_a_full_disk_while_the_summary_is_written_is_a_named_error(tmp_path, mon
     assert _tree(out) == before
 
 
-def _processes(marker: str) -> list[int]:
-    """Pids of live processes (not zombies) whose command line contains ``marker``."""
-    pids = []
-    for d in Path("/proc").iterdir():
-        if d.name.isdigit() and int(d.name) != os.getpid():
-            try:
-                cmd = (d / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
-                state = (d / "stat").read_text().rsplit(")", 1)[1].split()[0]
-            except OSError:
-                continue
-            if marker in cmd and state != "Z":
-                pids.append(int(d.name))
-    return pids
-
-
 @requires_yade
 def test_kill_9_of_a_sweep_ends_its_workers_and_their_yade(tmp_path):
     """kill -9 of a sweep's process left its workers running: they started and committed
-    further queued runs, then idled with parent 1."""
+    further queued runs, then idled with parent 1. Two pool workers, each running a long run
+    in its YADE, and a queued run."""
+    from test_reliability_run import alive, descendants
+
     (tmp_path / "base.toml").write_text(GOOD)
     (tmp_path / "s.toml").write_text('[sweep]\nname = "s"\ncase = "base.toml"\n'
                                      '[[runs]]\nname = "long"\nset = ["stages.0.duration=600.0"]\n'
+                                     '[[runs]]\nname = "long2"\nset = ["stages.0.duration=600.0"]\n'
                                      '[[runs]]\nname = "queued"\nset = ["stages.0.duration=0.2"]\n')
     results = tmp_path / "results"
     code = ("import sys; from pathlib import Path; from drystone import sweep\n"
-            "sweep.run(sys.argv[1], workers=1, results=Path(sys.argv[2]), heartbeat_s=3600)")
+            "sweep.run(sys.argv[1], workers=2, results=Path(sys.argv[2]), heartbeat_s=3600)")
     p = subprocess.Popen([sys.executable, "-c", code, str(tmp_path / "s.toml"), str(results)], cwd=paths.ROOT,
                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    stage = runner.staging_folder(results / "s" / "long")
-    marker = str(tmp_path)  # in the command line of the sweep, its workers (forked) and YADE (the spec's path)
+    logs = [runner.staging_folder(results / "s" / n) / "log.txt" for n in ("long", "long2")]
+    under = {}  # the sweep's workers (forked) and their YADE processes
     try:
         t0 = time.time()
-        while not ((stage / "log.txt").is_file() and "stage 1/1" in (stage / "log.txt").read_text()):
-            assert time.time() - t0 < 240 and p.poll() is None, "the long run did not start"
+        while not all(f.is_file() and "stage 1/1" in f.read_text() for f in logs):
+            assert time.time() - t0 < 240 and p.poll() is None, "the long runs did not start"
             time.sleep(0.2)
-        assert len(_processes(marker)) >= 3  # the sweep, its worker, YADE
+        under = descendants(p.pid)
+        assert len(under) >= 4 and sum("yade" in c for c in under.values()) >= 2, under  # 2 workers, 2 YADE
         p.kill()
         p.wait()
         t0 = time.time()
-        while _processes(marker) and time.time() - t0 < 20:
+        while alive(under) and time.time() - t0 < 20:
             time.sleep(0.2)
-        assert not _processes(marker), "workers or YADE outlived the sweep"
+        assert not alive(under), "workers or YADE outlived the sweep"
         time.sleep(1.0)
         assert not (results / "s" / "queued").exists()  # no queued run was started or committed
     finally:
-        for pid in _processes(marker):
+        for pid in alive(under):
             try:
                 os.kill(pid, signal.SIGKILL)
             except ProcessLookupError:

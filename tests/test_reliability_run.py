@@ -36,18 +36,45 @@ def _files(out: Path) -> dict:
     return {p.name: p.read_bytes() for p in sorted(out.iterdir()) if p.is_file()}
 
 
-def _yade_processes(marker: str) -> list[int]:
-    """Pids of live processes whose command line contains ``marker``."""
-    pids = []
+def descendants(root: int) -> dict[int, str]:
+    """Pids of the live processes (not zombies) that descend from process ``root``, with their
+    command lines: {pid: command line}."""
+    parent, cmd = {}, {}
     for d in Path("/proc").iterdir():
         if d.name.isdigit():
             try:
-                cmd = (d / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
-            except OSError:
+                stat = (d / "stat").read_text().rsplit(")", 1)[1].split()
+                c = (d / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+            except (OSError, IndexError):
                 continue
-            if marker in cmd and "yade" in cmd:
-                pids.append(int(d.name))
-    return pids
+            if stat[0] != "Z":
+                parent[int(d.name)], cmd[int(d.name)] = int(stat[1]), c
+    out, todo = {}, [root]
+    while todo:
+        p = todo.pop()
+        for k, pp in parent.items():
+            if pp == p and k not in out:
+                out[k] = cmd[k]
+                todo.append(k)
+    return out
+
+
+def alive(pids) -> list[int]:
+    """Those of ``pids`` that still run (not zombies)."""
+    out = []
+    for pid in pids:
+        try:
+            if Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z":
+                out.append(pid)
+        except (OSError, IndexError):
+            pass
+    return out
+
+
+def _yade_processes(root: int) -> list[int]:
+    """Pids of the YADE processes under process ``root`` (a run's own, or the worker making its
+    runs, drystone.simulate)."""
+    return [pid for pid, cmd in descendants(root).items() if "yade" in cmd]
 
 
 # -- plain Python: the stability checks ---------------------------------------------------
@@ -185,16 +212,24 @@ def _start(args, cwd) -> subprocess.Popen:
                             stderr=subprocess.PIPE, text=True, preexec_fn=_terminal_sigint)
 
 
-def _kill(p: subprocess.Popen, marker: str) -> None:
-    """Kill ``p`` and any YADE process whose command line contains ``marker``."""
+def _kill(p: subprocess.Popen, pids) -> None:
+    """Kill ``p`` and the processes ``pids`` (its YADE, found while it ran)."""
     if p.poll() is None:
         p.kill()
         p.wait()
-    for pid in _yade_processes(marker):
+    for pid in alive(pids):
         try:
             os.kill(pid, signal.SIGKILL)
         except ProcessLookupError:
             pass
+
+
+def _yade_running(p: subprocess.Popen, log: Path, found: list) -> bool:
+    """Whether ``log`` shows a run's first stage and YADE runs under ``p``; their pids into ``found``."""
+    if not (log.is_file() and "stage 1/1" in log.read_text()):
+        return False
+    found.extend(pid for pid in _yade_processes(p.pid) if pid not in found)
+    return bool(found)
 
 
 def _wait_for(pred, timeout=120.0):
@@ -212,16 +247,16 @@ def test_ctrl_c_on_a_run_kills_yade_and_keeps_the_folder(outdir):
     out = outdir / "long"
     p = _start(["run", str(outdir / "long.toml"), "--out", str(out)], paths.ROOT)
     stage = runner.staging_folder(out)
-    assert _wait_for(lambda: _yade_processes(str(stage)) and (stage / "log.txt").is_file()
-                     and "stage 1/1" in (stage / "log.txt").read_text()), "YADE did not start"
+    yade = []
     try:
+        assert _wait_for(lambda: _yade_running(p, stage / "log.txt", yade)), "YADE did not start"
         p.send_signal(signal.SIGINT)
         _, err = p.communicate(timeout=60)
         assert p.returncode == 130, err
-        assert _wait_for(lambda: not _yade_processes(str(stage)), 10), "YADE was orphaned"
+        assert _wait_for(lambda: not alive(yade), 10), "YADE was orphaned"
         assert not (out / "summary.json").exists()
     finally:  # a failed test must not leave a 600 s run behind
-        _kill(p, str(stage))
+        _kill(p, yade)
 
 
 @requires_yade
@@ -239,15 +274,15 @@ def test_ctrl_c_on_a_sweep_stops_the_pool_and_records_what_finished(outdir):
     p = subprocess.Popen([sys.executable, "-c", code, str(outdir / "s.toml"), str(env_results)], cwd=paths.ROOT,
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=_terminal_sigint)
     long_stage = runner.staging_folder(env_results / "s" / "long")
-    assert _wait_for(lambda: (long_stage / "log.txt").is_file() and "stage 1/1" in (long_stage / "log.txt").read_text()
-                     and _yade_processes(str(long_stage)), 240), "the long run did not start"
+    yade = []
     try:
+        assert _wait_for(lambda: _yade_running(p, long_stage / "log.txt", yade), 240), "the long run did not start"
         p.send_signal(signal.SIGINT)
         out, err = p.communicate(timeout=120)
         assert p.returncode == 130, out + err
-        assert _wait_for(lambda: not _yade_processes(str(env_results)), 10), "YADE was orphaned"
+        assert _wait_for(lambda: not alive(yade), 10), "YADE was orphaned"
     finally:
-        _kill(p, str(env_results))
+        _kill(p, yade)
     runs = {r["name"]: r["status"] for r in json.loads((env_results / "s" / "sweep.json").read_text())["runs"]}
     assert runs == {"short": "done", "long": "interrupted", "queued": "pending"}
     assert not (env_results / "s" / "queued").exists()

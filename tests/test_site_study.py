@@ -254,7 +254,7 @@ def test_small_study_end_to_end(outdir):
     collapse as its folder says, surface PGAs from each run's spec.json), every run is in
     runs.csv; run again, every run is reused (about 2 min on 2 cores)."""
     cfg = replace(P.CONFIGS["small"], results_root=str(outdir / "results"))
-    r = S.run(cfg, workers=2)
+    r = S.run(cfg, workers=1)
     assert not r["failed"] and not r["interrupted"] and not r["refused"], r
     text = R.write(cfg).read_text()
     data = json.loads((cfg.out_dir / "site.json").read_text())
@@ -282,7 +282,7 @@ def test_small_study_end_to_end(outdir):
     rows = list(csv.DictReader(open(cfg.out_dir / "runs.csv")))
     assert r["runs_run"] == len(rows)
     assert "ASSUMED" in text and "## Cost" in text
-    again = S.run(cfg, workers=2)
+    again = S.run(cfg, workers=1)
     assert again["runs_run"] == 0 and again["runs_reused"] == len(rows)
     assert R.write(cfg).read_text().split("## Cost")[0] == text.split("## Cost")[0]
 

@@ -211,6 +211,16 @@ def enter_stage(run, k: int) -> None:
         run.monitors = sorted(run.monitors + [m], key=lambda x: x.order)
 
 
+def peak_memory_mib() -> float:
+    """The process's peak resident memory, MiB: Linux's ``VmHWM`` (which a worker serving many
+    runs starts again at each, drystone/yade_scripts/worker.py), else ``ru_maxrss``."""
+    try:
+        with open("/proc/self/status") as f:
+            return next(float(x.split()[1]) for x in f if x.startswith("VmHWM:")) / 1024.0  # kB
+    except (OSError, StopIteration, ValueError, IndexError):
+        return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # KiB on Linux
+
+
 def write_run_info(run, wall) -> None:
     """run_info.json of a finished run (the driver ``run``; ``wall`` its wall time, s) into its folder."""
     info = {"steps": int(run.iter), "simulated_time_s": float(run.t), "wall_time_s": wall,
@@ -227,8 +237,8 @@ def write_run_info(run, wall) -> None:
                  "engine": run.engine.name, "us_per_step": 1e6 * wall / max(1, run.iter),
                  "python_us_per_step": 1e6 * run.python_time / max(1, run.iter),
                  "kernel_us_per_step": 1e6 * run.kernel_time / max(1, run.iter),
-                 # the process's peak resident memory (MiB; ru_maxrss is in KiB on Linux)
-                 "max_rss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
+                 # the run's peak resident memory (MiB), in a worker too (peak_memory_mib)
+                 "max_rss_mib": peak_memory_mib(),
                  # rebuilds of the compiled step's neighbour list (drystone/mechanics/neighbours.py)
                  "neighbour_list_builds": getattr(getattr(run.engine.step, "neighbours", None), "builds", None)})
     tmp = run.out / "run_info.tmp.json"
