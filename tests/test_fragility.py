@@ -139,6 +139,15 @@ def test_impossible_fits_are_refused_with_the_reason(x, z, words):
     assert words in F.why_no_fit(x, [10] * len(x), z)
 
 
+def test_a_flat_fit_is_refused_not_overflowed():
+    """The same fraction at every stripe (a bootstrap resample can draw it): the slope is
+    round-off and the median exp(-a / b) beyond any float, or below any; a FitError saying so, which the
+    bootstrap counts as a failed fit, not an OverflowError that ends the study."""
+    for z in ([1, 1, 1], [5, 5, 5]):  # the median far above the stripes, and far below them
+        with pytest.raises(F.FitError, match="beyond any number"):
+            F.fit([0.6, 0.9, 1.2], [6, 6, 6], z)
+
+
 def test_malformed_input_is_a_value_error():
     with pytest.raises(ValueError, match="0 <= z <= n"):
         F.fit([0.1, 0.2], [10, 10], [3, 11])

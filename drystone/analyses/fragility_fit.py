@@ -238,6 +238,9 @@ def fit(x, n, z) -> Fit:
     if b <= 0:  # cannot happen for overlapping data with probability increasing in x, but say so if it does
         raise FitError(f"the fitted probability decreases with the intensity measure (slope {b:.3g}): the data do "
                        "not describe a fragility")
+    if abs(a / b) > math.log(np.finfo(float).max):  # a nearly flat fit (a bootstrap resample): no finite median
+        raise FitError(f"the fitted median exp({-a / b:.3g}) is beyond any number (slope {b:.3g}): the data do not "
+                       "resolve it")
     theta, beta = math.exp(-a / b), 1.0 / b
     try:
         se_t, se_b = standard_errors(x, n, theta, beta)

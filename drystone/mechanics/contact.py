@@ -215,18 +215,23 @@ def twist_spring(mt0, wn, jp, area, kt, mu, fn_el, fs_mag, dt):
 def carried_share(before, now, f2, kt, both=False):
     """The share r of a contact's carried shear force (or twisting moment) that its patch
     still holds when its area (or polar moment) went from ``before`` to ``now`` (m^2 or
-    m^4), and the elastic energy that leaves with the rest, J: (1 - r) f2 / (2 K_t before),
-    f2 the carried force's square (N^2, or N^2 m^2), kt N/m^3. Where the patch shrank, r =
-    now / before (the springs that left let go of their share of a uniform traction): the
-    stored energy f^2 / (2 K_t A) falls to r times its value instead of growing; where it
-    grew, r = 1 (the springs that came in carry nothing yet), unless ``both`` (the carried
-    elastic displacement, f = K_t A u_s: the force follows the area both ways). The
-    opt-in law ``penalty_coulomb_area`` (drystone/mechanics/laws.py; docs/energy.md)."""
+    m^4), and the elastic energy the patch lets go, J, f2 the carried force's square (N^2,
+    or N^2 m^2), kt N/m^3. The law's patch is one spring K_t A holding a uniform traction,
+    its energy f^2 / (2 K_t A). Where the patch shrank, r = now / before (the springs that
+    left let go of their share of the traction): the energy falls to r times its value,
+    instead of growing, by (1 - r) f2 / (2 K_t before). Where it grew, r = 1 (the springs
+    that came in carry nothing yet), and the force spreads over the larger patch, as the
+    law's next increments (K_t A) take it: its energy falls by f2 / (2 K_t) (1 / before -
+    1 / now), what two springs let go when the loaded one shares its force with an unloaded
+    one. Both counted as dissipated: the stored shear energy never changes with the area
+    but downwards. With ``both`` (the carried elastic displacement, f = K_t A u_s: the force
+    follows the area both ways), r = now / before and the change (1 - r) f2 / (2 K_t before).
+    The opt-in law ``penalty_coulomb_area`` (drystone/mechanics/laws.py; docs/energy.md)."""
     if before <= 0.0 or now <= 0.0 or kt <= 0.0:
         return 1.0, 0.0
     r = now / before
     if r >= 1.0 and not both:
-        return 1.0, 0.0
+        return 1.0, 0.5 * f2 / kt * (1.0 / before - 1.0 / now)
     return r, (1.0 - r) * f2 / (2.0 * kt * before)
 
 

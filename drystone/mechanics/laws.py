@@ -84,7 +84,8 @@ class PenaltyCoulomb(ContactLaw):
 @register
 class PenaltyCoulombArea(PenaltyCoulomb):
     """``penalty_coulomb`` with the carried shear force and twisting moment scaled by the
-    area (polar moment) ratio where a contact's patch shrinks (contact.carried_share): the
+    area (polar moment) ratio where a contact's patch shrinks, kept where it grows, the
+    energy the patch lets go either way counted as dissipated (contact.carried_share): the
     stored shear energy cannot grow without work at a joint that opens under shear (a block
     rocking with uplift), but barely touching wedge joints, whose area follows their depth,
     couple their normal motion to their shear and a settled wall creeps (docs/energy.md).

@@ -46,6 +46,9 @@ warning. Blocks (``BLOCKS``):
 * ``limit_dem``: the rigid limit angles (both frictions) of the tilt-table walls and the shape
   study's walls beside their published DEM angles (results/limit_dem/report.md;
   ``python -m drystone.studies.limit_dem``);
+* ``contact_law``: the paper comparisons (tilt angles, Table 3 cells, fragility medians) and
+  the eccentric push's energy balance with both contact laws (results/contact_law/report.md;
+  ``python -m drystone.studies.contact_law``);
 * ``site``: the site study's retained vs free-standing table, its rock vs surface table and
   cost (results/site/report.md; ``make site-study``).
 
@@ -169,6 +172,16 @@ def first_table_after(report: Path, heading: str) -> str:
 def sacsayhuaman_table3(results: Path) -> str:
     p = results / "sacsayhuaman" / "report.md"
     return first_table_after(p, "Table 3") + "\n\n" + _source_note(p, results=results)
+
+
+def contact_law(results: Path) -> str:
+    """The paper comparisons with both contact laws and their cost (everything under the
+    report's heading)."""
+    p = results / "contact_law" / "report.md"
+    if not p.is_file():
+        raise Missing(f"{p} missing")
+    body = "\n".join(ln for ln in p.read_text().splitlines() if not ln.startswith("# ")).strip()
+    return body + "\n\n" + _source_note(p, results=results)
 
 
 def free_decay(results: Path) -> str:
@@ -356,7 +369,7 @@ BLOCKS = {"bench": bench, "verification": verification, "tilt": tilt, "tilt_chec
           "sacsayhuaman_table3": sacsayhuaman_table3, "free_decay": free_decay, "restitution": restitution,
           "restitution_curve": restitution_curve, "identification": identification,
           "fragility": fragility, "crosscheck": crosscheck, "shape": shape,
-          "site": site, "pulse_overturning": pulse_overturning, "limit_dem": limit_dem}
+          "site": site, "pulse_overturning": pulse_overturning, "limit_dem": limit_dem, "contact_law": contact_law}
 
 
 def documents(root: Path | None = None) -> list[Path]:
