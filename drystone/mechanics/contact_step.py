@@ -614,7 +614,8 @@ def _advance(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, a
                     slip, Fd, Td, nl, buf)
         v0[:] = vel
         w0[:] = angvel
-        integrate(dt, g[s], F, T, mass, inertia, lin_free, rot_free, aspherical, pos, vel, angvel, angmom, quat, rot)
+        integrate(dt, g[s], F, T, mass, inertia, lin_free, rot_free, aspherical, pos, vel, angvel, angmom, quat, rot,
+                  buf[8].shape[0])
         energy.account(dt, g[s], F, T, Fd, Td, F_ext, moving, mass, lin_free, v0, w0, vel, angvel, 0.5 * slip, acc)
         if loaded:
             acc[0] += energy.load_work(dt, coef[s], Fb, Tb, moving, lin_free, rot_free, v0, w0, vel, angvel)
