@@ -232,75 +232,66 @@ def _by_body(oa, ob, nb):
 
 
 @njit(cache=True)
-def _wrench_range(r0, r1, fs, fn, n, fd, md, ra, rb, pa, pb, f, tb, ta, tdb, tda):
-    """Contacts r0 <= k < r1 of ``_wrench_rows``."""
-    for k in range(r0, r1):
-        fc0 = fs[k, 0] + fn[k] * n[k, 0]
-        fc1 = fs[k, 1] + fn[k] * n[k, 1]
-        fc2 = fs[k, 2] + fn[k] * n[k, 2]
-        f[k, 0] = fc0 + fd[k, 0]
-        f[k, 1] = fc1 + fd[k, 1]
-        f[k, 2] = fc2 + fd[k, 2]
-        # torques: r x f_c at the overlap centroid, p x f_d at the patch centroid, + m_d
-        d0, d1, d2 = fd[k, 0], fd[k, 1], fd[k, 2]
-        tb[k, 0] = (rb[k, 1] * fc2 - rb[k, 2] * fc1) + (pb[k, 1] * d2 - pb[k, 2] * d1) + md[k, 0] + fs[k, 3] * n[k, 0]
-        tb[k, 1] = (rb[k, 2] * fc0 - rb[k, 0] * fc2) + (pb[k, 2] * d0 - pb[k, 0] * d2) + md[k, 1] + fs[k, 3] * n[k, 1]
-        tb[k, 2] = (rb[k, 0] * fc1 - rb[k, 1] * fc0) + (pb[k, 0] * d1 - pb[k, 1] * d0) + md[k, 2] + fs[k, 3] * n[k, 2]
-        ta[k, 0] = (ra[k, 1] * fc2 - ra[k, 2] * fc1) + (pa[k, 1] * d2 - pa[k, 2] * d1) + md[k, 0] + fs[k, 3] * n[k, 0]
-        ta[k, 1] = (ra[k, 2] * fc0 - ra[k, 0] * fc2) + (pa[k, 2] * d0 - pa[k, 0] * d2) + md[k, 1] + fs[k, 3] * n[k, 1]
-        ta[k, 2] = (ra[k, 0] * fc1 - ra[k, 1] * fc0) + (pa[k, 0] * d1 - pa[k, 1] * d0) + md[k, 2] + fs[k, 3] * n[k, 2]
-        tdb[k, 0] = (pb[k, 1] * d2 - pb[k, 2] * d1) + md[k, 0]
-        tdb[k, 1] = (pb[k, 2] * d0 - pb[k, 0] * d2) + md[k, 1]
-        tdb[k, 2] = (pb[k, 0] * d1 - pb[k, 1] * d0) + md[k, 2]
-        tda[k, 0] = (pa[k, 1] * d2 - pa[k, 2] * d1) + md[k, 0]
-        tda[k, 1] = (pa[k, 2] * d0 - pa[k, 0] * d2) + md[k, 1]
-        tda[k, 2] = (pa[k, 0] * d1 - pa[k, 1] * d0) + md[k, 2]
-
-
-@njit(cache=True, parallel=True)
-def _wrench_rows(fs, fn, n, fd, md, ra, rb, pa, pb, f, tb, ta, tdb, tda, chunks):
-    """Each contact's force on B (elastic normal + shear spring + damping) ``f`` and the
-    torques on B and A about their centres: all of it (tb, ta) and the damping's alone
-    (tdb, tda); the force and the torques on A are subtracted."""
-    m = fs.shape[0]
-    nt = range_count(m, chunks)
-    if nt == 1:
-        _wrench_range(0, m, fs, fn, n, fd, md, ra, rb, pa, pb, f, tb, ta, tdb, tda)
-    else:
-        for t in prange(nt):
-            _wrench_range(t * m // nt, (t + 1) * m // nt, fs, fn, n, fd, md, ra, rb, pa, pb, f, tb, ta, tdb, tda)
+def _wrench_terms(k, on_a, fs, fn, n, fd, md, ra, rb, pa, pb, out):
+    """Contact k's terms on one of its bodies into out (4, 3): the force on B (elastic
+    normal + shear spring + damping) and the damping's, and the torques about the body's
+    centre (``on_a``: A's, else B's) of all of it and of the damping alone (r x f_c at the
+    overlap centroid, p x f_d at the patch centroid, + m_d, + the twisting moment M_t n).
+    A subtracts them, B adds them."""
+    fc0 = fs[k, 0] + fn[k] * n[k, 0]
+    fc1 = fs[k, 1] + fn[k] * n[k, 1]
+    fc2 = fs[k, 2] + fn[k] * n[k, 2]
+    d0, d1, d2 = fd[k, 0], fd[k, 1], fd[k, 2]
+    out[0, 0] = fc0 + d0
+    out[0, 1] = fc1 + d1
+    out[0, 2] = fc2 + d2
+    out[1, 0] = d0
+    out[1, 1] = d1
+    out[1, 2] = d2
+    r = ra if on_a else rb
+    p = pa if on_a else pb
+    out[2, 0] = (r[k, 1] * fc2 - r[k, 2] * fc1) + (p[k, 1] * d2 - p[k, 2] * d1) + md[k, 0] + fs[k, 3] * n[k, 0]
+    out[2, 1] = (r[k, 2] * fc0 - r[k, 0] * fc2) + (p[k, 2] * d0 - p[k, 0] * d2) + md[k, 1] + fs[k, 3] * n[k, 1]
+    out[2, 2] = (r[k, 0] * fc1 - r[k, 1] * fc0) + (p[k, 0] * d1 - p[k, 1] * d0) + md[k, 2] + fs[k, 3] * n[k, 2]
+    out[3, 0] = (p[k, 1] * d2 - p[k, 2] * d1) + md[k, 0]
+    out[3, 1] = (p[k, 2] * d0 - p[k, 0] * d2) + md[k, 1]
+    out[3, 2] = (p[k, 0] * d1 - p[k, 1] * d0) + md[k, 2]
 
 
 @njit(cache=True)
-def _body_range(r0, r1, start, entries, f, tb, ta, fd, tdb, tda, F, T, Fd, Td):
+def _body_range(r0, r1, start, entries, fs, fn, n, fd, md, ra, rb, pa, pb, F, T, Fd, Td):
     """Bodies r0 <= i < r1 of ``_add_by_body``."""
+    w = np.empty((4, 3))
     for i in range(r0, r1):
         for e in range(start[i], start[i + 1]):
             k = entries[e] >> 1
-            if entries[e] & 1:  # body A of contact k
+            on_a = (entries[e] & 1) == 1
+            _wrench_terms(k, on_a, fs, fn, n, fd, md, ra, rb, pa, pb, w)
+            if on_a:
                 for q in range(3):
-                    F[i, q] -= f[k, q]
-                    T[i, q] -= ta[k, q]
-                    Fd[i, q] -= fd[k, q]
-                    Td[i, q] -= tda[k, q]
+                    F[i, q] -= w[0, q]
+                    T[i, q] -= w[2, q]
+                    Fd[i, q] -= w[1, q]
+                    Td[i, q] -= w[3, q]
             else:
                 for q in range(3):
-                    F[i, q] += f[k, q]
-                    T[i, q] += tb[k, q]
-                    Fd[i, q] += fd[k, q]
-                    Td[i, q] += tdb[k, q]
+                    F[i, q] += w[0, q]
+                    T[i, q] += w[2, q]
+                    Fd[i, q] += w[1, q]
+                    Td[i, q] += w[3, q]
 
 
 @njit(cache=True, parallel=True)
-def _add_by_body(start, entries, f, tb, ta, fd, tdb, tda, F, T, Fd, Td, chunks):
-    """Every body's terms (``_by_body``) added in its list's order."""
+def _add_by_body(start, entries, fs, fn, n, fd, md, ra, rb, pa, pb, F, T, Fd, Td, chunks):
+    """Every body's terms (``_by_body``, ``_wrench_terms``) added in its list's order."""
     nb = len(start) - 1
     nt = range_count(nb, chunks)
     if nt == 1:
-        _body_range(0, nb, start, entries, f, tb, ta, fd, tdb, tda, F, T, Fd, Td)
+        _body_range(0, nb, start, entries, fs, fn, n, fd, md, ra, rb, pa, pb, F, T, Fd, Td)
     else:
         for t in prange(nt):
-            _body_range(t * nb // nt, (t + 1) * nb // nt, start, entries, f, tb, ta, fd, tdb, tda, F, T, Fd, Td)
+            _body_range(t * nb // nt, (t + 1) * nb // nt, start, entries, fs, fn, n, fd, md, ra, rb, pa, pb, F, T, Fd,
+                        Td)
 
 
 @njit(cache=True)
@@ -309,25 +300,19 @@ def body_sums(oa, ob, nb, fs, fn, n, fd, md, ra, rb, pa, pb, chunks=1):
     those of the damping alone (energy.account): each contact's force on B, fs + fn n +
     fd at its centroids, its torque about B's centre r_b x (fs + fn n) + p_b x fd + md +
     M_t n (fs[:, 3] the twisting moment M_t), and their opposites on A."""
-    m = len(oa)
-    f = np.empty((m, 3))
-    tb = np.empty((m, 3))
-    ta = np.empty((m, 3))
-    tdb = np.empty((m, 3))
-    tda = np.empty((m, 3))
-    _wrench_rows(fs, fn, n, fd, md, ra, rb, pa, pb, f, tb, ta, tdb, tda, chunks)
     start, entries = _by_body(oa, ob, nb)
     F = np.zeros((nb, 3))
     T = np.zeros((nb, 3))
     Fd = np.zeros((nb, 3))
     Td = np.zeros((nb, 3))
-    _add_by_body(start, entries, f, tb, ta, fd, tdb, tda, F, T, Fd, Td, chunks)
+    _add_by_body(start, entries, fs, fn, n, fd, md, ra, rb, pa, pb, F, T, Fd, Td, chunks)
     return F, T, Fd, Td
 
 
 @njit(cache=True)
 def _energy_range(r0, r1, ia, ib, oa, ob, kn, kt, vol, c, n, area, fs, jp, normals, offsets, nf, rot, pos, e):
-    """Contacts r0 <= k < r1 of ``_energy_rows``."""
+    """Each contact's elastic energy (J), contacts r0 <= k < r1: its normal and shear
+    springs' (e[k, 0]) and its twist spring's (e[k, 1]); zeros for a contact without area."""
     for k in range(r0, r1):
         e[k, 0] = 0.0
         e[k, 1] = 0.0
@@ -339,27 +324,14 @@ def _energy_range(r0, r1, ia, ib, oa, ob, kn, kt, vol, c, n, area, fs, jp, norma
                 e[k, 1] = fs[k, 3] ** 2 / (2.0 * kt[k] * jp[k])
 
 
-@njit(cache=True, parallel=True)
-def _energy_rows(ia, ib, oa, ob, kn, kt, vol, c, n, area, fs, jp, normals, offsets, nf, rot, pos, e, chunks):
-    """Each contact's elastic energy (J): its normal and shear springs' (e[k, 0]) and its
-    twist spring's (e[k, 1]); zeros for a contact without area."""
-    m = len(ia)
-    nt = range_count(m, chunks)
-    if nt == 1:
-        _energy_range(0, m, ia, ib, oa, ob, kn, kt, vol, c, n, area, fs, jp, normals, offsets, nf, rot, pos, e)
-    else:
-        for t in prange(nt):
-            _energy_range(t * m // nt, (t + 1) * m // nt, ia, ib, oa, ob, kn, kt, vol, c, n, area, fs, jp, normals,
-                          offsets, nf, rot, pos, e)
-
-
 @njit(cache=True)
-def elastic_energy(ia, ib, oa, ob, kn, kt, vol, c, n, area, fs, jp, normals, offsets, nf, rot, pos, chunks=1):
+def elastic_energy(ia, ib, oa, ob, kn, kt, vol, c, n, area, fs, jp, normals, offsets, nf, rot, pos):
     """The elastic energy stored in the contacts (J; energy.normal_energy, the shear spring's
     |F_t|^2 / (2 K_t A) and the twist spring's M_t^2 / (2 K_t J_p)), added in the contacts'
-    order. Contacts ia, ib (shapes) of bodies oa, ob."""
+    order. Contacts ia, ib (shapes) of bodies oa, ob. On the calling thread: it is summed
+    at the recorded steps only (a kernel fewer to compile)."""
     e = np.empty((len(ia), 2))
-    _energy_rows(ia, ib, oa, ob, kn, kt, vol, c, n, area, fs, jp, normals, offsets, nf, rot, pos, e, chunks)
+    _energy_range(0, len(ia), ia, ib, oa, ob, kn, kt, vol, c, n, area, fs, jp, normals, offsets, nf, rot, pos, e)
     total = 0.0
     for k in range(len(ia)):
         if area[k] > 0.0:

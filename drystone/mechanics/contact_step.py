@@ -377,8 +377,7 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
             om_max = om[k]
     e_el = np.nan
     if with_energy or depth_ratio > 1.0:  # (a step too deep ends ``_advance``: its energy is the last)
-        e_el = rows.elastic_energy(ia, ib, oa, ob, kn, kt, vol, c, n, area, fs, jp, normals, offsets, nf, rot, pos,
-                                   nt)
+        e_el = rows.elastic_energy(ia, ib, oa, ob, kn, kt, vol, c, n, area, fs, jp, normals, offsets, nf, rot, pos)
     return (ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, basis, F, T, e_el, om_max, depth_ratio, slip, Fd, Td, nl,
             buf)
 
