@@ -11,6 +11,7 @@ __version__ = "0.1.0"
 
 #: the modules with numba kernels (``@njit(cache=True)``)
 _KERNEL_SOURCES = ("mechanics/overlap.py", "mechanics/contact.py", "mechanics/contact_step.py",
+                   "mechanics/contact_rows.py", "mechanics/neighbours.py", "mechanics/energy.py",
                    "mechanics/integration.py")
 
 

@@ -545,14 +545,18 @@ def damping_wrenches_warm(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, 
     amplifies round-off).
 
     Threads: the contacts are cut into ``chunks`` contiguous ranges, shared among numba's
-    threads (``numba.set_num_threads``; one range per thread the caller may run), each
-    damped with its own work arrays (``_damp_range``); a contact's arithmetic does not
+    threads (``numba.set_num_threads``; one range per thread the caller may run; one range:
+    on the calling thread), each damped with its own work arrays (``_damp_range``); a contact's arithmetic does not
     depend on its range or thread: the same numbers for any count."""
     m = len(parea)
     fd = np.zeros((m, 3))
     md = np.zeros((m, 3))
     om = np.zeros(m)
     nt = max(1, chunks)  # (numba.get_num_threads() here would keep numba from caching the kernels)
+    if nt == 1:  # on the calling thread
+        _damp_range(0, m, n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, iib, twist, fn_el, fs, mu, lever,
+                    basis, warm, fd, md, om)
+        return fd, md, om
     for t in prange(nt):
         _damp_range(t * m // nt, (t + 1) * m // nt, n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, iib,
                     twist, fn_el, fs, mu, lever, basis, warm, fd, md, om)

@@ -7,11 +7,12 @@ forces, shear histories and damping to 1e-9): find the overlaps (``drystone.mech
 match each contact with its shear force of the previous step (contacts are keyed by the
 pair of body indices and come out sorted, so one merge walk matches them), apply the
 penalty–Coulomb law and the patch damping (``drystone.mechanics.contact``), and sum the forces and
-torques on every body. ``drystone.mechanics.integration.integrate`` then advances the
+torques on every body (the work per contact and per body: ``drystone.mechanics.contact_rows``,
+on numba's threads). ``drystone.mechanics.integration.integrate`` then advances the
 bodies one leapfrog step as YADE's NewtonIntegrator does; ``CompiledStep.advance`` runs
 contact steps and integration one after another in one call. Every step also adds to the
 energy balance (``drystone.mechanics.energy``: the loads' work, the damping's and the slip's
-dissipation, the contacts' elastic energy), in both steps.
+dissipation; the contacts' elastic energy at the steps a sample records), in both steps.
 
 Units SI; quaternions (x, y, z, w) like YADE's; body arrays indexed by YADE body id.
 """
@@ -22,6 +23,7 @@ import numpy as np
 from numba import njit
 
 from drystone.mechanics import contact as law
+from drystone.mechanics import contact_rows as rows
 from drystone.mechanics import energy
 from drystone.mechanics import neighbours as nbr
 from drystone.mechanics import overlap as ov
@@ -286,23 +288,6 @@ class NumpyStep:
 # -- contact forces -------------------------------------------------------------------
 
 @njit(cache=True)
-def _props(ia, ib, nb, mat, table, jkeys, jvals):
-    """(m, 4) kn, kt, mu, damping of each contact between bodies ia and ib: the material
-    pair's, or the joint's override (jkeys: sorted a * nb + b of the overridden pairs of
-    bodies, a < b)."""
-    m = len(ia)
-    out = np.empty((m, 4))
-    for c in range(m):
-        key = min(ia[c], ib[c]) * nb + max(ia[c], ib[c])
-        j = np.searchsorted(jkeys, key)
-        if j < len(jkeys) and jkeys[j] == key:
-            out[c] = jvals[j]
-        else:
-            out[c] = table[mat[ia[c]], mat[ib[c]]]
-    return out
-
-
-@njit(cache=True)
 def _previous(keys, prev_keys):
     """Index of each contact among the previous step's (-1 for a new contact); both key
     arrays sorted ascending (one merge walk)."""
@@ -318,25 +303,22 @@ def _previous(keys, prev_keys):
 
 
 @njit(cache=True)
-def _global_inverse(R, d, out):
-    """out = R diag(d) R^T: a body's inverse inertia in the global frame."""
-    for i in range(3):
-        for j in range(3):
-            out[i, j] = R[i, 0] * d[0] * R[j, 0] + R[i, 1] * d[1] * R[j, 1] + R[i, 2] * d[2] * R[j, 2]
-
-
-@njit(cache=True)
 def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving, inv_mass,
                     inv_inertia_local, mat, table, jkeys, jvals, prev_keys, prev_shear, prev_basis, dt, tol, size, shared,
-                    nl, buf):
+                    nl, buf, with_energy=True):
     """One step's contacts between shapes (ia, ib: shape indices; shape s a convex part of
     body ``owner[s]``, ``size`` per shape; ``shared``: some body has several shapes) and
     the forces and torques on the bodies. The contacts come from the neighbour list ``nl``
     (``drystone.mechanics.neighbours``: the full search's contacts, in its order), into
-    the search's buffers ``buf``; both are returned last (grown, rebuilt)."""
+    the search's buffers ``buf``; both are returned last (grown, rebuilt). The elastic
+    energy e_el only ``with_energy`` or for a step deeper than its sizes allow (``depth_ratio``
+    > 1), else NaN: it is recorded at samples only. The work
+    per contact and per body runs on numba's threads (``drystone.mechanics.contact_rows``:
+    the same numbers for any number)."""
     nb = len(pos)
     ns = len(nv)
-    nl = nbr.update(nl, verts, nv, normals, offsets, nf, owner, pos, rot)
+    nt = buf[8].shape[0]  # ranges of rows for the threads: one per thread numba may run
+    nl = nbr.update(nl, verts, nv, normals, offsets, nf, owner, pos, rot, nt)
     m, buf = nbr.search(nl, buf, nv, nf, faces, fk, tol, ov.TOUCHING_IS_NO_CONTACT)
     ia = buf[0][:m]
     ib = buf[1][:m]
@@ -349,161 +331,53 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
     keys = ia * ns + ib  # a contact's history is its pair of shapes'
     oa = owner[ia]
     ob = owner[ib]
-    P = _props(oa, ob, nb, mat, table, jkeys, jvals)
-    kn = P[:, 0].copy()
-    kt = P[:, 1].copy()
-    mu = P[:, 2].copy()
-    xi = P[:, 3].copy()
-    if shared:  # a body of several shapes: its joints' contacts share the damping ratio
-        xi *= law.joint_share(oa, ob, nb, area)
     # each contact's history: its shear force (columns 0-2) and twisting moment about n (3),
     # and its damping's modal basis (zeros for a new contact: no basis, a cold solve, also at
-    # the next step if it is not damped now)
+    # the next step if it is not damped now); with the carried force scaled by the patch
+    # (``area_scaling``, contact.carried_share), two more columns: the contact's area A_c (4)
+    # and polar moment J_p (5) at the step
     prev = _previous(keys, prev_keys)
-    # with the carried force scaled by the patch (``area_scaling``, contact.carried_share), two
-    # more columns: the contact's area A_c (4) and polar moment J_p (5) at the step
-    ncol = prev_shear.shape[1]
-    scaled = ncol >= 6
-    fs_prev = np.zeros((m, ncol))
-    basis = np.zeros((m, 6, 6))
     warm = prev >= 0
-    for k in range(m):
-        if warm[k]:
-            fs_prev[k] = prev_shear[prev[k]]
-            basis[k] = prev_basis[prev[k]]
-    fn = kn * vol
-    fs = np.zeros((m, ncol))
+    kn = np.empty(m)
+    kt = np.empty(m)
+    mu = np.empty(m)
+    xi = np.empty(m)
+    fn = np.empty(m)
+    fs = np.empty((m, prev_shear.shape[1]))
+    basis = np.empty((m, 6, 6))
     jp = np.empty(m)
-    slipping = np.zeros(m, np.bool_)
+    slipping = np.empty(m, np.bool_)
     ra = np.empty((m, 3))
     rb = np.empty((m, 3))
     pa = np.empty((m, 3))
     pb = np.empty((m, 3))
-    twist = np.empty((m, 6))
     lever = np.empty((m, 3))
-    vr = np.empty(3)
-    slip = 0.0  # plastic work of Coulomb slip over the step, J (energy.slip_work)
-    # each body's inverse inertia in the global frame, once per body (a body has several
-    # contacts), then each contact's two
-    inv_glob = np.empty((nb, 3, 3))
-    for i in range(nb):
-        _global_inverse(rot[i], inv_inertia_local[i], inv_glob[i])
-    iia = inv_glob[oa]
-    iib = inv_glob[ob]
-    for k in range(m):
-        a = oa[k]
-        b = ob[k]
-        nk = n[k]
-        for q in range(3):
-            ra[k, q] = c[k, q] - pos[a, q]
-            rb[k, q] = c[k, q] - pos[b, q]
-            pa[k, q] = pc[k, q] - pos[a, q]
-            pb[k, q] = pc[k, q] - pos[b, q]
-            lever[k, q] = c[k, q] - pc[k, q]
-        # shear spring at the overlap centroid (contact.shear_spring); B's velocity
-        # relative to A there: (v_b + w_b x r_b) - (v_a + w_a x r_a)
-        vr[0] = (vel[b, 0] + (angvel[b, 1] * rb[k, 2] - angvel[b, 2] * rb[k, 1])) \
-            - (vel[a, 0] + (angvel[a, 1] * ra[k, 2] - angvel[a, 2] * ra[k, 1]))
-        vr[1] = (vel[b, 1] + (angvel[b, 2] * rb[k, 0] - angvel[b, 0] * rb[k, 2])) \
-            - (vel[a, 1] + (angvel[a, 2] * ra[k, 0] - angvel[a, 0] * ra[k, 2]))
-        vr[2] = (vel[b, 2] + (angvel[b, 0] * rb[k, 1] - angvel[b, 1] * rb[k, 0])) \
-            - (vel[a, 2] + (angvel[a, 0] * ra[k, 1] - angvel[a, 1] * ra[k, 0]))
-        vn = vr[0] * nk[0] + vr[1] * nk[1] + vr[2] * nk[2]
-        f0 = fs_prev[k]
-        mag = np.sqrt(f0[0] ** 2 + f0[1] ** 2 + f0[2] ** 2)
-        f0n = f0[0] * nk[0] + f0[1] * nk[1] + f0[2] * nk[2]
-        p0 = f0[0] - f0n * nk[0]
-        p1 = f0[1] - f0n * nk[1]
-        p2 = f0[2] - f0n * nk[2]
-        pm = np.sqrt(p0 ** 2 + p1 ** 2 + p2 ** 2)
-        sc = mag / pm if pm > 0.0 else 0.0
-        kta = kt[k] * area[k]
-        jp[k] = law.polar_moment(nk, pj[k])
-        if scaled:  # the part of the carried force and moment the patch's springs still hold
-            r, e_drop = law.carried_share(f0[4], area[k], mag * mag, kt[k], ncol > 6)
-            sc *= r
-            slip += e_drop
-            rj, e_drop = law.carried_share(f0[5], jp[k], f0[3] * f0[3], kt[k], ncol > 6)
-            f0[3] *= rj
-            slip += e_drop
-            fs[k, 4] = area[k]
-            fs[k, 5] = jp[k]
-        fs[k, 0] = p0 * sc - kta * (vr[0] - vn * nk[0]) * dt
-        fs[k, 1] = p1 * sc - kta * (vr[1] - vn * nk[1]) * dt
-        fs[k, 2] = p2 * sc - kta * (vr[2] - vn * nk[2]) * dt
-        fm = np.sqrt(fs[k, 0] ** 2 + fs[k, 1] ** 2 + fs[k, 2] ** 2)
-        fmax = mu[k] * fn[k]
-        if fm > fmax:
-            slipping[k] = True
-            s = fmax / fm
-            # the return mapping's plastic work (energy.slip_work): (f0 + f) . (f* - f) / (2 K_t A)
-            # with f = s f*: (1 - s) (f0 . f* + s |f*|^2)
-            if kta > 0.0:
-                f0t = p0 * sc * fs[k, 0] + p1 * sc * fs[k, 1] + p2 * sc * fs[k, 2]
-                slip += (1.0 - s) * (f0t + s * fm * fm) / (2.0 * kta)
-            for q in range(3):
-                fs[k, q] *= s
-        # the twist spring on the patch (contact.twist_spring)
-        wn = (angvel[b, 0] - angvel[a, 0]) * nk[0] + (angvel[b, 1] - angvel[a, 1]) * nk[1] \
-            + (angvel[b, 2] - angvel[a, 2]) * nk[2]
-        fs[k, 3], w_twist = law.twist_spring(f0[3], wn, jp[k], area[k], kt[k], mu[k], fn[k],
-                                             np.sqrt(fs[k, 0] ** 2 + fs[k, 1] ** 2 + fs[k, 2] ** 2), dt)
-        slip += w_twist
-        # relative twist at the patch centroid
-        twist[k, 0] = (vel[b, 0] + (angvel[b, 1] * pb[k, 2] - angvel[b, 2] * pb[k, 1])) \
-            - (vel[a, 0] + (angvel[a, 1] * pa[k, 2] - angvel[a, 2] * pa[k, 1]))
-        twist[k, 1] = (vel[b, 1] + (angvel[b, 2] * pb[k, 0] - angvel[b, 0] * pb[k, 2])) \
-            - (vel[a, 1] + (angvel[a, 2] * pa[k, 0] - angvel[a, 0] * pa[k, 2]))
-        twist[k, 2] = (vel[b, 2] + (angvel[b, 0] * pb[k, 1] - angvel[b, 1] * pb[k, 0])) \
-            - (vel[a, 2] + (angvel[a, 0] * pa[k, 1] - angvel[a, 1] * pa[k, 0]))
-        for q in range(3):
-            twist[k, 3 + q] = angvel[b, q] - angvel[a, q]
+    twist = np.empty((m, 6))
+    iia = np.empty((m, 3, 3))
+    iib = np.empty((m, 3, 3))
+    slip_terms = np.empty((m, 4))
+    rows.law_rows(oa, ob, c, n, area, pc, pj, vol, pos, vel, angvel, rot, inv_inertia_local, mat, table, jkeys, jvals,
+                  prev, prev_shear, prev_basis, dt, kn, kt, mu, xi, fn, fs, basis, jp, slipping, ra, rb, pa, pb, lever,
+                  twist, iia, iib, slip_terms, nt)
+    slip = rows.slip_work(slip_terms)  # plastic work of Coulomb slip over the step, J (energy.slip_work)
+    if shared:  # a body of several shapes: its joints' contacts share the damping ratio
+        xi *= law.joint_share(oa, ob, nb, area)
     fd, md, om = law.damping_wrenches_warm(n, area, pj, kn, kt, xi, ~slipping, pa, pb, inv_mass[oa], inv_mass[ob],
-                                           iia, iib, twist, fn, fs, mu, lever, basis, warm, buf[8].shape[0])
-    F = np.zeros((nb, 3))
-    T = np.zeros((nb, 3))
-    Fd = np.zeros((nb, 3))  # the damping wrenches alone, summed on each body (energy.account)
-    Td = np.zeros((nb, 3))
-    e_el = 0.0
+                                           iia, iib, twist, fn, fs, mu, lever, basis, warm,
+                                           rows.range_count(m, nt))
+    F, T, Fd, Td = rows.body_sums(oa, ob, nb, fs, fn, n, fd, md, ra, rb, pa, pb, nt)
     om_max = 0.0
     depth_ratio = 0.0  # largest depth V/A over the smaller shape's size
     for k in range(m):
-        a = oa[k]
-        b = ob[k]
-        for q in range(3):
-            fc = fs[k, q] + fn[k] * n[k, q]
-            F[b, q] += fc + fd[k, q]
-            F[a, q] -= fc + fd[k, q]
-        # torques: r x f_c at the overlap centroid, p x f_d at the patch centroid, + m_d
-        fc0 = fs[k, 0] + fn[k] * n[k, 0]
-        fc1 = fs[k, 1] + fn[k] * n[k, 1]
-        fc2 = fs[k, 2] + fn[k] * n[k, 2]
-        d0, d1, d2 = fd[k, 0], fd[k, 1], fd[k, 2]
-        T[b, 0] += (rb[k, 1] * fc2 - rb[k, 2] * fc1) + (pb[k, 1] * d2 - pb[k, 2] * d1) + md[k, 0] + fs[k, 3] * n[k, 0]
-        T[b, 1] += (rb[k, 2] * fc0 - rb[k, 0] * fc2) + (pb[k, 2] * d0 - pb[k, 0] * d2) + md[k, 1] + fs[k, 3] * n[k, 1]
-        T[b, 2] += (rb[k, 0] * fc1 - rb[k, 1] * fc0) + (pb[k, 0] * d1 - pb[k, 1] * d0) + md[k, 2] + fs[k, 3] * n[k, 2]
-        T[a, 0] -= (ra[k, 1] * fc2 - ra[k, 2] * fc1) + (pa[k, 1] * d2 - pa[k, 2] * d1) + md[k, 0] + fs[k, 3] * n[k, 0]
-        T[a, 1] -= (ra[k, 2] * fc0 - ra[k, 0] * fc2) + (pa[k, 2] * d0 - pa[k, 0] * d2) + md[k, 1] + fs[k, 3] * n[k, 1]
-        T[a, 2] -= (ra[k, 0] * fc1 - ra[k, 1] * fc0) + (pa[k, 0] * d1 - pa[k, 1] * d0) + md[k, 2] + fs[k, 3] * n[k, 2]
-        for q in range(3):
-            Fd[b, q] += fd[k, q]
-            Fd[a, q] -= fd[k, q]
-        Td[b, 0] += (pb[k, 1] * d2 - pb[k, 2] * d1) + md[k, 0]
-        Td[b, 1] += (pb[k, 2] * d0 - pb[k, 0] * d2) + md[k, 1]
-        Td[b, 2] += (pb[k, 0] * d1 - pb[k, 1] * d0) + md[k, 2]
-        Td[a, 0] -= (pa[k, 1] * d2 - pa[k, 2] * d1) + md[k, 0]
-        Td[a, 1] -= (pa[k, 2] * d0 - pa[k, 0] * d2) + md[k, 1]
-        Td[a, 2] -= (pa[k, 0] * d1 - pa[k, 1] * d0) + md[k, 2]
         if area[k] > 0.0:
-            e_el += energy.normal_energy(kn[k], vol[k], c, n, k, normals, offsets, nf, rot, pos, ia[k], a, ib[k], b) + (
-                fs[k, 0] ** 2 + fs[k, 1] ** 2 + fs[k, 2] ** 2) / (2.0 * kt[k] * area[k])
-            if kt[k] * jp[k] > 0.0:  # the twist spring's
-                e_el += fs[k, 3] ** 2 / (2.0 * kt[k] * jp[k])
             r = vol[k] / area[k] / min(size[ia[k]], size[ib[k]])
             if r > depth_ratio:
                 depth_ratio = r
         if om[k] > om_max:
             om_max = om[k]
+    e_el = np.nan
+    if with_energy or depth_ratio > 1.0:  # (a step too deep ends ``_advance``: its energy is the last)
+        e_el = rows.elastic_energy(ia, ib, oa, ob, kn, kt, vol, c, n, area, fs, jp, normals, offsets, nf, rot, pos)
     return (ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, basis, F, T, e_el, om_max, depth_ratio, slip, Fd, Td, nl,
             buf)
 
@@ -523,7 +397,8 @@ class CompiledStep:
     shapes; its forces act on the shapes' bodies. ``state`` is the last step's contacts
     as a ``ContactState`` (built when asked for; ids of bodies). ``skin`` (m): the
     neighbour list's (``drystone.mechanics.neighbours``; ``neighbours``). ``threads``: the
-    threads the contact search's clip and the damping run on (1 by default; at most numba's,
+    threads the shapes' placement, the contact search's clip, the law, the damping and the
+    sums on the bodies run on (``drystone.mechanics.contact_rows``; 1 by default; at most numba's,
     ``numba.config.NUMBA_NUM_THREADS``, the machine's cores unless set: more are not
     started); every result is the same bit for bit for any number (``neighbours.search``)."""
 
@@ -642,7 +517,9 @@ class CompiledStep:
         caller checks it). Returns (steps completed, F, T of the last step computed, that
         step integrated?); ``state``, ``elastic``, ``max_omega_dt``, ``depth_ratio`` and the
         shear history as after the same calls of ``forces``, and ``energy`` as after those of
-        ``forces`` and ``account`` (a step not integrated: half its slip work, as ``forces``)."""
+        ``forces`` and ``account`` (a step not integrated: half its slip work, as ``forces``),
+        except ``elastic[0]`` after a call stopped on the depth check before its last two
+        steps: NaN (the elastic energy is summed at the last two steps only, ``_advance``)."""
         s = self.shapes
         coef, Fb, Tb = self._no_loads(len(g)) if loads is None else loads
         (done, ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, basis, F, T, e_prev, e_last, om_max,
@@ -706,7 +583,10 @@ def _advance(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, a
     """``CompiledStep.advance``: len(g) steps of ``_contact_forces`` + ``integrate`` (+
     ``energy.account`` into ``acc``) without leaving compiled code; the arithmetic of each
     step is that of one call of each (the same results bit for bit). The loads' wrench of
-    step s is ``applied_wrench(coef[s], Fb, Tb)`` (nothing when coef has no column)."""
+    step s is ``applied_wrench(coef[s], Fb, Tb)`` (nothing when coef has no column). The
+    elastic energy (``e_prev``, ``e_last``) of the last two steps only (what a sample
+    after them records): a step that stops the call on the depth check has its own, the
+    step before it NaN unless it was one of the last two."""
     n = len(g)
     loaded = coef.shape[1] > 0
     e_prev = e_last
@@ -718,7 +598,7 @@ def _advance(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, a
         (ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, basis, F, T, e_el, om, depth, slip, Fd,
          Td, nl, buf) = _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving,
                                         inv_mass, inv_inertia_local, mat, table, jkeys, jvals, keys, shear, basis, dt,
-                                        tol, size, shared, nl, buf)
+                                        tol, size, shared, nl, buf, s >= n - 2)
         shear = fs
         e_prev = e_last
         e_last = e_el
@@ -733,7 +613,8 @@ def _advance(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, a
                     slip, Fd, Td, nl, buf)
         v0[:] = vel
         w0[:] = angvel
-        integrate(dt, g[s], F, T, mass, inertia, lin_free, rot_free, aspherical, pos, vel, angvel, angmom, quat, rot)
+        integrate(dt, g[s], F, T, mass, inertia, lin_free, rot_free, aspherical, pos, vel, angvel, angmom, quat, rot,
+                  buf[8].shape[0])
         energy.account(dt, g[s], F, T, Fd, Td, F_ext, moving, mass, lin_free, v0, w0, vel, angvel, 0.5 * slip, acc)
         if loaded:
             acc[0] += energy.load_work(dt, coef[s], Fb, Tb, moving, lin_free, rot_free, v0, w0, vel, angvel)

@@ -13,9 +13,10 @@ Units SI; quaternions (x, y, z, w) like YADE's; body arrays indexed by YADE body
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from drystone.mechanics import rotations
+from drystone.mechanics.contact_rows import range_count
 
 @njit(cache=True)
 def _quat_matrix(q, R):
@@ -80,12 +81,9 @@ def _normalise(q):
 
 
 @njit(cache=True)
-def integrate(dt, g, F, T, mass, inertia, lin_free, rot_free, aspherical, pos, vel, angvel, angmom, quat, rot):
-    """One leapfrog step of every body, in place (module docstring). ``g`` (3,) body
-    acceleration m/s^2; F, T (nb, 3) N, N m; lin_free, rot_free (nb, 3) 1.0 on free
-    directions (all 0 for non-moving bodies, which still move with their velocity);
-    aspherical (nb,) bool: Fincham's scheme (all rotations free). ``rot`` is refreshed."""
-    nb = len(mass)
+def _integrate_range(r0, r1, dt, g, F, T, mass, inertia, lin_free, rot_free, aspherical, pos, vel, angvel, angmom, quat,
+                     rot):
+    """Bodies r0 <= i < r1 of ``integrate``."""
     # work arrays, once per call (no allocation per body)
     A = np.empty((3, 3))
     conj = np.empty(4)
@@ -94,7 +92,7 @@ def integrate(dt, g, F, T, mass, inertia, lin_free, rot_free, aspherical, pos, v
     dq = np.empty(4)
     qh = np.empty(4)
     qn = np.empty(4)
-    for i in range(nb):
+    for i in range(r0, r1):
         for a in range(3):
             if lin_free[i, a] > 0.0:
                 vel[i, a] += dt * (F[i, a] / mass[i] + g[a])
@@ -150,6 +148,25 @@ def integrate(dt, g, F, T, mass, inertia, lin_free, rot_free, aspherical, pos, v
             else:
                 _normalise(quat[i])
         _quat_matrix(quat[i], rot[i])
+
+
+@njit(cache=True, parallel=True)
+def integrate(dt, g, F, T, mass, inertia, lin_free, rot_free, aspherical, pos, vel, angvel, angmom, quat, rot, chunks=1):
+    """One leapfrog step of every body, in place (module docstring). ``g`` (3,) body
+    acceleration m/s^2; F, T (nb, 3) N, N m; lin_free, rot_free (nb, 3) 1.0 on free
+    directions (all 0 for non-moving bodies, which still move with their velocity);
+    aspherical (nb,) bool: Fincham's scheme (all rotations free). ``rot`` is refreshed.
+    ``chunks``: ranges of bodies shared among numba's threads (each body's arithmetic on
+    its own: the same numbers for any count; ``contact_rows.range_count``)."""
+    nb = len(mass)
+    nt = range_count(nb, chunks)
+    if nt == 1:
+        _integrate_range(0, nb, dt, g, F, T, mass, inertia, lin_free, rot_free, aspherical, pos, vel, angvel, angmom,
+                         quat, rot)
+    else:
+        for t in prange(nt):
+            _integrate_range(t * nb // nt, (t + 1) * nb // nt, dt, g, F, T, mass, inertia, lin_free, rot_free,
+                             aspherical, pos, vel, angvel, angmom, quat, rot)
 
 
 def free_directions(blocked: str, moving: bool) -> tuple[np.ndarray, np.ndarray]:

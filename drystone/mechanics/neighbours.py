@@ -37,6 +37,7 @@ import numba
 from numba import njit, prange
 
 from drystone.mechanics import overlap as ov
+from drystone.mechanics.contact_rows import range_count
 
 #: default skin (m): a few times a wall's motion over the steps between two samples under
 #: a strong record, small beside a stone (0.25-0.6 m): a list a few percent longer than
@@ -107,12 +108,9 @@ def _buffers(cap, maxf, nt):
 
 
 @njit(cache=True)
-def _shape_geometry(verts, nv, normals, offsets, nf, owner, pos, rot, GV, GN, GD, lo, hi, ok):
-    """Every shape's vertices, face planes and box in the global frame, into the work
-    arrays (``overlap.place_shape`` at pos[owner], rot[owner]);
-    ``ok``: the shape's vertices are finite (a shape of a stone that left the model, or of
-    a blown-up body, pairs with nothing)."""
-    for s in range(len(nv)):
+def _shape_range(r0, r1, verts, nv, normals, offsets, nf, owner, pos, rot, GV, GN, GD, lo, hi, ok):
+    """Shapes r0 <= s < r1 of ``_shape_geometry``."""
+    for s in range(r0, r1):
         b = owner[s]
         V = GV[s]
         ov.place_shape(verts, nv, normals, offsets, nf, pos, rot, s, b, V, GN[s], GD[s])
@@ -131,6 +129,23 @@ def _shape_geometry(verts, nv, normals, offsets, nf, owner, pos, rot, GV, GN, GD
             lo[s, a] = mn
             hi[s, a] = mx
         ok[s] = good
+
+
+@njit(cache=True, parallel=True)
+def _shape_geometry(verts, nv, normals, offsets, nf, owner, pos, rot, GV, GN, GD, lo, hi, ok, chunks):
+    """Every shape's vertices, face planes and box in the global frame, into the work
+    arrays (``overlap.place_shape`` at pos[owner], rot[owner]);
+    ``ok``: the shape's vertices are finite (a shape of a stone that left the model, or of
+    a blown-up body, pairs with nothing). ``chunks`` ranges of shapes shared among numba's
+    threads, each shape into its own rows (``contact_rows.range_count``)."""
+    ns = len(nv)
+    nt = range_count(ns, chunks)
+    if nt == 1:
+        _shape_range(0, ns, verts, nv, normals, offsets, nf, owner, pos, rot, GV, GN, GD, lo, hi, ok)
+    else:
+        for t in prange(nt):
+            _shape_range(t * ns // nt, (t + 1) * ns // nt, verts, nv, normals, offsets, nf, owner, pos, rot, GV, GN, GD,
+                         lo, hi, ok)
 
 
 @njit(cache=True)
@@ -176,12 +191,12 @@ def _build(lo, hi, ok, moving_s, owner, half_skin):
 
 
 @njit(cache=True)
-def update(nl, verts, nv, normals, offsets, nf, owner, pos, rot):
+def update(nl, verts, nv, normals, offsets, nf, owner, pos, rot, chunks=1):
     """The shapes' global geometry into the list's work arrays, and the list rebuilt if it
     is stale (``_stale``) or invalidated; returns the list's arrays (new pair arrays after
-    a rebuild)."""
+    a rebuild). ``chunks``: ranges of shapes for numba's threads (``_shape_geometry``)."""
     la, lb, meta, ref_pos, ref_rot, radius, hs, moving_s, GV, GN, GD, lo, hi, ok = nl
-    _shape_geometry(verts, nv, normals, offsets, nf, owner, pos, rot, GV, GN, GD, lo, hi, ok)
+    _shape_geometry(verts, nv, normals, offsets, nf, owner, pos, rot, GV, GN, GD, lo, hi, ok, chunks)
     if meta[2] == 0 and not _stale(pos, rot, ref_pos, ref_rot, radius, hs[0]):
         return nl
     la, lb = _build(lo, hi, ok, moving_s, owner, hs[0])

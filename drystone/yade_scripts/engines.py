@@ -20,7 +20,7 @@ energy given at once (a velocity jump), ``finish`` (the state written back or re
 engine is one class here and a name in ``ENGINES``.
 
 The case's [[loads]] (drystone/model/loads.py, ``run.loads``: an AppliedLoads or None) act at
-every step in every engine: their coefficients at the step's time (``_loads_at``) times
+every step in every engine (applied.py): their coefficients at the step's time (``loads_at``) times
 their fixed vectors, a force on each loaded body and a moment about its centroid (fixed in
 the platform frame), added to the contact forces (compiled: ``contact_step.applied_wrench``,
 also inside ``advance`` with a coefficient row per step) or given to YADE
@@ -45,6 +45,7 @@ import yade
 from drystone.mechanics import contact as law
 from drystone.mechanics import contact_step as cs
 from drystone.mechanics import energy, integration, laws, monitors, rotations, stability
+from drystone.yade_scripts import applied
 from drystone.yade_scripts import contact_engine as ce
 from drystone.yade_scripts import quiet_steps as quiet
 
@@ -131,50 +132,6 @@ class Engine:
     def finish_step(self, g: np.ndarray) -> None:
         """What remains of the step after a sample (an engine that integrates: the motion)."""
 
-    def _applied(self, t: float, g: np.ndarray):
-        """Give YADE this step's applied forces and loads; returns the loads' (force, moment)
-        (nb, 3) or None without loads."""
-        for y, f, start, end in self.run.forces:
-            if start <= t < end:
-                self.run.O.forces.addF(y, f)
-        c = self._loads_at(t, g)
-        if c is None:
-            return None
-        F, T = self.run.loads.wrench(c)
-        for i in self.run.loads.loaded.tolist():
-            self.run.O.forces.addF(i, yade.Vector3(*F[i]))
-            self.run.O.forces.addT(i, yade.Vector3(*T[i]))
-        return F, T
-
-    def _loads_at(self, t: float, g: np.ndarray) -> np.ndarray | None:
-        """The loads' coefficients (J,) of the step at t (body acceleration g), None without
-        loads. Where a load is undefined the driver stops the run (``load_limit``) and the
-        step keeps the previous step's coefficients."""
-        loads = self.run.loads
-        if loads is None:
-            return None
-        c, bad, why = loads.coefficients(np.array([t]), np.asarray(g, float)[None])
-        if bad is not None:
-            self.run.load_limit(t, why)
-            c = loads.last[None]
-        loads.taken(c, self.run.O.dt)
-        return c[0]
-
-    def _external(self, t: float) -> np.ndarray:
-        """The applied forces (nb, 3) N at t, on the bodies they act on."""
-        F_ext = np.zeros_like(self.run.pos)
-        for y, f, start, end in self.run.forces:
-            if start <= t < end:
-                F_ext[y] += tuple(f)
-        return F_ext
-
-    def _free_directions(self) -> tuple[np.ndarray, np.ndarray]:
-        """(translations, rotations) (nb, 3): 1.0 on the directions each body may use."""
-        run = self.run
-        free = [integration.free_directions(run.states[i].blockedDOFs or "", bool(np.isfinite(run.mass[i])))
-                for i in range(len(run.mass))]
-        return np.array([f[0] for f in free]).reshape(-1, 3), np.array([f[1] for f in free]).reshape(-1, 3)
-
     # -- state -----------------------------------------------------------------------
     def read(self, ids) -> None:
         """Positions, velocities, angular velocities, orientations of bodies ``ids`` from YADE."""
@@ -243,7 +200,7 @@ class StockEngine(Engine):
 
     def forces(self, t, g):
         self.run.newton.gravity = yade.Vector3(*g)
-        self._applied(t, g)
+        applied.give_yade(self.run, t, g)
 
     def before_sample(self):
         self.read(self.run.moving)
@@ -263,7 +220,7 @@ class NumpyEngine(Engine):
         self.step = ce.PenaltyCoulomb(lambda a, b: pair_properties(run, a, b), run.mass, run.local_v,
                                       run.spec.detection, run.inertia, run.owner,
                                       area_scaling=laws.get(run.spec.law).area_scaling)
-        self.ledger = energy.Ledger(run.mass, self._free_directions()[0])
+        self.ledger = energy.Ledger(run.mass, applied.free_directions(run)[0])
 
     def forces(self, t, g):
         run = self.run
@@ -272,9 +229,9 @@ class NumpyEngine(Engine):
         self.ledger.complete(run.vel, run.angvel)  # the previous step, now that YADE has integrated it
         self.step.step(run.O, (run.pos, run.vel, run.angvel, run.rot))
         self.check_depth()
-        wrench = self._applied(t, g)
+        wrench = applied.give_yade(run, t, g)
         last = self.step.last
-        F_ext, T_ext = self._external(t), None
+        F_ext, T_ext = applied.external(run, t), None
         if wrench is not None:
             F_ext, T_ext = F_ext + wrench[0], wrench[1]
         self.ledger.begin(run.O.dt, g, last["F"], np.zeros_like(last["F"]), last["Fd"], last["Td"], F_ext,
@@ -345,9 +302,7 @@ class CompiledEngine(Engine):
     def __init__(self, run):
         super().__init__(run)
         nb = len(run.mass)
-        free = [integration.free_directions(run.states[i].blockedDOFs or "", bool(np.isfinite(run.mass[i]))) for i in range(nb)]
-        self.lin_free = np.array([f[0] for f in free])
-        self.rot_free = np.array([f[1] for f in free])
+        self.lin_free, self.rot_free = applied.free_directions(run)
         # YADE's exactAsphericalRot: aspherical bodies free to rotate about every axis
         self.aspherical = np.array([bool(np.isfinite(run.mass[i])) and run.O.bodies[i].aspherical
                                     and self.rot_free[i].all() for i in range(nb)])
@@ -425,8 +380,8 @@ class CompiledEngine(Engine):
         for y, f, start, end in run.forces:
             if start <= t < end:
                 self.F[y] += tuple(f)
-        self.F_ext = self._external(t)  # for the loads' work
-        self.c = self._loads_at(t, g)
+        self.F_ext = applied.external(run, t)  # for the loads' work
+        self.c = applied.loads_at(run, t, g)
         if self.c is not None:
             cs.applied_wrench(self.c, run.loads.force, run.loads.moment, self.F, self.T)
 
