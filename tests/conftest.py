@@ -66,7 +66,7 @@ def pytest_configure(config):
     """In the controller of a parallel run (``-n N``: it runs no test itself) with numba's cache
     cold, compile the contact kernels once, by running the smallest case, before the workers
     start: otherwise each worker, and each YADE run a test starts before the cache is written,
-    compiles them on its own (30-60 s of a core each)."""
+    compiles them on its own (60-90 s of a core each)."""
     import tempfile
 
     import drystone
@@ -76,7 +76,7 @@ def pytest_configure(config):
         return
     from drystone import runner, simulate
 
-    print("conftest: numba's cache is cold: compiling the contact kernels once (30-60 s)", flush=True)
+    print("conftest: numba's cache is cold: compiling the contact kernels once (60-90 s)", flush=True)
     with tempfile.TemporaryDirectory(prefix="drystone-warm-") as d:
         runner.run_dict(_WARM_CASE, Path(d) / "warm.toml", out_dir=Path(d) / "out", quiet=True)
     simulate.end_workers()  # this process runs no test: its YADE worker would idle all session
