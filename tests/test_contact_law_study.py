@@ -4,13 +4,13 @@ energy tests do, and its report and the docs block are built from a results file
 import copy
 import json
 
+import numpy as np
 import pytest
 
 import tolerances as tol
 from drystone.model import case as casemod
 from drystone.studies import contact_law as cl
 from drystone.studies import readme_tables as rt
-from test_energy import omega_max
 
 
 @pytest.mark.parametrize("law", cl.LAWS)
@@ -21,11 +21,28 @@ def test_push_case_is_valid_and_names_its_law(law, tmp_path):
     assert case["forces"][0]["force"][1] == -cl.PUSH["force_N"]
 
 
-def test_bound_uses_the_energy_tests_highest_mode():
-    """The same 6 x 6 patch mode as tests/test_energy.py's (its K_n 2e8, K_t 1e8, rho 2300)."""
+def test_bound_uses_the_joint_s_highest_mode():
+    """The push case's bound uses the box's highest joint mode (stability.box_joint_omega_max,
+    shared with tests/test_energy.py): no lower than its vertical mode sqrt(K_n b d / m),
+    which is decoupled from the others on a centred base (exact), and no higher than the square
+    root of the sum of all six eigenvalues (they are non-negative); the shadow factor the
+    energy tests derive."""
+    from drystone.mechanics import stability
+
     p = cl.PUSH
-    assert cl.omega_max(cl.PUSH_SIZE, p["kn"], p["kt"], p["density"]) == pytest.approx(
-        omega_max(cl.PUSH_SIZE), rel=tol.EXACT_REL)
+    b, d, h = cl.PUSH_SIZE
+    m = p["density"] * b * d * h
+    w = stability.box_joint_omega_max(cl.PUSH_SIZE, p["kn"], p["kt"], p["density"])
+    w_z = (p["kn"] * b * d / m) ** 0.5
+    ic = m * np.array([d * d + h * h, b * b + h * h, b * b + d * d]) / 12
+    # trace of W K at the base's centre (W: the box's mobility there, K: the patch's diagonal
+    # stiffness): translations K_t A (1/m + (h/2)^2 / I_c) twice and K_n A / m, rotations K_n I
+    # over I_c (I the base's larger second moment: a bound whichever axis it is about), twist
+    # K_t J_p / I_c,z
+    area, second = b * d, max(b * d ** 3, d * b ** 3) / 12
+    trace = p["kt"] * area * (2 / m + h * h / 4 * (1 / ic[0] + 1 / ic[1])) + p["kn"] * area / m \
+        + p["kn"] * second * (1 / ic[0] + 1 / ic[1]) + p["kt"] * area * (b * b + d * d) / 12 / ic[2]
+    assert w_z * (1 - tol.EXACT_REL) <= w <= trace ** 0.5
     assert cl.SHADOW == tol.BALANCE_SHADOW
 
 

@@ -25,7 +25,7 @@ from conftest import requires_yade, run_case
 from drystone.geometry import blockfile as bf
 from drystone.mechanics import contact as law
 from drystone.mechanics import contact_step as cs
-from drystone.mechanics import energy, integration, rotations
+from drystone.mechanics import energy, integration, rotations, stability
 from drystone.mechanics import overlap as ov
 from drystone.postprocess import summary as summ
 from drystone.units import GRAVITY as G
@@ -38,17 +38,9 @@ def box(size, center=(0.0, 0.0, 0.0)):
 
 
 def omega_max(size, kn=KN, kt=KT):
-    """Highest mode (rad/s) of a box (b, d, h) on a rigid base on its joint's springs: the
-    6 x 6 patch stiffness on the box's mass seen at the joint (drystone/mechanics/contact.py)."""
-    b, d, h = size
-    m = RHO * b * d * h
-    ic = np.diag([m * (d * d + h * h), m * (b * b + h * h), m * (b * b + d * d)]) / 12
-    W = law.mobility(np.zeros((1, 3)), np.array([[0.0, 0.0, -h / 2]]), np.zeros(1), np.array([1 / m]),
-                     np.zeros((1, 3, 3)), np.linalg.inv(ic)[None])
-    K = law.patch_stiffness(np.array([[0.0, 0.0, 1.0]]), np.array([b * d]),
-                            np.diag([b ** 3 * d / 12, d ** 3 * b / 12, 0.0])[None], np.array([kn]), np.array([kt]),
-                            np.array([True]))
-    return float(law.damping_matrix(K, W, np.array([1.0]))[1][0])
+    """Highest mode (rad/s) of a box (b, d, h) on a rigid base on its joint's springs
+    (drystone/mechanics/stability.py ``box_joint_omega_max``), this file's stone."""
+    return stability.box_joint_omega_max(size, kn, kt, RHO)
 
 
 def balance(h):

@@ -301,3 +301,21 @@ if __name__ == "__main__":
     for r, d in rows:
         print(f"{r:6.3f}  {d}")
     print(f"{len(rows)} runs; a run is stopped when its ratio exceeds 1")
+
+
+def box_joint_omega_max(size, kn: float, kt: float, density: float) -> float:
+    """Highest mode (rad/s) of a box (b, d, h, m) standing on a rigid base on its joint's
+    springs: the 6 x 6 patch stiffness (K_n, K_t in N/m^3 over the b x d base) on the box's
+    mass and inertia seen at the joint (drystone/mechanics/contact.py ``damping_matrix``).
+    The leapfrog energy bound's omega_max (tests/tolerances.py BALANCE_SHADOW)."""
+    from drystone.mechanics import contact as law
+
+    b, d, h = size
+    m = density * b * d * h
+    ic = np.diag([m * (d * d + h * h), m * (b * b + h * h), m * (b * b + d * d)]) / 12
+    W = law.mobility(np.zeros((1, 3)), np.array([[0.0, 0.0, -h / 2]]), np.zeros(1), np.array([1 / m]),
+                     np.zeros((1, 3, 3)), np.linalg.inv(ic)[None])
+    K = law.patch_stiffness(np.array([[0.0, 0.0, 1.0]]), np.array([b * d]),
+                            np.diag([b ** 3 * d / 12, d ** 3 * b / 12, 0.0])[None], np.array([kn]), np.array([kt]),
+                            np.array([True]))
+    return float(law.damping_matrix(K, W, np.array([1.0]))[1][0])

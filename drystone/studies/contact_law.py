@@ -9,7 +9,7 @@ time (resumable: a finished run folder is read, not rerun), into results/contact
 * ``push``: the eccentric push, a 1.0 x 0.8 x 1.0 m block (mu 0.6, undamped, K_n 2e8, K_t
   1e8 N/m^3) pushed at its centroid by 3000 N out of plane under a 2 Hz, 2 m/s^2 base sine
   along the push: its heel lifts. Its energy balance error against leapfrog's bound
-  ``SHADOW`` (omega_max dt)^2 K_max (tests/tolerances.py BALANCE_SHADOW, derived there);
+  ``SHADOW`` (omega_max dt)^2 K_max (omega_max: stability.box_joint_omega_max; tests/tolerances.py BALANCE_SHADOW, derived there);
 * ``table3``: cells of the Sacsayhuaman paper's Table 3 (cases/sacsayhuaman/record.toml, the
   records ASSUMED analogues as in the study): the largest out-of-plane residual of any
   stone after the motion has died out (drystone/studies/sacsayhuaman/analysis.py residuals);
@@ -32,6 +32,7 @@ import numpy as np
 
 from drystone import atomic
 from drystone import paths
+from drystone.mechanics import stability
 
 OUT = paths.RESULTS / "contact_law"
 LAWS = ("penalty_coulomb", "penalty_coulomb_area")
@@ -70,22 +71,6 @@ def push_case(law: str) -> dict:
             "output": {"interval": 1e-3}}
 
 
-def omega_max(size, kn, kt, density) -> float:
-    """Highest mode (rad/s) of a box (b, d, h) on a rigid base on its joint's springs (the
-    6 x 6 patch stiffness on the box's mass seen at the joint, contact.damping_matrix)."""
-    from drystone.mechanics import contact as law
-
-    b, d, h = size
-    m = density * b * d * h
-    ic = np.diag([m * (d * d + h * h), m * (b * b + h * h), m * (b * b + d * d)]) / 12
-    W = law.mobility(np.zeros((1, 3)), np.array([[0.0, 0.0, -h / 2]]), np.zeros(1), np.array([1 / m]),
-                     np.zeros((1, 3, 3)), np.linalg.inv(ic)[None])
-    K = law.patch_stiffness(np.array([[0.0, 0.0, 1.0]]), np.array([b * d]),
-                            np.diag([b ** 3 * d / 12, d ** 3 * b / 12, 0.0])[None], np.array([kn]), np.array([kt]),
-                            np.array([True]))
-    return float(law.damping_matrix(K, W, np.array([1.0]))[1][0])
-
-
 def _done(folder: Path) -> bool:
     return (folder / "summary.json").is_file()
 
@@ -120,7 +105,7 @@ def push(out: Path = OUT, log=print, save=None) -> dict:
         h = summ.load_histories(folder)
         spec = json.loads((folder / "spec.json").read_text())
         err = float(np.abs(summ.balance_history(h)).max())
-        bound = SHADOW * (omega_max(PUSH_SIZE, PUSH["kn"], PUSH["kt"], PUSH["density"]) * spec["dt"]) ** 2 * float(
+        bound = SHADOW * (stability.box_joint_omega_max(PUSH_SIZE, PUSH["kn"], PUSH["kt"], PUSH["density"]) * spec["dt"]) ** 2 * float(
             h["kinetic"].max())
         res[law] = {"balance_error_J": err, "bound_J": bound, "heel_lift_m": _heel_lift(h, spec),
                     "wall_s": _wall(folder)}
