@@ -52,7 +52,7 @@ TILT = {"penalty_coulomb": (14.93, 16.01), "penalty_coulomb_area": (14.88, 15.96
 TILT_EXPERIMENT = "14.33 +- 0.76 deg"
 PUSH_SIZE = (1.0, 0.8, 1.0)  # m: along the wall (x), out of plane (y, pushed), height
 PUSH = {"force_N": 3000.0, "mu": 0.6, "kn": 2e8, "kt": 1e8, "density": 2300.0, "sine_hz": 2.0, "sine_m_s2": 2.0,
-        "sine_s": 0.6}
+        "sine_s": 0.6, "gravity_s": 0.3}
 
 
 def push_case(law: str) -> dict:
@@ -63,7 +63,7 @@ def push_case(law: str) -> dict:
            "kt": p["kt"], "platform_size": [3.0, 3.0],
            "boxes": [{"id": 1, "center_xy": [0.0, 0.0], "size": list(PUSH_SIZE)}]}
     return {"case": {"name": f"push_{law}", "geometry": geo}, "contact": {"law": law},
-            "stages": [{"type": "gravity", "duration": 0.3, "ramp": 0.15},
+            "stages": [{"type": "gravity", "duration": p["gravity_s"], "ramp": p["gravity_s"] / 2},
                        {"type": "excitation", "motion": "sine", "frequency_hz": p["sine_hz"],
                         "amplitude": p["sine_m_s2"], "duration": p["sine_s"], "direction": "y"},
                        {"type": "rest", "duration": 0.1}],
@@ -121,7 +121,7 @@ def _heel_lift(h, spec) -> float:
     r0 = rotations.to_matrix(h["quat0"][-1])
     low = np.array([float((rel @ (rotations.to_matrix(q) @ r0.T).T)[:, 2].min() + x[2])
                     for x, q in zip(h["pos"][:, -1], h["quat"][:, -1])])
-    k = int(np.searchsorted(h["t"], 0.3 - 1e-9))
+    k = int(np.searchsorted(h["t"], PUSH["gravity_s"] - 1e-9))  # the end of gravity
     return float(low[k:].max() - low[k])
 
 
