@@ -45,7 +45,7 @@ _WARM_CASE = {"case": {"name": "numba_warm", "geometry": {"generator": "boxes_on
 #: on a shared 2-core machine, so only their ratios matter; files not here (under 3 s) are costed
 #: by marks (``_COST_S``, the same units). A stale figure only makes the two workers finish less together.
 _FILE_COST_S = {
-    "test_site_study.py": 192, "test_yade_contact.py": 114, "test_docs_runnable.py": 94, "test_shape_study.py": 85,
+    "test_site_study.py": 192, "test_yade_contact.py": 58, "test_docs_runnable.py": 94, "test_shape_study.py": 85,
     "test_analyses_assess.py": 56, "test_yade_worker.py": 50, "test_analyses_tilt.py": 33,
     "test_analyses_fragility.py": 31, "test_sweep.py": 31, "test_fragility.py": 27, "test_reliability_site.py": 24,
     "test_tilt_block.py": 23, "test_analyses_collapse.py": 23, "test_motions_catalogue.py": 22,
