@@ -628,7 +628,8 @@ COACD_L_VOLUME_REL = 1e-3
 #: round-off grown over 40 000 steps of a sliding block, 4.6e-14 m measured; 1e-10 m
 CUT_BLOCK_SAME_RUN_M = 1e-10
 #: the compiled step against the numpy engine on a multi-part stone: the same law in a
-#: different order of sums, 1.4e-12 m measured over a 1.8 s run; 1e-9 m
+#: different order of sums, 1.4e-12 m measured over a 1.8 s run (a 20 deg/s tilt), 4e-12 m over
+#: 1.25 s (40 deg/s, the test's); 1e-9 m
 ENGINES_MULTIPART_M = 1e-9
 #: a stone pushed 5 % below its threshold moves by its joints' elastic deflection,
 #: P / (K A) ~ 1e-4 m; 1e-3 m. 5 % above it accelerates at ~0.05 P / m for 0.6 s: at least
