@@ -28,6 +28,38 @@ from drystone.model.loads import LoadContext
 from drystone.model.stages import AXES, REGISTRY, TOWARDS, ResolveContext, initial_relative_velocity  # noqa: F401
 
 
+#: the generators whose block file is a function of their parameters alone (none reads a file)
+PURE_GENERATORS = frozenset({"four_blocks", "boxes_on_platform", "running_bond", "ogawa_blocks", "irregular_wall",
+                             "tilt_wall", "sacsayhuaman", "polygonal_wall"})
+#: this process's last geometries of those generators, generated and checked (``_generated``), by
+#: their parameters: a sweep or an analysis checks every run's case before it runs them, and its
+#: runs share one wall; kept up to ``GENERATED_MAX``, the oldest dropped first
+_GENERATED: dict = {}
+GENERATED_MAX = 8
+
+
+def _generated(geo: dict, where: str, check_overlaps: bool) -> tuple[dict, bf.BlockSet]:
+    """The block file of a generated geometry and its BlockSet (copies of the kept ones where
+    the same pure generator was asked the same before)."""
+    import copy
+
+    key = None
+    if geo.get("generator") in PURE_GENERATORS:
+        key = (json.dumps(geo, sort_keys=True, default=repr), bool(check_overlaps))
+        if key in _GENERATED:
+            return copy.deepcopy(_GENERATED[key])
+    try:
+        data = generators.generate(geo)
+    except bf.GeometryError as exc:
+        raise casemod.CaseError(f"{where}: [case] geometry: {exc}") from None
+    bs = bf.parse(data, f"{where}: generated geometry {geo['generator']!r}", check_overlaps)
+    if key is not None:
+        while len(_GENERATED) >= GENERATED_MAX:
+            _GENERATED.pop(next(iter(_GENERATED)))
+        _GENERATED[key] = copy.deepcopy((data, bs))
+    return data, bs
+
+
 def _geometry(case: dict, where: str, out: Path, check_overlaps: bool = True) -> tuple[bf.BlockSet, dict]:
     geo = case["case"]["geometry"]
     if isinstance(geo, str):
@@ -35,11 +67,7 @@ def _geometry(case: dict, where: str, out: Path, check_overlaps: bool = True) ->
         bs = bf.parse(data, geo, check_overlaps)
         source = {"file": geo, "sha256": hashlib.sha256(Path(geo).read_bytes()).hexdigest()}
     else:
-        try:
-            data = generators.generate(geo)
-        except bf.GeometryError as exc:
-            raise casemod.CaseError(f"{where}: [case] geometry: {exc}") from None
-        bs = bf.parse(data, f"{where}: generated geometry {geo['generator']!r}", check_overlaps)
+        data, bs = _generated(geo, where, check_overlaps)
         source = {"generator": geo}
     for b in bs.blocks:  # what the contact kernel cannot hold fails here, not inside YADE
         for k, part in enumerate(b.parts):
