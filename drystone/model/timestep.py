@@ -24,9 +24,22 @@ from drystone.geometry import polyhedron as ph
 MAX_STEPS = 5e7
 
 
+#: the largest face areas this process has measured, by their vertices (shape and bytes): the runs
+#: of one wall, each checked before it runs and again when it runs, measure each stone once
+_AREAS: dict = {}
+AREAS_MAX = 100_000
+
+
 def largest_face_area(vertices) -> float:
     """Area (m^2) of the largest planar face of the convex hull of ``vertices``."""
-    return float(ph.faces(vertices).areas.max())
+    v = np.ascontiguousarray(vertices, dtype=float)
+    key = (v.shape, v.tobytes())
+    area = _AREAS.get(key)
+    if area is None:
+        if len(_AREAS) >= AREAS_MAX:
+            _AREAS.clear()
+        area = _AREAS[key] = float(ph.faces(v).areas.max())
+    return area
 
 
 def critical_step(blocks, materials) -> tuple[float, dict]:
