@@ -49,7 +49,7 @@ _FILE_COST_S = {
     "test_analyses_assess.py": 56, "test_yade_worker.py": 50, "test_analyses_tilt.py": 24,
     "test_analyses_fragility.py": 28, "test_sweep.py": 31, "test_fragility.py": 27, "test_reliability_site.py": 24,
     "test_tilt_block.py": 23, "test_analyses_collapse.py": 23, "test_motions_catalogue.py": 22,
-    "test_cases_valid.py": 18, "test_damping.py": 22, "test_energy.py": 22, "test_restitution.py": 12,
+    "test_cases_valid.py": 5, "test_damping.py": 22, "test_energy.py": 22, "test_restitution.py": 12,
     "test_rocking_pulse.py": 20, "test_sacsayhuaman.py": 19, "test_fragility_measures.py": 19,
     "test_multipart_runs.py": 15, "test_broad_phase.py": 19, "test_identification.py": 17, "test_crosscheck.py": 16,
     "test_reliability_run.py": 15, "test_reliability_output.py": 15, "test_reliability_geometry.py": 14,
