@@ -1,8 +1,11 @@
 """``python -m drystone tilt`` (drystone/analyses/tilt.py) on one stone whose collapse angle
 has a closed form: the 0.2 m cube of one_block.json (mu 0.4 < b/h = 1) slides at
 atan(0.4) = 21.80 deg towards any direction. One analysis (two directions, each with its
-rate check) is run once for the module; its runs tilt at 5 deg/s to 15 deg (the stone stands
-still there: 15 deg is 6.8 deg below its sliding angle), then at the rate measured."""
+rate check) is run once for the module; its runs tilt at 5 deg/s to 20 deg (the stone stands
+still there: 20 deg is 1.8 deg below its sliding angle, as in the case file), then at the rate
+measured: 2 deg/s, and 0.5 deg/s in the rate check (led in at 2 deg/s to 3 deg below the first
+onset), the rate TILT_ANGLE_DEG is stated for (its onset is that after a lead-in to 15 deg and
+1 deg/s within 0.003 deg; the 2 deg/s onset is 0.37 deg later, inside the check's 0.5 deg band)."""
 import json
 import math
 from pathlib import Path
@@ -20,8 +23,8 @@ CASE = paths.ROOT / "cases" / "examples" / "one_block_tilt.toml"
 @pytest.fixture(scope="module")
 def result(tmp_path_factory):
     out = tmp_path_factory.mktemp("tilt") / "tilt"
-    return T.tilt(CASE, ["+y", "-x"], out=out, workers=1, rate=1.0, max_deg=30.0, rate_check=True, check_rate=0.5,
-                  lead=(15.0, 5.0), log=lambda *a, **k: None)
+    return T.tilt(CASE, ["+y", "-x"], out=out, workers=1, rate=2.0, max_deg=30.0, rate_check=True, check_rate=0.5,
+                  lead=(20.0, 5.0), log=lambda *a, **k: None)
 
 
 @requires_yade

@@ -267,9 +267,11 @@ def test_cone_bracket_holds_the_finer_pyramids():
 def test_limit_beside_a_tilt_is_kept_until_the_wall_changes(tmp_path, monkeypatch):
     """beside_dem with a cache folder solves once, reuses the kept angles for the same wall
     (no LP the second time), and solves again when what it depends on changes (here the
-    directions; the wall, the pyramid and the code are in the same digest)."""
+    directions; the wall, the pyramid and the code are in the same digest); the same process
+    asking again without the cache folder reuses what it solved (no LP)."""
     from drystone import paths
 
+    monkeypatch.setattr(lim, "_KEPT", {})  # what this process solved before this test: forgotten
     case = paths.ROOT / "cases" / "examples" / "one_block_tilt.toml"
     first = lim.beside_dem(case, ["+y"], cache_dir=tmp_path)
     assert first["+y"]["associative_deg"] == pytest.approx(math.degrees(math.atan(0.4)), rel=LIMIT_LP_REL)
@@ -281,4 +283,6 @@ def test_limit_beside_a_tilt_is_kept_until_the_wall_changes(tmp_path, monkeypatc
     assert calls == []
     both = lim.beside_dem(case, ["+y", "-x"], cache_dir=tmp_path)  # other directions: solved again
     assert ("-x", "associative") in calls and ("+y", "associative") in calls
+    calls.clear()
+    assert lim.beside_dem(case, ["+y", "-x"]) == both and calls == []
     assert both["-x"]["associative_deg"] == pytest.approx(first["+y"]["associative_deg"], rel=LIMIT_LP_REL)

@@ -160,8 +160,10 @@ def test_box_and_the_box_cut_in_two_give_the_same_run(outdir):
 
 
 def test_engines_agree_on_a_multi_part_stone(outdir):
+    """The compiled step and the numpy engine on the L stone tilted at 40 deg/s to 34 deg: it
+    slides 3.5 cm (measured), both engines within ENGINES_MULTIPART_M."""
     data = stone_file([L_FOOT, L_LEG])
-    case = gravity_then([{"type": "tilt", "rate_deg_s": 20.0, "to_deg": 30.0, "towards": "+x"}], write(outdir, data))
+    case = gravity_then([{"type": "tilt", "rate_deg_s": 40.0, "to_deg": 34.0, "towards": "+x"}], write(outdir, data))
     from drystone import runner
     hs = []
     for engine in ("compiled", "python"):

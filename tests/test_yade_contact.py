@@ -44,10 +44,11 @@ def case(boxes, stages, forces=(), law="penalty_coulomb", mu=0.7, damping=0.8, i
 
 
 TWO = [{"id": 1, "center_xy": [0.0, 0.0], "size": SLAB}, {"id": 2, "center_xy": [0.6, 0.0], "size": SLAB}]
-#: gravity ramped over 0.2 s and held to 0.3 s: the slabs' normal (235 Hz) and shear (166 Hz)
-#: modes on the platform die out within a few hundredths of a second
-SETTLE = [{"type": "gravity", "duration": 0.3, "ramp": 0.2}]
-PUSH_T = 0.3
+#: gravity ramped over 0.1 s and held to 0.15 s: the slabs' normal (235 Hz) and shear (166 Hz)
+#: modes on the platform die out within a few hundredths of a second (the push tests' deflection,
+#: drift and acceleration are those after 0.3 s of settling to 1e-14 of their tolerances)
+SETTLE = [{"type": "gravity", "duration": 0.15, "ramp": 0.1}]
+PUSH_T = 0.15
 
 
 def disp(h, block):
@@ -58,16 +59,16 @@ def disp(h, block):
 @pytest.mark.slow
 def test_push_below_friction_sticks_elastically(outdir):
     """0.4 W with mu = 0.7: the block deflects by F / (K_t A) (elastic joint) and stops:
-    drift between 0.25 s and 1 s after the push below 1e-7 m per 1.5 s; the unloaded
+    drift between 0.25 s and 0.5 s after the push below 1e-7 m per 1.5 s; the unloaded
     neighbour moves < 1e-9 m (with YADE's stock law it creeps: test_stock_law_leaks_shear)."""
     F = 0.4 * W
-    # the run ends 1 s after the push, at the end of the drift window
-    s, h, _ = run_case(case(TWO, SETTLE + [{"type": "rest", "duration": 1.0}],
+    # the run ends 0.5 s after the push, at the end of the drift window
+    s, h, _ = run_case(case(TWO, SETTLE + [{"type": "rest", "duration": 0.5}],
                             [{"block": 1, "force": [F, 0.0, 0.0], "start": PUSH_T}]), outdir)
     t = h["t"]
     x = disp(h, 1)[:, 0]
     i1, i2 = np.searchsorted(t, PUSH_T + 0.25), len(t) - 1
-    assert t[i2] == pytest.approx(PUSH_T + 1.0, abs=0.5 * (t[1] - t[0]))
+    assert t[i2] == pytest.approx(PUSH_T + 0.5, abs=0.5 * (t[1] - t[0]))
     assert abs(x[i2] - x[i1]) < tol.STICK_DRIFT_RATE_M_S * (t[i2] - t[i1])
     # elastic deflection F / (K_t A); 3 % covers the slab's tilt under the push (1.5 %)
     assert x[i2] == pytest.approx(F / (1e8 * 0.16), rel=tol.ELASTIC_DEFLECTION_REL)
@@ -75,22 +76,23 @@ def test_push_below_friction_sticks_elastically(outdir):
 
 
 def test_push_above_friction_slides_with_coulomb_acceleration(outdir):
-    """0.8 W with mu = 0.7: uniform acceleration (0.8 - 0.7) g, within 2 % (fitted over 0.6 s
-    from 0.1 s after the push)."""
-    s, h, _ = run_case(case(TWO[:1], SETTLE + [{"type": "rest", "duration": 0.7}],
+    """0.8 W with mu = 0.7: uniform acceleration (0.8 - 0.7) g, within 2 % (fitted over 0.3 s
+    from 0.1 s after the push: 30 samples, 4.4 cm of slide)."""
+    s, h, _ = run_case(case(TWO[:1], SETTLE + [{"type": "rest", "duration": 0.4}],
                             [{"block": 1, "force": [0.8 * W, 0.0, 0.0], "start": PUSH_T}]), outdir)
     t = h["t"]
     x = disp(h, 1)[:, 0]
-    win = (t > PUSH_T + 0.1) & (t < PUSH_T + 0.7)
+    win = t > PUSH_T + 0.1  # to the run's end, 0.4 s after the push
     a = 2 * np.polyfit(t[win], x[win], 2)[0]
     assert a == pytest.approx(0.1 * G, rel=tol.COULOMB_ACCELERATION_REL)
 
 
 def test_stacked_blocks_penetrations(outdir):
-    """Two stacked slabs: joint penetrations W/(K_n A) (top) and 2W/(K_n A) (bottom), 1 %."""
+    """Two stacked slabs: joint penetrations W/(K_n A) (top) and 2W/(K_n A) (bottom), 1 %
+    (gravity ramped over 0.1 s, held 0.15 s more)."""
     boxes = [{"id": 1, "center_xy": [0.0, 0.0], "size": SLAB},
              {"id": 2, "center_xy": [0.0, 0.0], "size": SLAB, "z0": 0.04}]
-    c = case(boxes, [{"type": "gravity", "duration": 0.5, "ramp": 0.2}],
+    c = case(boxes, [{"type": "gravity", "duration": 0.25, "ramp": 0.1}],
              contacts=[{"name": "top", "blocks": [1, 2]}, {"name": "bottom", "blocks": [0, 1]}])
     s, h, spec = run_case(c, outdir)
     d0 = W / (2e8 * 0.16)
@@ -131,7 +133,8 @@ def test_stock_law_leaks_shear(outdir, detection):
     if detection == "native":
         pytest.skip("the stock law has only YADE's contact geometry")
     F = 0.4 * W
-    s, h, _ = run_case(case(TWO, SETTLE + [{"type": "rest", "duration": 1.0}],
+    settle = [{"type": "gravity", "duration": 0.3, "ramp": 0.2}]
+    s, h, _ = run_case(case(TWO, settle + [{"type": "rest", "duration": 1.0}],
                             [{"block": 1, "force": [F, 0.0, 0.0], "start": 0.5}], law="stock_volumetric",
                             damping=0.0), outdir)
     version = str(json.loads((outdir / "case" / "run_info.json").read_text())["yade_version"]).strip()

@@ -381,22 +381,28 @@ def _log_diff_ndtr(a, b):
 def ida_loglik(theta: float, beta: float, brackets, censored=()) -> float:
     """The log-likelihood above."""
     lo, hi, c = _ida_check(brackets, censored)
-    return -_ida_negll(np.array([math.log(theta), math.log(beta)]), lo, hi, c)[0]
+    return -_ida_negll(np.array([math.log(theta), math.log(beta)]), *_ida_logs(lo, hi, c))[0]
 
 
-def _ida_negll(params, lo, hi, c):
-    """-log L and its gradient in (m, s) = (ln theta, ln beta)."""
+def _ida_logs(lo, hi, c) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """ln lo (-inf where lo = 0), ln hi, ln c: ``_ida_negll``'s data, taken once per fit."""
+    with np.errstate(divide="ignore"):
+        return np.log(lo), np.log(hi), np.log(c)
+
+
+def _ida_negll(params, log_lo, log_hi, log_c):
+    """-log L and its gradient in (m, s) = (ln theta, ln beta), from the data's logarithms
+    (``_ida_logs``)."""
     m, s = params
     beta = math.exp(s)
-    with np.errstate(divide="ignore"):
-        a = (np.log(lo) - m) / beta
-    b = (np.log(hi) - m) / beta
+    a = (log_lo - m) / beta
+    b = (log_hi - m) / beta
     ld = _log_diff_ndtr(a, b)
     lpa = np.where(np.isfinite(a), -0.5 * a * a - _LOG_SQRT_2PI, -np.inf)
     lpb = -0.5 * b * b - _LOG_SQRT_2PI
     ra, rb = np.exp(lpa - ld), np.exp(lpb - ld)            # phi(a)/D, phi(b)/D
     a0 = np.where(np.isfinite(a), a, 0.0)
-    u = (np.log(c) - m) / beta
+    u = (log_c - m) / beta
     lq = log_ndtr(-u)
     rc = np.exp(-0.5 * u * u - _LOG_SQRT_2PI - lq)          # phi(u)/Q
     ll = float(ld.sum() + lq.sum())
@@ -417,7 +423,8 @@ def fit_ida(brackets, censored=()) -> IdaFit:
     mid = np.where(lo > 0, np.sqrt(np.maximum(lo, 1e-300) * hi), hi / 2)
     pts = np.log(np.concatenate([mid, c]))
     x0 = np.array([pts.mean(), math.log(max(float(np.std(pts)), 0.1))])
-    res = optimize.minimize(_ida_negll, x0, args=(lo, hi, c), jac=True, method="BFGS", options={"gtol": 1e-9})
+    res = optimize.minimize(_ida_negll, x0, args=_ida_logs(lo, hi, c), jac=True, method="BFGS",
+                            options={"gtol": 1e-9})
     if not np.all(np.isfinite(res.x)) or np.abs(res.jac).max() > 1e-5 * max(1.0, len(lo) + len(c)):
         raise FitError(f"the optimiser did not converge ({res.message}; gradient {np.abs(res.jac).max():.2g})")
     return IdaFit(theta=math.exp(res.x[0]), beta=math.exp(res.x[1]), loglik=-float(res.fun), n_records=len(lo) + len(c),

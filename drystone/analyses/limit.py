@@ -20,6 +20,7 @@ stages, [[forces]] and [[loads]] are not part of this analysis (listed as ``igno
 """
 from __future__ import annotations
 
+import copy
 import json
 import math
 from dataclasses import dataclass
@@ -238,6 +239,11 @@ def _wall_key(wall: Wall, dirs: list[str]) -> str:
     return h.hexdigest()
 
 
+#: this process's angles by ``_wall_key`` (``beside_dem``): analyses of one wall (a study's walls
+#: with and without their loads, which this analysis leaves out) solve it once
+_KEPT: dict = {}
+
+
 def beside_dem(case_path, towards, overrides=(), cache_dir=None) -> dict:
     """The rigid limit angles of a case's wall as built, per direction, to set beside a DEM
     tilt angle: {dir: {"associative_deg", "coulomb_deg", "associative_status",
@@ -246,7 +252,7 @@ def beside_dem(case_path, towards, overrides=(), cache_dir=None) -> dict:
     not_converged: the note says why). A wall this analysis cannot read gives
     {"error": one line} instead (the DEM analysis goes on). ``cache_dir``: the angles are
     kept in its ``limit_beside_dem.json`` and reused while the wall, the directions and this
-    code are unchanged (a digest of them: ``_wall_key``)."""
+    code are unchanged (a digest of them: ``_wall_key``), as they are in this process (``_KEPT``)."""
     from drystone.geometry.blockfile import GeometryError
 
     try:
@@ -255,7 +261,7 @@ def beside_dem(case_path, towards, overrides=(), cache_dir=None) -> dict:
         return {"error": f"the limit analysis could not read the wall: {str(e).splitlines()[0]}"}
     dirs = directions(towards)
     cache = Path(cache_dir) / "limit_beside_dem.json" if cache_dir is not None else None
-    key = _wall_key(wall, dirs) if cache is not None else None
+    key = _wall_key(wall, dirs)
     if cache is not None and cache.is_file():
         try:
             kept = json.loads(cache.read_text())
@@ -263,6 +269,11 @@ def beside_dem(case_path, towards, overrides=(), cache_dir=None) -> dict:
                 return kept["limits"]
         except (OSError, ValueError, KeyError, AttributeError):
             pass  # unreadable: computed again and rewritten
+    if key in _KEPT:
+        out = copy.deepcopy(_KEPT[key])
+        if cache is not None:
+            _keep(cache, key, case_path, overrides, out)
+        return out
     out = {}
     for t in dirs:
         e = {}
@@ -277,13 +288,19 @@ def beside_dem(case_path, towards, overrides=(), cache_dir=None) -> dict:
                 e.setdefault("note", entry.get("message", entry["status"]))
         e["note"] = e.get("note", "rigid stones, the geometry as built (docs/limit-analysis.md)")
         out[t] = e
+    _KEPT[key] = copy.deepcopy(out)
     if cache is not None:
-        from drystone.analyses import common
-
-        cache.parent.mkdir(parents=True, exist_ok=True)
-        common.write_json(cache, {"key": key, "case": str(case_path), "overrides": list(overrides), "limits": out},
-                          overrides=overrides)
+        _keep(cache, key, case_path, overrides, out)
     return out
+
+
+def _keep(cache: Path, key: str, case_path, overrides, out: dict) -> None:
+    """``beside_dem``'s angles into its cache file."""
+    from drystone.analyses import common
+
+    cache.parent.mkdir(parents=True, exist_ok=True)
+    common.write_json(cache, {"key": key, "case": str(case_path), "overrides": list(overrides), "limits": out},
+                      overrides=overrides)
 
 
 def _speeds(wall: Wall, v) -> np.ndarray:

@@ -28,18 +28,61 @@ from drystone.model.loads import LoadContext
 from drystone.model.stages import AXES, REGISTRY, TOWARDS, ResolveContext, initial_relative_velocity  # noqa: F401
 
 
+#: the generators whose block file is a function of their parameters alone (none reads a file)
+PURE_GENERATORS = frozenset({"four_blocks", "boxes_on_platform", "running_bond", "ogawa_blocks", "irregular_wall",
+                             "tilt_wall", "sacsayhuaman", "polygonal_wall"})
+#: this process's last geometries of those generators, generated and checked (``_generated``), by
+#: their parameters: a sweep or an analysis checks every run's case before it runs them, and its
+#: runs share one wall; kept up to ``GENERATED_MAX``, the oldest dropped first
+_GENERATED: dict = {}
+GENERATED_MAX = 8
+
+
+def _generated(geo: dict, where: str, check_overlaps: bool) -> tuple[dict, bf.BlockSet, tuple | None]:
+    """The block file of a generated geometry, its BlockSet (copies of the kept ones where the
+    same pure generator was asked the same before) and its key in ``_GENERATED`` (None: not kept)."""
+    import copy
+
+    key = None
+    if geo.get("generator") in PURE_GENERATORS:
+        key = (json.dumps(geo, sort_keys=True, default=repr), bool(check_overlaps))
+        if key in _GENERATED:
+            return (*copy.deepcopy((_GENERATED[key]["data"], _GENERATED[key]["bs"])), key)
+    try:
+        data = generators.generate(geo)
+    except bf.GeometryError as exc:
+        raise casemod.CaseError(f"{where}: [case] geometry: {exc}") from None
+    bs = bf.parse(data, f"{where}: generated geometry {geo['generator']!r}", check_overlaps)
+    if key is not None:
+        while len(_GENERATED) >= GENERATED_MAX:
+            _GENERATED.pop(next(iter(_GENERATED)))
+        _GENERATED[key] = {"data": copy.deepcopy(data), "bs": copy.deepcopy(bs), "text": None}
+    return data, bs, key
+
+
+def _write_geometry(data: dict, path: Path, key: tuple | None) -> None:
+    """geometry.json: the block file checked and written (``bf.write``), or, for a kept generated
+    geometry written before, the same text again."""
+    from drystone import atomic
+
+    kept = _GENERATED.get(key) if key is not None else None
+    if kept is not None and kept["text"] is not None:
+        atomic.write_text(path, kept["text"])
+        return
+    bf.write(data, path)
+    if kept is not None:
+        kept["text"] = path.read_text()
+
+
 def _geometry(case: dict, where: str, out: Path, check_overlaps: bool = True) -> tuple[bf.BlockSet, dict]:
     geo = case["case"]["geometry"]
     if isinstance(geo, str):
         data = inputfiles.load_json(geo, bf.GeometryError, "block file")
         bs = bf.parse(data, geo, check_overlaps)
         source = {"file": geo, "sha256": hashlib.sha256(Path(geo).read_bytes()).hexdigest()}
+        key = None
     else:
-        try:
-            data = generators.generate(geo)
-        except bf.GeometryError as exc:
-            raise casemod.CaseError(f"{where}: [case] geometry: {exc}") from None
-        bs = bf.parse(data, f"{where}: generated geometry {geo['generator']!r}", check_overlaps)
+        data, bs, key = _generated(geo, where, check_overlaps)
         source = {"generator": geo}
     for b in bs.blocks:  # what the contact kernel cannot hold fails here, not inside YADE
         for k, part in enumerate(b.parts):
@@ -54,7 +97,7 @@ def _geometry(case: dict, where: str, out: Path, check_overlaps: bool = True) ->
               f"platform nor on fixed blocks that do (more than {bf.STANDING_TOL:g} m away, or 0.1 % of the "
               "wall's size if less): held in mid-air",
               file=sys.stderr)
-    bf.write(data, out / "geometry.json")
+    _write_geometry(data, out / "geometry.json", key)
     return bs, source
 
 

@@ -35,6 +35,7 @@ silenced). No YADE, no package layer above motions/.
 """
 from __future__ import annotations
 
+import copy
 import hashlib
 import importlib.metadata as md
 import math
@@ -454,9 +455,46 @@ def convergence_warning(info: dict) -> str | None:
             "the last iteration; raise 'max_iterations' or check the profile")
 
 
+#: this process's last propagations (``propagate``), by their inputs (``_inputs``): an analysis
+#: checks each run's case before it runs it and the run reads it again, a study sizes its caps
+#: from the same motions; kept up to ``KEPT_MAX``, the oldest dropped first
+_KEPT: dict = {}
+KEPT_MAX = 32
+
+
+def _inputs(record: Record, sp: SiteProfile) -> tuple:
+    """Everything a propagation depends on: the profile as read (every field), the record's
+    names, step and samples (their digest)."""
+    acc = np.ascontiguousarray(record.acc)
+    return (repr(sp), record.source, record.event, float(record.dt), acc.dtype.str, acc.shape,
+            hashlib.sha256(acc.tobytes()).hexdigest())
+
+
 def propagate(record: Record, sp: SiteProfile) -> tuple[Record, dict]:
     """The surface motion of ``record`` (taken at rock, module docstring) through the site
-    profile ``sp``: (Record at the record's step and length, m/s^2; info, JSON-ready)."""
+    profile ``sp``: (Record at the record's step and length, m/s^2; info, JSON-ready). The
+    same inputs again in this process give copies of the first result (``_KEPT``)."""
+    key = _inputs(record, sp)
+    if key not in _KEPT:
+        while len(_KEPT) >= KEPT_MAX:
+            _KEPT.pop(next(iter(_KEPT)))
+        _KEPT[key] = _propagate(record, sp)
+    acc, info = _KEPT[key]
+    acc, info = acc.copy(), copy.deepcopy(info)
+    note = (f"site response: {Path(sp.path).name} (sha256 {sp.sha256[:12]}), {info['method']}; input "
+            f"{'rigid base' if sp.bedrock is None else 'outcrop rock'} -> surface; f0 {info['f0_linear_hz']:.3g} Hz "
+            f"(small strain), {info['iterations']} iterations{'' if info['converged'] else ' (NOT converged)'}; "
+            f"PGA {record.pga_g:.4g} g -> {info['pga_surface_g']:.4g} g")
+    out = record.replaced(note, acc=acc)
+    out.info["site_response"] = {"profile": sp.path, "sha256": sp.sha256, "name": sp.name, "assumed": sp.assumed,
+                                 "f0_linear_hz": info["f0_linear_hz"],
+                                 "amplification_linear": info["amplification_linear"],
+                                 "pga_rock_g": record.pga_g, "pga_surface_g": info["pga_surface_g"]}
+    return out, info
+
+
+def _propagate(record: Record, sp: SiteProfile) -> tuple[np.ndarray, dict]:
+    """``propagate``'s work: the surface acceleration (m/s^2, the record's samples) and info."""
     ps = _pystrata()
     n = record.n
     pad, nfft = fft_samples(record, sp)
@@ -507,12 +545,4 @@ def propagate(record: Record, sp: SiteProfile) -> tuple[Record, dict]:
         "tf_linear_abs": np.abs(transfer_function(sp, F_INFO_HZ)).tolist(),
         "tf_compatible_abs": np.abs(transfer_function(sp, F_INFO_HZ, profile)).tolist(),
     }
-    note = (f"site response: {Path(sp.path).name} (sha256 {sp.sha256[:12]}), {info['method']}; input "
-            f"{'rigid base' if sp.bedrock is None else 'outcrop rock'} -> surface; f0 {f0_lin:.3g} Hz "
-            f"(small strain), {iterations} iterations{'' if info['converged'] else ' (NOT converged)'}; "
-            f"PGA {record.pga_g:.4g} g -> {info['pga_surface_g']:.4g} g")
-    out = record.replaced(note, acc=acc)
-    out.info["site_response"] = {"profile": sp.path, "sha256": sp.sha256, "name": sp.name, "assumed": sp.assumed,
-                                 "f0_linear_hz": f0_lin, "amplification_linear": amp_lin,
-                                 "pga_rock_g": record.pga_g, "pga_surface_g": info["pga_surface_g"]}
-    return out, info
+    return acc, info

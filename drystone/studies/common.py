@@ -54,7 +54,7 @@ def search_params(cap_g: float, resolution_g: float) -> dict:
 #: deg/s until collapse and 1.5 s after it (the cases': 2 and 1 deg/s, 3 s): about half the
 #: simulated time of a tilt run, a sixth less of a seismic run
 QUICK_GRAVITY = {"duration": 1.0, "ramp": 0.5}
-QUICK_TILT = {"rate": 2.0, "lead_rate": 4.0, "after_collapse": 1.5}
+QUICK_TILT = {"rate": 4.0, "lead_rate": 8.0, "after_collapse": 1.5}
 
 
 def quick_gravity(quick: bool) -> list[str]:

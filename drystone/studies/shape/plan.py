@@ -110,7 +110,7 @@ CONFIGS = {
     "small": Config(name="small", out="shape_small", variants=("coursed", "polygonal"), seeds=(0,), records=("ancash1970",), resolution_g=1.6,
                     record_duration_s=1.0, rest_max_s=1.5, quick=True,
                     notes=("1 seed, 1 record cut to 1 s, 2 variants, a 1.6 g bracket, rest at most 1.5 s, gravity "
-                           "held 1 s, tilts at 4 then 2 deg/s: a pipeline check, not a result",)),
+                           "held 1 s, tilts at 8 then 4 deg/s: a pipeline check, not a result",)),
 }
 
 

@@ -98,7 +98,7 @@ CONFIGS = {
                     record_duration_s=0.75, rest_max_s=1.5, quick=True,
                     notes=("1 record cut to 0.75 s, as recorded only, 1.6 g (free) and 0.3 g (retained) brackets, "
                            "a 2 m water-level bracket, rest at most 1.5 s, gravity held 1 s in the seismic and tilt "
-                           "runs, tilts at 4 then 2 deg/s: a pipeline check, not a result",)),
+                           "runs, tilts at 8 then 4 deg/s: a pipeline check, not a result",)),
 }
 
 
