@@ -9,6 +9,7 @@ import pytest
 
 from drystone.analyses import limit as lim
 from drystone.geometry import blockfile as bf
+from drystone.kept import Kept
 from drystone.mechanics import interfaces as itf
 from drystone.mechanics import limit_analysis as la
 from tolerances import EXACT_REL, LIMIT_ITERATION_REL, LIMIT_LP_REL
@@ -271,7 +272,7 @@ def test_limit_beside_a_tilt_is_kept_until_the_wall_changes(tmp_path, monkeypatc
     asking again without the cache folder reuses what it solved (no LP)."""
     from drystone import paths
 
-    monkeypatch.setattr(lim, "_KEPT", {})  # what this process solved before this test: forgotten
+    monkeypatch.setattr(lim, "_KEPT", Kept(32))  # what this process solved before this test: forgotten
     case = paths.ROOT / "cases" / "examples" / "one_block_tilt.toml"
     first = lim.beside_dem(case, ["+y"], cache_dir=tmp_path)
     assert first["+y"]["associative_deg"] == pytest.approx(math.degrees(math.atan(0.4)), rel=LIMIT_LP_REL)

@@ -20,7 +20,6 @@ stages, [[forces]] and [[loads]] are not part of this analysis (listed as ``igno
 """
 from __future__ import annotations
 
-import copy
 import json
 import math
 from dataclasses import dataclass
@@ -29,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from drystone.geometry import blockfile as bf
+from drystone.kept import Kept
 from drystone.mechanics import interfaces as itf
 from drystone.mechanics import limit_analysis as la
 from drystone.mechanics.contact import pair_properties
@@ -241,7 +241,7 @@ def _wall_key(wall: Wall, dirs: list[str]) -> str:
 
 #: this process's angles by ``_wall_key`` (``beside_dem``): analyses of one wall (a study's walls
 #: with and without their loads, which this analysis leaves out) solve it once
-_KEPT: dict = {}
+_KEPT = Kept(32)
 
 
 def beside_dem(case_path, towards, overrides=(), cache_dir=None) -> dict:
@@ -270,7 +270,7 @@ def beside_dem(case_path, towards, overrides=(), cache_dir=None) -> dict:
         except (OSError, ValueError, KeyError, AttributeError):
             pass  # unreadable: computed again and rewritten
     if key in _KEPT:
-        out = copy.deepcopy(_KEPT[key])
+        out = _KEPT.get(key)
         if cache is not None:
             _keep(cache, key, case_path, overrides, out)
         return out
@@ -288,7 +288,7 @@ def beside_dem(case_path, towards, overrides=(), cache_dir=None) -> dict:
                 e.setdefault("note", entry.get("message", entry["status"]))
         e["note"] = e.get("note", "rigid stones, the geometry as built (docs/limit-analysis.md)")
         out[t] = e
-    _KEPT[key] = copy.deepcopy(out)
+    _KEPT.put(key, out)
     if cache is not None:
         _keep(cache, key, case_path, overrides, out)
     return out

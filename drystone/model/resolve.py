@@ -24,6 +24,7 @@ from drystone.geometry import generators
 from drystone.geometry import polyhedron as ph
 from drystone.model.spec import SPEC_FORMAT, SPEC_VERSION, Spec, StageSpec, spec_dict  # noqa: F401
 from drystone.model.loads import REGISTRY as LOAD_TYPES
+from drystone.kept import Kept
 from drystone.model.loads import LoadContext
 from drystone.model.stages import AXES, REGISTRY, TOWARDS, ResolveContext, initial_relative_velocity  # noqa: F401
 
@@ -31,33 +32,27 @@ from drystone.model.stages import AXES, REGISTRY, TOWARDS, ResolveContext, initi
 #: the generators whose block file is a function of their parameters alone (none reads a file)
 PURE_GENERATORS = frozenset({"four_blocks", "boxes_on_platform", "running_bond", "ogawa_blocks", "irregular_wall",
                              "tilt_wall", "sacsayhuaman", "polygonal_wall"})
-#: this process's last geometries of those generators, generated and checked (``_generated``), by
-#: their parameters: a sweep or an analysis checks every run's case before it runs them, and its
-#: runs share one wall; kept up to ``GENERATED_MAX``, the oldest dropped first
-_GENERATED: dict = {}
-GENERATED_MAX = 8
+#: this process's geometries of those generators, generated and checked (``_generated``), and the
+#: text of their geometry.json, by their parameters (drystone/kept.py): a sweep or an analysis checks
+#: every run's case before it runs them, and its runs share one wall
+_GENERATED = Kept(8)
+_WRITTEN = Kept(8)
 
 
 def _generated(geo: dict, where: str, check_overlaps: bool) -> tuple[dict, bf.BlockSet, tuple | None]:
     """The block file of a generated geometry, its BlockSet (copies of the kept ones where the
     same pure generator was asked the same before) and its key in ``_GENERATED`` (None: not kept)."""
-    import copy
+    def generate():
+        try:
+            data = generators.generate(geo)
+        except bf.GeometryError as exc:
+            raise casemod.CaseError(f"{where}: [case] geometry: {exc}") from None
+        return data, bf.parse(data, f"{where}: generated geometry {geo['generator']!r}", check_overlaps)
 
-    key = None
-    if geo.get("generator") in PURE_GENERATORS:
-        key = (json.dumps(geo, sort_keys=True, default=repr), bool(check_overlaps))
-        if key in _GENERATED:
-            return (*copy.deepcopy((_GENERATED[key]["data"], _GENERATED[key]["bs"])), key)
-    try:
-        data = generators.generate(geo)
-    except bf.GeometryError as exc:
-        raise casemod.CaseError(f"{where}: [case] geometry: {exc}") from None
-    bs = bf.parse(data, f"{where}: generated geometry {geo['generator']!r}", check_overlaps)
-    if key is not None:
-        while len(_GENERATED) >= GENERATED_MAX:
-            _GENERATED.pop(next(iter(_GENERATED)))
-        _GENERATED[key] = {"data": copy.deepcopy(data), "bs": copy.deepcopy(bs), "text": None}
-    return data, bs, key
+    if geo.get("generator") not in PURE_GENERATORS:
+        return (*generate(), None)
+    key = (json.dumps(geo, sort_keys=True, default=repr), bool(check_overlaps))
+    return (*_GENERATED.get(key, generate), key)
 
 
 def _write_geometry(data: dict, path: Path, key: tuple | None) -> None:
@@ -65,13 +60,13 @@ def _write_geometry(data: dict, path: Path, key: tuple | None) -> None:
     geometry written before, the same text again."""
     from drystone import atomic
 
-    kept = _GENERATED.get(key) if key is not None else None
-    if kept is not None and kept["text"] is not None:
-        atomic.write_text(path, kept["text"])
+    text = _WRITTEN.get(key) if key is not None else None
+    if text is not None:
+        atomic.write_text(path, text)
         return
     bf.write(data, path)
-    if kept is not None:
-        kept["text"] = path.read_text()
+    if key is not None:
+        _WRITTEN.put(key, path.read_text())
 
 
 def _geometry(case: dict, where: str, out: Path, check_overlaps: bool = True) -> tuple[bf.BlockSet, dict]:

@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from drystone.kept import Kept
 from drystone.mechanics import contact as law
 from drystone.model.keys import CaseError
 from drystone.geometry import polyhedron as ph
@@ -27,19 +28,13 @@ MAX_STEPS = 5e7
 #: the largest face areas and volumes this process has measured, by the hull's vertices (shape and
 #: bytes): the runs of one wall, each checked before it runs and again when it runs, measure each
 #: stone once
-_MEASURED: dict = {}
-MEASURED_MAX = 100_000
+_MEASURED = Kept(100_000)
 
 
 def _measured(what: str, vertices, measure) -> float:
     v = np.ascontiguousarray(vertices, dtype=float)
     key = (what, v.shape, v.tobytes())
-    x = _MEASURED.get(key)
-    if x is None:
-        if len(_MEASURED) >= MEASURED_MAX:
-            _MEASURED.clear()
-        x = _MEASURED[key] = float(measure(v))
-    return x
+    return _MEASURED.get(key, lambda: float(measure(v)))
 
 
 def largest_face_area(vertices) -> float:

@@ -35,7 +35,6 @@ silenced). No YADE, no package layer above motions/.
 """
 from __future__ import annotations
 
-import copy
 import hashlib
 import importlib.metadata as md
 import math
@@ -46,6 +45,7 @@ from pathlib import Path
 import numpy as np
 
 from drystone.inputfiles import load_toml
+from drystone.kept import Kept
 from drystone.motions.record import Record
 from drystone.units import G_STANDARD
 
@@ -457,9 +457,8 @@ def convergence_warning(info: dict) -> str | None:
 
 #: this process's last propagations (``propagate``), by their inputs (``_inputs``): an analysis
 #: checks each run's case before it runs it and the run reads it again, a study sizes its caps
-#: from the same motions; kept up to ``KEPT_MAX``, the oldest dropped first
-_KEPT: dict = {}
-KEPT_MAX = 32
+#: from the same motions (drystone/kept.py)
+_KEPT = Kept(32)
 
 
 def _inputs(record: Record, sp: SiteProfile) -> tuple:
@@ -475,12 +474,7 @@ def propagate(record: Record, sp: SiteProfile) -> tuple[Record, dict]:
     profile ``sp``: (Record at the record's step and length, m/s^2; info, JSON-ready). The
     same inputs again in this process give copies of the first result (``_KEPT``)."""
     key = _inputs(record, sp)
-    if key not in _KEPT:
-        while len(_KEPT) >= KEPT_MAX:
-            _KEPT.pop(next(iter(_KEPT)))
-        _KEPT[key] = _propagate(record, sp)
-    acc, info = _KEPT[key]
-    acc, info = acc.copy(), copy.deepcopy(info)
+    acc, info = _KEPT.get(key, lambda: _propagate(record, sp))
     note = (f"site response: {Path(sp.path).name} (sha256 {sp.sha256[:12]}), {info['method']}; input "
             f"{'rigid base' if sp.bedrock is None else 'outcrop rock'} -> surface; f0 {info['f0_linear_hz']:.3g} Hz "
             f"(small strain), {info['iterations']} iterations{'' if info['converged'] else ' (NOT converged)'}; "

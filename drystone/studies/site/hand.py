@@ -25,6 +25,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.optimize import brentq
 
+from drystone.kept import Kept
 from drystone.mechanics import earth_pressure as ep
 from drystone.units import GRAVITY
 
@@ -141,21 +142,22 @@ def retained(case=None) -> tuple[Body, float]:
 
 #: this process's hand checks by their case file and its bytes (``summary``): a study's report
 #: written again gives the same check
-_KEPT: dict = {}
+_KEPT = Kept(8)
 
 
 def summary(case=None) -> dict:
     """The retained wall's hand check: weight (N), friction, critical tilts (deg) and water
     levels (m)."""
-    import copy
     from pathlib import Path
 
     from drystone.studies.site import plan as planmod
 
     path = Path(case or planmod.record_case("retained"))
     key = (str(path.resolve()), path.read_bytes())
-    if key not in _KEPT:
+
+    def check():
         b, mu = retained(path)
-        _KEPT[key] = {"weight_N": b.weight, "mu": mu, "pivot_m": list(b.pivot), **critical_tilt(b, mu),
-                      **critical_water(b, mu)}
-    return copy.deepcopy(_KEPT[key])
+        return {"weight_N": b.weight, "mu": mu, "pivot_m": list(b.pivot), **critical_tilt(b, mu),
+                **critical_water(b, mu)}
+
+    return _KEPT.get(key, check)
