@@ -31,10 +31,11 @@ class Layer:
 
 LAYERS = (
     Layer(0, "leaves", ("drystone", "drystone.paths", "drystone.units", "drystone.libm", "drystone.inputfiles",
-                        "drystone.layers", "drystone.atomic"), (),
-          "`drystone/` (`paths.py`, `units.py`, `libm.py`, `inputfiles.py`, `layers.py`, `atomic.py`)",
+                        "drystone.layers", "drystone.atomic", "drystone.kept"), (),
+          "`drystone/` (`paths.py`, `units.py`, `libm.py`, `inputfiles.py`, `layers.py`, `atomic.py`, `kept.py`)",
           "where things are, units and g, processor-independent sin/cos, reading input files with one-line "
-          "errors, this list of layers, every file written aside and renamed into place"),
+          "errors, this list of layers, every file written aside and renamed into place, a process's results "
+          "kept by their inputs"),
     Layer(1, "inputs", (), ("drystone.geometry", "drystone.motions"),
           "`drystone/geometry/`, `drystone/motions/`",
           "block files (`blockfile.py`: the format and its checks), hull helpers, generated walls and outlines; "
