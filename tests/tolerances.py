@@ -772,6 +772,9 @@ BALANCE_SHADOW = 0.5
 #: force scaled with the contact area both ways crept 70 um (an earlier round); the opt-in
 #: penalty_coulomb_area law (scaled where the area shrinks only) 3.7 um, 82 % of this bound
 #: (docs/energy.md)
+#: NOT robust: the wall settles in slow events whose timing follows round-off (a stricter stop of
+#: the damping's square root: 12-35 um per 0.5 s from 1.5 s; this code held to 5 s: 3.3 um from
+#: 4.5 s); docs/energy.md, "Correction"
 SETTLED_DRIFT_DEPTH_FRACTION = 0.01
 #: second-order convergence (the balance's bounded leapfrog error): halving dt quarters it,
 #: a ratio of 4; the next order's share moves it by up to a quarter: 3-5
