@@ -22,6 +22,11 @@ GENERATORS = {
     "dxf": ("drystone.geometry.dxf", "make"),
     "meshes": ("drystone.geometry.meshes", "make"),
 }
+#: the generators whose block file is a function of their parameters alone (none reads a file): a
+#: process may keep what they generate (drystone/model/resolve.py); a new generator that reads no
+#: file belongs here
+PURE = frozenset({"four_blocks", "boxes_on_platform", "running_bond", "ogawa_blocks", "irregular_wall", "tilt_wall",
+                  "sacsayhuaman", "polygonal_wall"})
 
 
 def generate(spec: dict) -> dict:

@@ -29,10 +29,7 @@ from drystone.model.loads import LoadContext
 from drystone.model.stages import AXES, REGISTRY, TOWARDS, ResolveContext, initial_relative_velocity  # noqa: F401
 
 
-#: the generators whose block file is a function of their parameters alone (none reads a file)
-PURE_GENERATORS = frozenset({"four_blocks", "boxes_on_platform", "running_bond", "ogawa_blocks", "irregular_wall",
-                             "tilt_wall", "sacsayhuaman", "polygonal_wall"})
-#: this process's geometries of those generators, generated and checked (``_generated``), and the
+#: this process's geometries of the pure generators (``generators.PURE``), generated and checked (``_generated``), and the
 #: text of their geometry.json, by their parameters (drystone/kept.py): a sweep or an analysis checks
 #: every run's case before it runs them, and its runs share one wall
 _GENERATED = Kept(8)
@@ -49,7 +46,7 @@ def _generated(geo: dict, where: str, check_overlaps: bool) -> tuple[dict, bf.Bl
             raise casemod.CaseError(f"{where}: [case] geometry: {exc}") from None
         return data, bf.parse(data, f"{where}: generated geometry {geo['generator']!r}", check_overlaps)
 
-    if geo.get("generator") not in PURE_GENERATORS:
+    if geo.get("generator") not in generators.PURE:
         return (*generate(), None)
     key = (json.dumps(geo, sort_keys=True, default=repr), bool(check_overlaps))
     return (*_GENERATED.get(key, generate), key)
