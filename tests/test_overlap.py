@@ -34,6 +34,32 @@ def test_side_by_side_coplanar_faces_counted_once():
     assert g == pytest.approx([-0.4, 0, 0], rel=tol.THIN_OVERLAP_REL, abs=tol.EXACT_ABS)
 
 
+@pytest.mark.parametrize("front", [0.0, 1e-13, -1e-13, 3e-11, -3e-11, 1e-6])
+def test_coplanar_faces_in_any_orientation(front):
+    """A bed joint 1e-4 m deep whose upper stone's front face is ``front`` metres behind
+    the lower stone's (0 and +-1e-13: one plane within overlap.TOL; +-3e-11 and 1e-6: two),
+    both stones turned and moved as one by 200 seeded rigid motions. Turned, the coplanar
+    faces lie on either side of each other's planes by round-off: the front face is counted
+    once all the same (not lost, not doubled), and the volume, centroid and dV/dx_B are the
+    axis-aligned pair's turned with it."""
+    a = box([0, 0, 0], [1.0, 0.6, 0.8])
+    b = box([front, 0.2, 0.8 - 1e-4], [1.0, 0.7, 1.6])
+    v0, c0, g0 = ov.overlap(a, b)
+    assert v0 == pytest.approx(1e-4 * 0.4 * (1.0 - max(front, 0.0)), rel=tol.THIN_OVERLAP_REL)
+    rng = np.random.default_rng(7)
+    for _ in range(200):
+        q = rng.normal(size=4)
+        x, y, z, w = q / np.linalg.norm(q)
+        r = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                      [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+        t = rng.uniform(-5.0, 5.0, 3)
+        v, c, g = ov.overlap(a @ r.T + t, b @ r.T + t)
+        assert v == pytest.approx(v0, rel=tol.THIN_OVERLAP_REL)
+        assert c == pytest.approx(r @ c0 + t, abs=tol.THIN_OVERLAP_REL)
+        assert g == pytest.approx(r @ g0, abs=tol.THIN_OVERLAP_REL * np.linalg.norm(g0))
+
+
 def test_separated_and_touching_give_nothing():
     a = box([0, 0, 0], [1, 1, 1])
     assert ov.overlap(a, box([1.001, 0, 0], [2, 1, 1]))[0] == 0.0

@@ -18,11 +18,15 @@ then acts along  n = -dV/dx_B / |dV/dx_B|  (from A to B), the direction in which
 overlap shrinks fastest, and |dV/dx_B| is the contact area A_c: the overlap's footprint,
 exact for a flat joint (A_c delta = V) and for a block rocking on an edge (a wedge) alike.
 
-Coplanar faces of A and B with the same outward normal (two stones side by side, their
-front faces in one plane) bound I on the same plane; to count that boundary once, such a
-face of B (its plane within ``tol`` = 1e-11 m of A's: far above round-off at wall scale) is
-left out. Exactly touching faces (opposite normals, one plane) give two polygons that
-cancel: V = 0.
+Coplanar faces of A and B with the same outward normal (two stones of a wall, their
+front faces in one plane) bound I on the same plane; that boundary is A's face there,
+clipped to B's other planes, and B's face is left out (``_coplanar``: normals parallel to
+1e-12 and each face's vertices within ``tol`` = 1e-11 m of the other's plane, far above
+round-off at wall scale). Clipping A's face to B's plane too would keep or drop all of it on
+the sign of round-off distances (~1e-16 m): with B's face left out, the overlap of a bed
+joint that reaches the wall's front then lost its front face, and its volume jumped by a
+fifth as a stone turned by round-off. Exactly touching faces (opposite normals, one plane)
+give two polygons that cancel: V = 0.
 
 Touching. The two polygons cancel exactly only where the faces' vertices have the same
 coordinates (boxes on a grid). Two stones that touch on a sloping joint (an irregular wall)
@@ -142,14 +146,34 @@ def _clip(P, k, S, Q):
 
 
 @njit(cache=True)
-def _faces_inside(V, F, FK, nf, N1, D1, V2, nv2, N2, D2, nf2, dedup, tol, polys, counts, start, A, B, S):
-    """Clip every face of one body (global vertices V, planes N1, D1) to the other body's
-    half-spaces (N2 x + D2 <= 0; its vertices V2[:nv2]); store the non-empty polygons from
-    index ``start``. A face whose plane the other body does not reach (all its vertices
-    more than ``tol`` inside the plane) is skipped without a clip: no part of it can be in
-    the other body. With ``dedup``, a face lying in a plane of the other body with the same
-    outward normal (within ``tol``) is skipped: the other body's face already bounds the
-    overlap there. A, B: (MAXV, 3) work arrays; S (MAXV,) the signed distances."""
+def _coplanar(NA, DA, VA, FA, FKA, f, NB, DB, VB, FB, FKB, p, tol):
+    """Face f of A and face p of B lie in one plane with the same outward normal: normals
+    parallel to 1e-12 (their cosine), every vertex of each face within ``tol`` of the other
+    face's plane (module docstring). A's face is always the first argument, so both bodies'
+    passes of ``_clip_pair`` get the same answer from the same arithmetic."""
+    if NA[f, 0] * NB[p, 0] + NA[f, 1] * NB[p, 1] + NA[f, 2] * NB[p, 2] <= 1.0 - 1e-12:
+        return False
+    for q in range(FKA[f]):
+        v = FA[f, q]
+        if not abs(NB[p, 0] * VA[v, 0] + NB[p, 1] * VA[v, 1] + NB[p, 2] * VA[v, 2] + DB[p]) < tol:
+            return False
+    for q in range(FKB[p]):
+        v = FB[p, q]
+        if not abs(NA[f, 0] * VB[v, 0] + NA[f, 1] * VB[v, 1] + NA[f, 2] * VB[v, 2] + DA[f]) < tol:
+            return False
+    return True
+
+
+@njit(cache=True)
+def _faces_inside(V, F, FK, nf, N1, D1, V2, F2, FK2, nv2, N2, D2, nf2, dedup, tol, polys, counts, start, A, B, S):
+    """Clip every face of one body (global vertices V, faces F, FK, planes N1, D1) to the
+    other body's half-spaces (N2 x + D2 <= 0; its vertices V2[:nv2], faces F2, FK2); store
+    the non-empty polygons from index ``start``. A face whose plane the other body does not
+    reach (all its vertices more than ``tol`` inside the plane) is skipped without a clip:
+    no part of it can be in the other body. Coplanar faces (``_coplanar``): in A's pass
+    (``dedup`` False) a face is not clipped to the other body's plane it lies in; in B's
+    pass (``dedup``) the face is skipped: A's face bounds the overlap there. A, B: (MAXV, 3)
+    work arrays; S (MAXV,) the signed distances."""
     c = start
     for f in range(nf):
         reached = False  # a vertex of the other body within tol of the plane or beyond it
@@ -163,8 +187,7 @@ def _faces_inside(V, F, FK, nf, N1, D1, V2, nv2, N2, D2, nf2, dedup, tol, polys,
         if dedup:
             dup = False
             for p in range(nf2):
-                if N1[f, 0] * N2[p, 0] + N1[f, 1] * N2[p, 1] + N1[f, 2] * N2[p, 2] > 1.0 - 1e-12 \
-                        and abs(D1[f] - D2[p]) < tol:
+                if _coplanar(N2, D2, V2, F2, FK2, p, N1, D1, V, F, FK, f, tol):  # (A's face first)
                     dup = True
                     break
             if dup:
@@ -194,6 +217,8 @@ def _faces_inside(V, F, FK, nf, N1, D1, V2, nv2, N2, D2, nf2, dedup, tol, polys,
             if total == total:
                 if smax <= 0.0:
                     continue
+                if not dedup and _coplanar(N1, D1, V, F, FK, f, N2, D2, V2, F2, FK2, p, tol):
+                    continue  # the face lies in this plane: it bounds the overlap there
                 if smin > 0.0:
                     k = 0
                     break
@@ -222,8 +247,8 @@ def _work(maxf):
 def _clip_pair(VA, nva, FA, FKA, nfa, NA, DA, VB, nvb, FB, FKB, nfb, NB, DB, tol, polys, counts, A, B, S):
     """The polygons bounding A ∩ B into ``polys``: A's faces clipped to B (the first
     ``na``), then B's faces clipped to A (to ``nt``); returns (na, nt)."""
-    na = _faces_inside(VA, FA, FKA, nfa, NA, DA, VB, nvb, NB, DB, nfb, False, tol, polys, counts, 0, A, B, S)
-    nt = _faces_inside(VB, FB, FKB, nfb, NB, DB, VA, nva, NA, DA, nfa, True, tol, polys, counts, na, A, B, S)
+    na = _faces_inside(VA, FA, FKA, nfa, NA, DA, VB, FB, FKB, nvb, NB, DB, nfb, False, tol, polys, counts, 0, A, B, S)
+    nt = _faces_inside(VB, FB, FKB, nfb, NB, DB, VA, FA, FKA, nva, NA, DA, nfa, True, tol, polys, counts, na, A, B, S)
     return na, nt
 
 
