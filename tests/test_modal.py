@@ -41,10 +41,12 @@ def _box(x0, x1, y0, y1, z0, z1):
     return np.array([[x, y, z] for x in (x0, x1) for y in (y0, y1) for z in (z0, z1)], float)
 
 
-def _one_block(blocked=""):
+def _one_block(blocked="", flush=False):
+    """The block on the large platform, or (``flush``) on a fixed pedestal of its own
+    footprint, every side face flush with the pedestal's."""
     m = RHO * B * D * H
     delta0 = m * modal.G / (KN * B * D)
-    platform = _box(-1, 1, -1, 1, -0.2, 0.0)
+    platform = _box(-B / 2, B / 2, -D / 2, D / 2, -0.2, 0.0) if flush else _box(-1, 1, -1, 1, -0.2, 0.0)
     block = _box(-B / 2, B / 2, -D / 2, D / 2, -delta0, H - delta0)
     return modal.Assembly([platform, block], moving=[False, True], density=RHO, kn=KN, kt=KT,
                           blocked=["", blocked], ids=[0, 1]), m, delta0
@@ -89,6 +91,22 @@ def test_one_block_on_a_winkler_foundation():
     k0 = int(np.argmin(np.where(rx["frequency_hz"] > 0.1, rx["frequency_hz"], np.inf)))
     assert rx["effective_mass_ratio"][k0] > 0.5 and ry["effective_mass_ratio"][k0] < tol.EXACT_ABS
     assert rx["effective_mass_ratio"].sum() == pytest.approx(1.0, rel=tol.NUMERICAL_REL)
+
+
+def test_sliding_stiffness_flush_with_a_pedestal():
+    """The block on a fixed pedestal of its own footprint, every side face flush with the
+    pedestal's (coplanar faces, drystone/mechanics/overlap.py). Sliding by u along x, its
+    overlap gains the strip of its trailing side face inside the pedestal, d x delta0, and
+    the normal tilts by delta0 / b, one way or the other with the sign of u: the normal
+    force K_n V jumps sideways by K_n d delta0^2 either way (7.6 N here), a jump, no
+    stiffness; and the tangential spring K_t A acts in the tilted tangent plane:
+    K_xx = K_t A (1 - (delta0 / b)^2), K_yy = K_t A (1 - (delta0 / d)^2), the same either way.
+    Central differences alone read the jump over twice the step as a stiffness (-11 K_t A)."""
+    asm, m, delta0 = _one_block(flush=True)
+    K = asm.stiffness()
+    ix, iy = ([k for k, (b, c) in enumerate(asm.dofs) if c == axis][0] for axis in (0, 1))
+    assert K[ix, ix] == pytest.approx(KT * B * D * (1.0 - (delta0 / B) ** 2), rel=tol.MODAL_FREQUENCY_REL)
+    assert K[iy, iy] == pytest.approx(KT * B * D * (1.0 - (delta0 / D) ** 2), rel=tol.MODAL_FREQUENCY_REL)
 
 
 def test_blocked_dofs_are_left_out():

@@ -59,11 +59,12 @@ SETTLED_SPEED_FRACTION = 0.1
 #: median overlap depth of the wall's contacts: the stiffness is the secant over vibrations
 #: of a tenth of the static deflection. The law's force is not differentiable everywhere:
 #: where two neighbours' front faces are coplanar (an extruded wall), an out-of-plane offset
-#: of either way thins their overlap, a force step of F_n x depth / thickness that a step h
-#: turns into a spurious negative stiffness F_n depth / (thickness h); at the mechanics'
-#: default (1e-3 of the depth) it gave negative eigenvalues on a settled wall of re-entrant
-#: stones (cases/examples/polygonal_wall.toml), at 0.1 it is a few % of the joints' shear
-#: stiffness. On a closed flat joint the forces are linear in the translations and the
+#: of either way thins their overlap, a force step of F_n x depth / thickness, which central
+#: differences over a step h read as a spurious negative stiffness F_n depth / (thickness h)
+#: (at 1e-3 of the depth: negative eigenvalues on a settled wall of re-entrant stones,
+#: cases/examples/polygonal_wall.toml; at 0.1 a few % of the joints' shear stiffness);
+#: ``Assembly.stiffness`` now leaves such a step out (drystone/mechanics/modal.py), and 0.1
+#: stays the secant's amplitude. On a closed flat joint the forces are linear in the translations and the
 #: rotations' geometric terms err by O((h / stone size)^2): 1e-6 on the Winkler block
 #: (tests/test_analyses_modal.py). ``STEP_CHECK``: the frequencies again at these multiples
 #: of the step, their largest relative change reported (``model.step_sensitivity``)
