@@ -588,9 +588,12 @@ FREE_FALL_RATIO_MIN = 0.49
 #: (6 sd below), which a depth that does not vary fails
 DEPTH_SD_MIN_REL = 0.1
 #: the Sacsayhuaman wall in both engines (test_yade_compiled.py): a round-off perturbation
-#: saturates at a divergence set by the dynamics (measured 4e-4 m between the engines,
-#: 2e-4 m for a 1e-12 change of the density): the engines within 4 x the model's own
-#: sensitivity (twice the measured ratio) and within 5 % of the motion (above 1 cm)
+#: tips a joint's stick or slip or not, and saturates at a divergence set by the dynamics
+#: (measured 1.3e-6 m between the engines, 1.9e-7 to 7.9e-7 m for the compiled engine's three
+#: perturbations, the largest taken; 4.3 cm of motion): the engines within 4 x the model's own
+#: sensitivity (twice the measured ratio, 1.7) and within 5 % of the motion (above 1 cm).
+#: Before the overlap's coplanar-face fix, joint volumes jumped with round-off and the same
+#: divergences were 4e-4 and 2e-4 m
 ENGINE_SENSITIVITY_FACTOR = 4
 ENGINE_DIVERGENCE_OF_MOTION = 0.05
 
@@ -768,13 +771,11 @@ BALANCE_SHADOW = 0.5
 #: a settled wall stands still: over the last 0.5 s of a gravity stage its stones move less
 #: than this fraction of the joints' depth scale rho g H / K_n (H the wall's height: the
 #: bottom joints' static depth under a full column, 0.45 mm for the 4 m Sacsayhuaman section
-#: at K_n 2e8). Measured 0.01 um (2e-5 of it) with the law's carried shear force; a carried
-#: force scaled with the contact area both ways crept 70 um (an earlier round); the opt-in
-#: penalty_coulomb_area law (scaled where the area shrinks only) 3.7 um, 82 % of this bound
-#: (docs/energy.md)
-#: NOT robust: the wall settles in slow events whose timing follows round-off (a stricter stop of
-#: the damping's square root: 12-35 um per 0.5 s from 1.5 s; this code held to 5 s: 3.3 um from
-#: 4.5 s); docs/energy.md, "Correction"
+#: at K_n 2e8). Measured below 1e-4 um with either law (penalty_coulomb, penalty_coulomb_area),
+#: held to 5 s too, also with a stricter stop of the damping's square root (round-off changed);
+#: before the overlap's coplanar-face fix, joint volumes jumped as stones turned by round-off
+#: and the wall moved in events of 3-35 um at times that followed the rounding
+#: (docs/energy.md, "Resolved")
 SETTLED_DRIFT_DEPTH_FRACTION = 0.01
 #: second-order convergence (the balance's bounded leapfrog error): halving dt quarters it,
 #: a ratio of 4; the next order's share moves it by up to a quarter: 3-5

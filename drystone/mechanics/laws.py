@@ -87,13 +87,13 @@ class PenaltyCoulombArea(PenaltyCoulomb):
     area (polar moment) ratio where a contact's patch shrinks, kept where it grows, the
     energy the patch lets go either way counted as dissipated (contact.carried_share): the
     stored shear energy cannot grow without work at a joint that opens under shear (a block
-    rocking with uplift), but barely touching wedge joints, whose area follows their depth,
-    couple their normal motion to their shear and a settled wall creeps (docs/energy.md).
-    Opt-in, not the default."""
+    rocking with uplift); barely touching wedge joints, whose area follows their depth,
+    couple their normal motion to their shear (docs/energy.md: a settled wall stands still
+    all the same). Opt-in, not the default."""
 
     name = "penalty_coulomb_area"
     meaning = ("the paper's law with the carried shear force scaled down where the contact area shrinks "
-               "(no shear energy from nowhere at opening joints; settled walls creep: docs/energy.md)")
+               "(no shear energy from nowhere at opening joints: docs/energy.md)")
     area_scaling = True
 
 
