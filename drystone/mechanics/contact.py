@@ -358,8 +358,10 @@ def critical_time_step(mass, stiffness, damping_ratio=0.0) -> float:
 def _jacobi_sqrt(B, T, A, V, warm):
     """B^1/2 = V diag(A) V^T for a symmetric positive semi-definite 6 x 6 B: on exit V
     holds B's eigenvectors (columns) and A's diagonal the square roots of its eigenvalues
-    (negative round-off ones clipped to 0); returns the largest eigenvalue. T: 6 x 6 work
-    array. On entry, with ``warm``, V is a basis to start from (the previous step's
+    (negative round-off ones clipped to 0); returns (the largest eigenvalue, ``series``).
+    With ``series`` the sweeps stopped early, V only nearly diagonalising B, and A is the
+    whole square root of V^T B V to below round-off (``_series_root``): B^1/2 = V A V^T. T:
+    6 x 6 work array. On entry, with ``warm``, V is a basis to start from (the previous step's
     eigenvectors of the same contact, which nearly diagonalise B: cyclic Jacobi, quadratically
     convergent, then needs fewer sweeps; the result is a cold solve's to ~1e-9 of the
     largest eigenvalue's scale). A basis whose columns have drifted from unit length (round-off over many
@@ -412,6 +414,7 @@ def _jacobi_sqrt(B, T, A, V, warm):
             for j in range(n):
                 A[i, j] = B[i, j]
                 V[i, j] = 1.0 if i == j else 0.0
+    series = False
     for _ in range(50):
         off = 0.0
         scale = 0.0
@@ -420,6 +423,9 @@ def _jacobi_sqrt(B, T, A, V, warm):
             for j in range(i + 1, n):
                 off += A[i, j] * A[i, j]
         if off <= 1e-26 * scale or scale == 0.0:
+            break
+        if _series_root(A, T):  # nearly diagonal: its square root to below round-off, no sweep more
+            series = True
             break
         for p in range(n - 1):
             for q in range(p + 1, n):
@@ -454,9 +460,62 @@ def _jacobi_sqrt(B, T, A, V, warm):
     for i in range(n):
         if A[i, i] > lmax:
             lmax = A[i, i]
+    if series:
+        for i in range(n):
+            for j in range(n):
+                A[i, j] = T[i, j]
+        return lmax, True
     for k in range(n):
         A[k, k] = np.sqrt(A[k, k]) if A[k, k] > 0.0 else 0.0
-    return lmax
+    return lmax, False
+
+
+#: ``_series_root``'s bound on the neglected second-order term of the square root, over the
+#: largest square root: below double precision's round-off (2.2e-16)
+SERIES_TOL = 1e-16
+
+
+@njit(cache=True)
+def _series_root(A, S):
+    """The square root S (6 x 6) of a symmetric positive semi-definite A = D + E that is
+    nearly diagonal (D its diagonal), when the expansion's first-order term gives it to
+    below round-off; returns whether it did (S then written; else S is scratch). With
+    s_i = sqrt(D_ii), S = diag(s) + X + S2 + ..., where X solves diag(s) X + X diag(s) = E,
+    X_ij = E_ij / (s_i + s_j), and S2_ij = -(X X)_ij / (s_i + s_j) (the square of S matching A
+    to second order). S = diag(s) + X is taken when every |S2_ij| <= SERIES_TOL max(s): the
+    neglected terms are then below the round-off of the largest entry (the higher terms
+    smaller still, each a further factor X / s). This stands for the last Jacobi sweeps
+    (quadratic convergence: each sweep squares the off-diagonal part) at a fraction of their
+    cost; a zero eigenvalue of B (a slipping contact) coupled to the others fails the test
+    (s_i + s_j near 0), and the sweeps go on there."""
+    n = 6
+    smax = 0.0
+    for i in range(n):
+        S[i, i] = np.sqrt(A[i, i]) if A[i, i] > 0.0 else 0.0
+        if S[i, i] > smax:
+            smax = S[i, i]
+    for i in range(n):
+        for j in range(i + 1, n):
+            d = S[i, i] + S[j, j]
+            if d > 0.0:
+                x = A[i, j] / d
+            elif A[i, j] == 0.0:
+                x = 0.0
+            else:
+                return False
+            S[i, j] = x
+            S[j, i] = x
+    lim = SERIES_TOL * smax
+    for i in range(n):
+        for j in range(i, n):
+            acc = 0.0
+            for k in range(n):
+                if k != i and k != j:
+                    acc += S[i, k] * S[k, j]
+            d = S[i, i] + S[j, j]
+            if acc != 0.0 and not abs(acc) <= lim * d:
+                return False
+    return True
 
 
 @njit(cache=True)
@@ -644,7 +703,7 @@ def _damp_range(c0, c1, n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, ii
             for j in range(i + 1, 6):
                 B[j, i] = B[i, j]
         V6 = basis[c]
-        lmax = _jacobi_sqrt(B, T6, A6, V6, warm[c])
+        lmax, series = _jacobi_sqrt(B, T6, A6, V6, warm[c])
         om[c] = np.sqrt(lmax)
         # y = L^-1 u (forward), z = B^1/2 y, w = L^-T z (backward); wrench = -2 xi w
         for i in range(6):
@@ -652,11 +711,17 @@ def _damp_range(c0, c1, n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, ii
             for k in range(i):
                 s -= L[i, k] * y[k]
             y[i] = s / L[i, i]
-        for k in range(6):  # z = B^1/2 y = V diag(A6) V^T y
+        for k in range(6):  # z = B^1/2 y = V A6 V^T y (A6 diagonal unless ``series``)
             s = 0.0
             for i in range(6):
                 s += V6[i, k] * y[i]
+            z[k] = s
             w6[k] = A6[k, k] * s
+        if series:
+            for k in range(6):
+                for j in range(6):
+                    if j != k:
+                        w6[k] += A6[k, j] * z[j]
         for i in range(6):
             s = 0.0
             for k in range(6):
