@@ -31,11 +31,12 @@ class Layer:
 
 LAYERS = (
     Layer(0, "leaves", ("drystone", "drystone.paths", "drystone.units", "drystone.libm", "drystone.inputfiles",
-                        "drystone.layers", "drystone.atomic", "drystone.kept"), (),
-          "`drystone/` (`paths.py`, `units.py`, `libm.py`, `inputfiles.py`, `layers.py`, `atomic.py`, `kept.py`)",
+                        "drystone.layers", "drystone.atomic", "drystone.kept", "drystone.numba_cache"), (),
+          "`drystone/` (`paths.py`, `units.py`, `libm.py`, `inputfiles.py`, `layers.py`, `atomic.py`, `kept.py`, "
+          "`numba_cache.py`)",
           "where things are, units and g, processor-independent sin/cos, reading input files with one-line "
           "errors, this list of layers, every file written aside and renamed into place, a process's results "
-          "kept by their inputs"),
+          "kept by their inputs, numba's cache safe for processes compiling at once"),
     Layer(1, "inputs", (), ("drystone.geometry", "drystone.motions"),
           "`drystone/geometry/`, `drystone/motions/`",
           "block files (`blockfile.py`: the format and its checks), hull helpers, generated walls and outlines; "

@@ -870,3 +870,14 @@ LIMIT_ITERATION_REL = 1e-3
 #: a ratio of lengths (b / 2h), each moved by at most delta as the stones settle and tilt, so
 #: |d lambda| / lambda <= delta / b + delta / h <= 2 delta / b
 LIMIT_SETTLED_PER_SETTLEMENT = 2.0
+
+
+# ---------------------------------------------------------------------------------------
+# numba's cache lock (test_numba_cache.py)
+# ---------------------------------------------------------------------------------------
+
+#: how long a process compiling a cached kernel is watched waiting for the lock: without the
+#: lock it has started (interpreter, numpy, numba, a kernel module: 1.1 s measured here),
+#: compiled a trivial kernel (0.1 s) and written its index well within it (the check fails
+#: then); a loaded machine can only make the check weaker (still waiting), never fail it
+LOCK_WAIT_S = 3.0

@@ -51,6 +51,9 @@ import numpy as np
 from numba import njit, prange
 
 from drystone.geometry import blockfile as bf
+from drystone import numba_cache
+
+numba_cache.install()  # numba's cache safe for processes compiling at once
 
 #: ignore contacts thinner than this (m) or with no volume: failed intersections in
 #: YADE leave such values behind

@@ -29,6 +29,9 @@ from numba import njit, prange
 
 from drystone.mechanics import contact as law
 from drystone.mechanics import energy
+from drystone import numba_cache
+
+numba_cache.install()  # numba's cache safe for processes compiling at once
 
 #: fewer rows than this (contacts, bodies, shapes) are done on the calling thread: starting
 #: the threads' loop costs microseconds (3.5 us on one thread, ~30 us on two of a busy

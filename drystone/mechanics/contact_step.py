@@ -29,6 +29,9 @@ from drystone.mechanics import neighbours as nbr
 from drystone.mechanics import overlap as ov
 from drystone.mechanics.integration import integrate
 from drystone.geometry import polyhedron as ph
+from drystone import numba_cache
+
+numba_cache.install()  # numba's cache safe for processes compiling at once
 
 
 # -- the numpy reference ---------------------------------------------------------------

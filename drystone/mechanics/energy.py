@@ -70,6 +70,9 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
+from drystone import numba_cache
+
+numba_cache.install()  # numba's cache safe for processes compiling at once
 
 #: the accumulators' order in ``acc`` and the histories' keys
 TERMS = ("work_loads", "dissipated_damping", "dissipated_friction")

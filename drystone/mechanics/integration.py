@@ -17,6 +17,10 @@ from numba import njit, prange
 
 from drystone.mechanics import rotations
 from drystone.mechanics.contact_rows import range_count
+from drystone import numba_cache
+
+numba_cache.install()  # numba's cache safe for processes compiling at once
+
 
 @njit(cache=True)
 def _quat_matrix(q, R):

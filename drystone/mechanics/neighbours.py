@@ -38,6 +38,9 @@ from numba import njit, prange
 
 from drystone.mechanics import overlap as ov
 from drystone.mechanics.contact_rows import range_count
+from drystone import numba_cache
+
+numba_cache.install()  # numba's cache safe for processes compiling at once
 
 #: default skin (m): a few times a wall's motion over the steps between two samples under
 #: a strong record, small beside a stone (0.25-0.6 m): a list a few percent longer than

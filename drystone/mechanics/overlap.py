@@ -52,6 +52,9 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
+from drystone import numba_cache
+
+numba_cache.install()  # numba's cache safe for processes compiling at once
 
 TOL = 1e-11  # m
 MAXV = 96  # vertices of a clipped face polygon (a face of k vertices clipped by p planes has <= k + p)

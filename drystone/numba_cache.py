@@ -1,0 +1,60 @@
+"""numba's on-disk cache made safe for processes compiling at once.
+
+numba (0.58) keeps, per cached function, an index (signature -> data file) and numbered data
+files. A process that saves a new overload reads the index, takes the first free number,
+writes the index, then the data file, without a lock: two processes compiling different
+overloads of one function at the same time (the test suite's workers, a sweep's runs after
+a kernel changed) can both take number 1, and the index then names one overload's file
+while the file holds the other's machine code. The next process to load it calls that
+code with the wrong arguments: a segmentation fault, measured here once after a kernel
+change (``neighbours.update`` called with an explicit ``chunks``).
+
+``install`` wraps numba's index-and-data reads and writes in an advisory lock (``fcntl``)
+on a file in the cache's root (``NUMBA_CACHE_DIR``, which ``drystone/__init__.py`` sets;
+else each function's cache folder): writers one at a time, readers not during a write. Every
+module with cached kernels calls it when imported, before any of its kernels can be
+loaded or saved; installing twice does nothing. The cost is a lock per cache lookup (a
+few microseconds, at a kernel's first call in a process).
+"""
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import functools
+import os
+
+from numba.core import caching, config
+
+#: the lock file in the cache's root
+LOCK_NAME = ".drystone-lock"
+
+
+@contextlib.contextmanager
+def locked(folder: str, exclusive: bool):
+    """Hold the advisory lock of the cache ``folder`` (made if missing): exclusive for a
+    writer, shared for a reader; released when the block ends (the file is closed)."""
+    os.makedirs(folder, exist_ok=True)
+    fd = os.open(os.path.join(folder, LOCK_NAME), os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
+        yield
+    finally:
+        os.close(fd)
+
+
+def _under_lock(method, exclusive: bool):
+    @functools.wraps(method)
+    def wrapper(self, *args, **kwargs):
+        with locked(config.CACHE_DIR or self._cache_path, exclusive):
+            return method(self, *args, **kwargs)
+    wrapper.drystone_locked = True
+    return wrapper
+
+
+def install() -> None:
+    """Serialise numba's cache writes (and keep reads out of them) across processes."""
+    cls = caching.IndexDataCacheFile
+    if getattr(cls.save, "drystone_locked", False):
+        return
+    cls.save = _under_lock(cls.save, exclusive=True)
+    cls.load = _under_lock(cls.load, exclusive=False)
