@@ -142,14 +142,17 @@ def _clip(P, k, S, Q):
 
 
 @njit(cache=True)
-def _faces_inside(V, F, FK, nf, N1, D1, V2, nv2, N2, D2, nf2, dedup, tol, polys, counts, start, A, B, S):
+def _faces_inside(V, F, FK, nf, N1, D1, V2, nv2, N2, D2, nf2, dedup, tol, polys, counts, start, A, B, S, r0, r1, r2,
+                  npts):
     """Clip every face of one body (global vertices V, planes N1, D1) to the other body's
     half-spaces (N2 x + D2 <= 0; its vertices V2[:nv2]); store the non-empty polygons from
     index ``start``. A face whose plane the other body does not reach (all its vertices
     more than ``tol`` inside the plane) is skipped without a clip: no part of it can be in
     the other body. With ``dedup``, a face lying in a plane of the other body with the same
     outward normal (within ``tol``) is skipped: the other body's face already bounds the
-    overlap there. A, B: (MAXV, 3) work arrays; S (MAXV,) the signed distances."""
+    overlap there. A, B: (MAXV, 3) work arrays; S (MAXV,) the signed distances.
+    Returns (the next index, r0, r1, r2, npts): the sums r0, r1, r2 of the stored vertices'
+    coordinates and their number npts, continued from those given (``_volume``)."""
     c = start
     for f in range(nf):
         reached = False  # a vertex of the other body within tol of the plane or beyond it
@@ -203,12 +206,19 @@ def _faces_inside(V, F, FK, nf, N1, D1, V2, nv2, N2, D2, nf2, dedup, tol, polys,
                 break
         if k >= 3:
             for q in range(k):
-                polys[c, q, 0] = P[q, 0]
-                polys[c, q, 1] = P[q, 1]
-                polys[c, q, 2] = P[q, 2]
+                x0 = P[q, 0]
+                x1 = P[q, 1]
+                x2 = P[q, 2]
+                polys[c, q, 0] = x0
+                polys[c, q, 1] = x1
+                polys[c, q, 2] = x2
+                r0 += x0
+                r1 += x1
+                r2 += x2
+            npts += k
             counts[c] = k
             c += 1
-    return c
+    return c, r0, r1, r2, npts
 
 
 @njit(cache=True)
@@ -223,10 +233,14 @@ def _work(maxf):
 @njit(cache=True)
 def _clip_pair(VA, nva, FA, FKA, nfa, NA, DA, VB, nvb, FB, FKB, nfb, NB, DB, tol, polys, counts, A, B, S):
     """The polygons bounding A ∩ B into ``polys``: A's faces clipped to B (the first
-    ``na``), then B's faces clipped to A (to ``nt``); returns (na, nt)."""
-    na = _faces_inside(VA, FA, FKA, nfa, NA, DA, VB, nvb, NB, DB, nfb, False, tol, polys, counts, 0, A, B, S)
-    nt = _faces_inside(VB, FB, FKB, nfb, NB, DB, VA, nva, NA, DA, nfa, True, tol, polys, counts, na, A, B, S)
-    return na, nt
+    ``na``), then B's faces clipped to A (to ``nt``); returns (na, nt, r0, r1, r2, npts):
+    the sums of the coordinates of the vertices of ``polys[:nt]``, added up polygon by
+    polygon as they are stored, and their number (``_volume``)."""
+    na, r0, r1, r2, npts = _faces_inside(VA, FA, FKA, nfa, NA, DA, VB, nvb, NB, DB, nfb, False, tol, polys, counts, 0,
+                                         A, B, S, 0.0, 0.0, 0.0, 0)
+    nt, r0, r1, r2, npts = _faces_inside(VB, FB, FKB, nfb, NB, DB, VA, nva, NA, DA, nfa, True, tol, polys, counts, na,
+                                         A, B, S, r0, r1, r2, npts)
+    return na, nt, r0, r1, r2, npts
 
 
 @njit(cache=True)
@@ -235,33 +249,27 @@ def pair(VA, nva, FA, FKA, nfa, NA, DA, VB, nvb, FB, FKB, nfb, NB, DB, tol):
     indices, FKA vertices per face, planes NA x + DA <= 0, the same for B). Returns (V, centroid (3,), g (3,)) with
     g = dV/dx_B (m^2); V = 0 when they do not overlap."""
     polys, counts, A, B, S, areas = _work(max(nfa, nfb))
-    na, nt = _clip_pair(VA, nva, FA, FKA, nfa, NA, DA, VB, nvb, FB, FKB, nfb, NB, DB, tol, polys, counts, A, B, S)
+    na, nt, r0, r1, r2, npts = _clip_pair(VA, nva, FA, FKA, nfa, NA, DA, VB, nvb, FB, FKB, nfb, NB, DB, tol, polys,
+                                          counts, A, B, S)
     cen = np.zeros(3)
     g = np.zeros(3)
-    v = _volume(polys, counts, na, nt, cen, g, areas)
+    v = _volume(polys, counts, na, nt, r0, r1, r2, npts, cen, g, areas)
     return v, cen, g
 
 
 @njit(cache=True)
-def _volume(polys, counts, na, nt, cen, g, areas):
+def _volume(polys, counts, na, nt, r0, r1, r2, npts, cen, g, areas):
     """Volume (returned) of the overlap bounded by ``polys[:nt]`` (the first ``na`` from
     A's faces); its centroid into ``cen`` and dV/dx_B into ``g`` ((3,) each; zero when the
-    volume is zero); the twice area vectors of B's faces (``polys[na:nt]``) into
-    ``areas[na:nt]`` for ``_patch``. Scalar arithmetic (no temporaries: this runs for
-    every pair)."""
+    volume is zero). The tetrahedra share the apex r, the mean of the polygons' vertices:
+    (r0, r1, r2) / npts, their coordinates' sums and number (``_clip_pair``). The twice
+    area vectors of B's faces (``polys[na:nt]``) into ``areas[na:nt]`` for ``_patch``.
+    Scalar arithmetic (no temporaries: this runs for every pair)."""
     for a in range(3):
         cen[a] = 0.0
         g[a] = 0.0
     if nt == 0:
         return 0.0
-    r0 = r1 = r2 = 0.0
-    npts = 0
-    for s in range(nt):
-        for q in range(counts[s]):
-            r0 += polys[s, q, 0]
-            r1 += polys[s, q, 1]
-            r2 += polys[s, q, 2]
-            npts += 1
     r0 /= npts
     r1 /= npts
     r2 /= npts
@@ -392,12 +400,13 @@ def pair_patch(VA, nva, FA, FKA, nfa, NA, DA, VB, nvb, FB, FKB, nfb, NB, DB, tol
     """``pair`` plus the contact patch: (V, centroid, g, patch area, patch centroid p,
     patch second moment J about p)."""
     polys, counts, A, B, S, areas = _work(max(nfa, nfb))
-    na, nt = _clip_pair(VA, nva, FA, FKA, nfa, NA, DA, VB, nvb, FB, FKB, nfb, NB, DB, tol, polys, counts, A, B, S)
+    na, nt, r0, r1, r2, npts = _clip_pair(VA, nva, FA, FKA, nfa, NA, DA, VB, nvb, FB, FKB, nfb, NB, DB, tol, polys,
+                                          counts, A, B, S)
     c = np.zeros(3)
     g = np.zeros(3)
     p = np.zeros(3)
     J = np.zeros((3, 3))
-    v = _volume(polys, counts, na, nt, c, g, areas)
+    v = _volume(polys, counts, na, nt, r0, r1, r2, npts, c, g, areas)
     if v <= 0.0:
         return 0.0, c, g, 0.0, c.copy(), J
     a = _patch(polys, counts, na, nt, c, g, p, J, areas)
@@ -555,9 +564,9 @@ def pair_contact(GV, GN, GD, nv, nf, faces, fk, i, j, tol, touching, polys, coun
     clip (module docstring, "Touching"). Row m of cen may be written when it is not."""
     if touching and _apart(GV[i], nv[i], GN[i], GD[i], nf[i], GV[j], nv[j], GN[j], GD[j], nf[j], tol):
         return False
-    na, nt = _clip_pair(GV[i], nv[i], faces[i], fk[i], nf[i], GN[i], GD[i], GV[j], nv[j], faces[j], fk[j], nf[j],
-                        GN[j], GD[j], tol, polys, counts, A, B, S)
-    v = _volume(polys, counts, na, nt, cen[m], g, areas)
+    na, nt, r0, r1, r2, npts = _clip_pair(GV[i], nv[i], faces[i], fk[i], nf[i], GN[i], GD[i], GV[j], nv[j], faces[j],
+                                          fk[j], nf[j], GN[j], GD[j], tol, polys, counts, A, B, S)
+    v = _volume(polys, counts, na, nt, r0, r1, r2, npts, cen[m], g, areas)
     if v <= 0.0:
         return False
     ga = np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
