@@ -553,7 +553,7 @@ def _apart(VA, nva, NA, DA, nfa, VB, nvb, NB, DB, nfb, tol):
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # inlined into the pair loops: no call with its many arguments per pair
 def pair_contact(GV, GN, GD, nv, nf, faces, fk, i, j, tol, touching, polys, counts, A, B, S, areas, g, id1, id2, vol,
                  cen, nrm, area, pc, pj, m):
     """A listed pair's contact: shapes i and j (their global vertices GV, planes GN, GD)
