@@ -103,11 +103,15 @@ def contact_buffers(cap: int, maxf: int) -> tuple:
 
 @njit(cache=True)
 def _buffers(cap, maxf, nt):
-    polys, counts, A, B, S = ov._work(maxf)
+    """``contact_buffers``: id1 .. pj (entries 0-7), then per thread the clip's work arrays
+    (``overlap._work``: entries 8-12 and 15, polys first) and g (13), and the pairs' hit
+    flags (14)."""
+    polys, counts, A, B, S, areas = ov._work(maxf)
     return (np.empty(cap, np.int64), np.empty(cap, np.int64), np.empty(cap), np.empty((cap, 3)),
             np.empty((cap, 3)), np.empty(cap), np.empty((cap, 3)), np.empty((cap, 3, 3)),
             np.empty((nt,) + polys.shape), np.zeros((nt,) + counts.shape, np.int64), np.empty((nt,) + A.shape),
-            np.empty((nt,) + B.shape), np.empty((nt,) + S.shape), np.empty((nt, 3)), np.zeros(cap, np.bool_))
+            np.empty((nt,) + B.shape), np.empty((nt,) + S.shape), np.empty((nt, 3)), np.zeros(cap, np.bool_),
+            np.empty((nt,) + areas.shape))
 
 
 @njit(cache=True)
@@ -228,7 +232,7 @@ def search(nl, buf, nv, nf, faces, fk, tol, touching):
     n = meta[0]
     if len(buf[0]) < n:
         buf = _buffers(n + n // 4 + 16, GN.shape[1], buf[8].shape[0])
-    id1, id2, vol, cen, nrm, area, pc, pj, polys, counts, A, B, S, g, hit = buf
+    id1, id2, vol, cen, nrm, area, pc, pj, polys, counts, A, B, S, g, hit, areas = buf
     for k in prange(n):
         t = numba.get_thread_id()
         i = la[k]
@@ -237,7 +241,7 @@ def search(nl, buf, nv, nf, faces, fk, tol, touching):
         if ok[i] and ok[j] and not (lo[i, 0] > hi[j, 0] or lo[j, 0] > hi[i, 0] or lo[i, 1] > hi[j, 1]
                                     or lo[j, 1] > hi[i, 1] or lo[i, 2] > hi[j, 2] or lo[j, 2] > hi[i, 2]):
             hit[k] = ov.pair_contact(GV, GN, GD, nv, nf, faces, fk, i, j, tol, touching, polys[t], counts[t], A[t],
-                                     B[t], S[t], g[t], id1, id2, vol, cen, nrm, area, pc, pj, k)
+                                     B[t], S[t], areas[t], g[t], id1, id2, vol, cen, nrm, area, pc, pj, k)
     m = 0
     for k in range(n):
         if hit[k]:

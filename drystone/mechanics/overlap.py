@@ -112,16 +112,16 @@ def too_large(vertices) -> str | None:
 
 
 @njit(cache=True)
-def _twice_area_vector(P, k):
-    """Twice the area vector (m^2) of the planar polygon P[:k] (counter-clockwise about it)."""
+def _twice_area_vector(polys, s, k):
+    """Twice the area vector (m^2) of the planar polygon polys[s, :k] (counter-clockwise about it)."""
     ax = 0.0
     ay = 0.0
     az = 0.0
     for q in range(k):
         j = q + 1 if q + 1 < k else 0
-        ax += P[q, 1] * P[j, 2] - P[q, 2] * P[j, 1]
-        ay += P[q, 2] * P[j, 0] - P[q, 0] * P[j, 2]
-        az += P[q, 0] * P[j, 1] - P[q, 1] * P[j, 0]
+        ax += polys[s, q, 1] * polys[s, j, 2] - polys[s, q, 2] * polys[s, j, 1]
+        ay += polys[s, q, 2] * polys[s, j, 0] - polys[s, q, 0] * polys[s, j, 2]
+        az += polys[s, q, 0] * polys[s, j, 1] - polys[s, q, 1] * polys[s, j, 0]
     return ax, ay, az
 
 
@@ -168,7 +168,8 @@ def _coplanar(NA, DA, VA, FA, FKA, f, NB, DB, VB, FB, FKB, p, tol):
 
 
 @njit(cache=True)
-def _faces_inside(V, F, FK, nf, N1, D1, V2, F2, FK2, nv2, N2, D2, nf2, dedup, tol, polys, counts, start, A, B, S):
+def _faces_inside(V, F, FK, nf, N1, D1, V2, F2, FK2, nv2, N2, D2, nf2, dedup, tol, polys, counts, start, A, B, S, r0, r1,
+                  r2, npts):
     """Clip every face of one body (global vertices V, faces F, FK, planes N1, D1) to the
     other body's half-spaces (N2 x + D2 <= 0; its vertices V2[:nv2], faces F2, FK2); store
     the non-empty polygons from index ``start``. A face whose plane the other body does not
@@ -176,7 +177,9 @@ def _faces_inside(V, F, FK, nf, N1, D1, V2, F2, FK2, nv2, N2, D2, nf2, dedup, to
     no part of it can be in the other body. Coplanar faces (``_coplanar``): in A's pass
     (``dedup`` False) a face is not clipped to the other body's plane it lies in; in B's
     pass (``dedup``) the face is skipped: A's face bounds the overlap there. A, B: (MAXV, 3)
-    work arrays; S (MAXV,) the signed distances."""
+    work arrays; S (MAXV,) the signed distances. Returns (the next index, r0, r1, r2, npts):
+    the sums r0, r1, r2 of the stored vertices' coordinates and their number npts, continued
+    from those given (``_volume``)."""
     c = start
     for f in range(nf):
         reached = False  # a vertex of the other body within tol of the plane or beyond it
@@ -231,28 +234,41 @@ def _faces_inside(V, F, FK, nf, N1, D1, V2, F2, FK2, nv2, N2, D2, nf2, dedup, to
                 break
         if k >= 3:
             for q in range(k):
-                polys[c, q, 0] = P[q, 0]
-                polys[c, q, 1] = P[q, 1]
-                polys[c, q, 2] = P[q, 2]
+                x0 = P[q, 0]
+                x1 = P[q, 1]
+                x2 = P[q, 2]
+                polys[c, q, 0] = x0
+                polys[c, q, 1] = x1
+                polys[c, q, 2] = x2
+                r0 += x0
+                r1 += x1
+                r2 += x2
+            npts += k
             counts[c] = k
             c += 1
-    return c
+    return c, r0, r1, r2, npts
 
 
 @njit(cache=True)
 def _work(maxf):
-    """(polys, counts, A, B, S): the work arrays of ``_clip_pair`` for bodies of <= maxf faces."""
+    """(polys, counts, A, B, S, areas): the work arrays of ``_clip_pair`` (polys .. S) and
+    of ``_volume`` and ``_patch`` (areas: the polygons' twice area vectors) for bodies of
+    <= maxf faces."""
     return (np.empty((2 * maxf, MAXV, 3)), np.zeros(2 * maxf, np.int64), np.empty((MAXV, 3)), np.empty((MAXV, 3)),
-            np.empty(MAXV))
+            np.empty(MAXV), np.empty((2 * maxf, 3)))
 
 
 @njit(cache=True)
 def _clip_pair(VA, nva, FA, FKA, nfa, NA, DA, VB, nvb, FB, FKB, nfb, NB, DB, tol, polys, counts, A, B, S):
     """The polygons bounding A ∩ B into ``polys``: A's faces clipped to B (the first
-    ``na``), then B's faces clipped to A (to ``nt``); returns (na, nt)."""
-    na = _faces_inside(VA, FA, FKA, nfa, NA, DA, VB, FB, FKB, nvb, NB, DB, nfb, False, tol, polys, counts, 0, A, B, S)
-    nt = _faces_inside(VB, FB, FKB, nfb, NB, DB, VA, FA, FKA, nva, NA, DA, nfa, True, tol, polys, counts, na, A, B, S)
-    return na, nt
+    ``na``), then B's faces clipped to A (to ``nt``); returns (na, nt, r0, r1, r2, npts):
+    the sums of the coordinates of the vertices of ``polys[:nt]``, added up polygon by
+    polygon as they are stored, and their number (``_volume``)."""
+    na, r0, r1, r2, npts = _faces_inside(VA, FA, FKA, nfa, NA, DA, VB, FB, FKB, nvb, NB, DB, nfb, False, tol, polys,
+                                         counts, 0, A, B, S, 0.0, 0.0, 0.0, 0)
+    nt, r0, r1, r2, npts = _faces_inside(VB, FB, FKB, nfb, NB, DB, VA, FA, FKA, nva, NA, DA, nfa, True, tol, polys,
+                                         counts, na, A, B, S, r0, r1, r2, npts)
+    return na, nt, r0, r1, r2, npts
 
 
 @njit(cache=True)
@@ -260,32 +276,28 @@ def pair(VA, nva, FA, FKA, nfa, NA, DA, VB, nvb, FB, FKB, nfb, NB, DB, tol):
     """Overlap of bodies A and B (global frame; vertices VA[:nva], faces FA as vertex
     indices, FKA vertices per face, planes NA x + DA <= 0, the same for B). Returns (V, centroid (3,), g (3,)) with
     g = dV/dx_B (m^2); V = 0 when they do not overlap."""
-    polys, counts, A, B, S = _work(max(nfa, nfb))
-    na, nt = _clip_pair(VA, nva, FA, FKA, nfa, NA, DA, VB, nvb, FB, FKB, nfb, NB, DB, tol, polys, counts, A, B, S)
+    polys, counts, A, B, S, areas = _work(max(nfa, nfb))
+    na, nt, r0, r1, r2, npts = _clip_pair(VA, nva, FA, FKA, nfa, NA, DA, VB, nvb, FB, FKB, nfb, NB, DB, tol, polys,
+                                          counts, A, B, S)
     cen = np.zeros(3)
     g = np.zeros(3)
-    v = _volume(polys, counts, na, nt, cen, g)
+    v = _volume(polys, counts, na, nt, r0, r1, r2, npts, cen, g, areas)
     return v, cen, g
 
 
 @njit(cache=True)
-def _volume(polys, counts, na, nt, cen, g):
+def _volume(polys, counts, na, nt, r0, r1, r2, npts, cen, g, areas):
     """Volume (returned) of the overlap bounded by ``polys[:nt]`` (the first ``na`` from
     A's faces); its centroid into ``cen`` and dV/dx_B into ``g`` ((3,) each; zero when the
-    volume is zero). Scalar arithmetic (no temporaries: this runs for every pair)."""
+    volume is zero). The tetrahedra share the apex r, the mean of the polygons' vertices:
+    (r0, r1, r2) / npts, their coordinates' sums and number (``_clip_pair``). The twice
+    area vectors of B's faces (``polys[na:nt]``) into ``areas[na:nt]`` for ``_patch``.
+    Scalar arithmetic (no temporaries: this runs for every pair)."""
     for a in range(3):
         cen[a] = 0.0
         g[a] = 0.0
     if nt == 0:
         return 0.0
-    r0 = r1 = r2 = 0.0
-    npts = 0
-    for s in range(nt):
-        for q in range(counts[s]):
-            r0 += polys[s, q, 0]
-            r1 += polys[s, q, 1]
-            r2 += polys[s, q, 2]
-            npts += 1
     r0 /= npts
     r1 /= npts
     r2 /= npts
@@ -293,22 +305,24 @@ def _volume(polys, counts, na, nt, cen, g):
     c0 = c1 = c2 = 0.0
     for s in range(nt):
         k = counts[s]
-        P = polys[s]
-        ax, ay, az = _twice_area_vector(P, k)
         if s >= na:  # a face of B inside A
+            ax, ay, az = _twice_area_vector(polys, s, k)
+            areas[s, 0] = ax
+            areas[s, 1] = ay
+            areas[s, 2] = az
             g[0] += 0.5 * ax
             g[1] += 0.5 * ay
             g[2] += 0.5 * az
-        ux = P[0, 0] - r0
-        uy = P[0, 1] - r1
-        uz = P[0, 2] - r2
+        ux = polys[s, 0, 0] - r0
+        uy = polys[s, 0, 1] - r1
+        uz = polys[s, 0, 2] - r2
         for q in range(1, k - 1):
-            vx = P[q, 0] - r0
-            vy = P[q, 1] - r1
-            vz = P[q, 2] - r2
-            wx = P[q + 1, 0] - r0
-            wy = P[q + 1, 1] - r1
-            wz = P[q + 1, 2] - r2
+            vx = polys[s, q, 0] - r0
+            vy = polys[s, q, 1] - r1
+            vz = polys[s, q, 2] - r2
+            wx = polys[s, q + 1, 0] - r0
+            wy = polys[s, q + 1, 1] - r1
+            wz = polys[s, q + 1, 2] - r2
             v6 = ux * (vy * wz - vz * wy) + uy * (vz * wx - vx * wz) + uz * (vx * wy - vy * wx)
             vol += v6
             c0 += v6 * (ux + vx + wx)
@@ -324,11 +338,12 @@ def _volume(polys, counts, na, nt, cen, g):
 
 
 @njit(cache=True)
-def _patch(polys, counts, first, last, cen, g, p, J):
+def _patch(polys, counts, first, last, cen, g, p, J, areas):
     """Footprint of the overlap (module docstring) from the faces of B inside A
-    (``polys[first:last]``), projected on the plane normal to n = -g/|g|: returns its area
-    (m^2), writes its centroid into p (3,) and its second moment about p into J (3, 3)
-    (m^4). Scalar arithmetic, as ``_volume``."""
+    (``polys[first:last]``, their twice area vectors ``areas[first:last]`` from
+    ``_volume``), projected on the plane normal to n = -g/|g|: returns its area (m^2),
+    writes its centroid into p (3,) and its second moment about p into J (3, 3) (m^4).
+    Scalar arithmetic, as ``_volume``."""
     ga = np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
     for a in range(3):
         p[a] = cen[a]
@@ -342,22 +357,23 @@ def _patch(polys, counts, first, last, cen, g, p, J):
     s00_ = s01_ = s02_ = s11_ = s12_ = s22_ = 0.0  # the symmetric sum of second moments
     for s in range(first, last):
         k = counts[s]
-        P = polys[s]
-        ax, ay, az = _twice_area_vector(P, k)
+        ax = areas[s, 0]
+        ay = areas[s, 1]
+        az = areas[s, 2]
         am = np.sqrt(ax * ax + ay * ay + az * az)
         if am <= 0.0:
             continue
         w = -(ax * n[0] + ay * n[1] + az * n[2]) / am  # cosine between the face normal and -n
-        x00 = P[0, 0] - cen[0]
-        x01 = P[0, 1] - cen[1]
-        x02 = P[0, 2] - cen[2]
+        x00 = polys[s, 0, 0] - cen[0]
+        x01 = polys[s, 0, 1] - cen[1]
+        x02 = polys[s, 0, 2] - cen[2]
         for q in range(1, k - 1):
-            x10 = P[q, 0] - cen[0]
-            x11 = P[q, 1] - cen[1]
-            x12 = P[q, 2] - cen[2]
-            x20 = P[q + 1, 0] - cen[0]
-            x21 = P[q + 1, 1] - cen[1]
-            x22 = P[q + 1, 2] - cen[2]
+            x10 = polys[s, q, 0] - cen[0]
+            x11 = polys[s, q, 1] - cen[1]
+            x12 = polys[s, q, 2] - cen[2]
+            x20 = polys[s, q + 1, 0] - cen[0]
+            x21 = polys[s, q + 1, 1] - cen[1]
+            x22 = polys[s, q + 1, 2] - cen[2]
             cx = (x11 - x01) * (x22 - x02) - (x12 - x02) * (x21 - x01)
             cy = (x12 - x02) * (x20 - x00) - (x10 - x00) * (x22 - x02)
             cz = (x10 - x00) * (x21 - x01) - (x11 - x01) * (x20 - x00)
@@ -411,16 +427,17 @@ def _sym(m, a, b):
 def pair_patch(VA, nva, FA, FKA, nfa, NA, DA, VB, nvb, FB, FKB, nfb, NB, DB, tol):
     """``pair`` plus the contact patch: (V, centroid, g, patch area, patch centroid p,
     patch second moment J about p)."""
-    polys, counts, A, B, S = _work(max(nfa, nfb))
-    na, nt = _clip_pair(VA, nva, FA, FKA, nfa, NA, DA, VB, nvb, FB, FKB, nfb, NB, DB, tol, polys, counts, A, B, S)
+    polys, counts, A, B, S, areas = _work(max(nfa, nfb))
+    na, nt, r0, r1, r2, npts = _clip_pair(VA, nva, FA, FKA, nfa, NA, DA, VB, nvb, FB, FKB, nfb, NB, DB, tol, polys,
+                                          counts, A, B, S)
     c = np.zeros(3)
     g = np.zeros(3)
     p = np.zeros(3)
     J = np.zeros((3, 3))
-    v = _volume(polys, counts, na, nt, c, g)
+    v = _volume(polys, counts, na, nt, r0, r1, r2, npts, c, g, areas)
     if v <= 0.0:
         return 0.0, c, g, 0.0, c.copy(), J
-    a = _patch(polys, counts, na, nt, c, g, p, J)
+    a = _patch(polys, counts, na, nt, c, g, p, J, areas)
     return v, c, g, a, p, J
 
 
@@ -564,26 +581,26 @@ def _apart(VA, nva, NA, DA, nfa, VB, nvb, NB, DB, nfb, tol):
     return False
 
 
-@njit(cache=True)
-def pair_contact(GV, GN, GD, nv, nf, faces, fk, i, j, tol, touching, polys, counts, A, B, S, g, id1, id2, vol, cen,
-                 nrm, area, pc, pj, m):
+@njit(cache=True, inline="always")  # inlined into the pair loops: no call with its many arguments per pair
+def pair_contact(GV, GN, GD, nv, nf, faces, fk, i, j, tol, touching, polys, counts, A, B, S, areas, g, id1, id2, vol,
+                 cen, nrm, area, pc, pj, m):
     """A listed pair's contact: shapes i and j (their global vertices GV, planes GN, GD)
-    clipped (``_clip_pair``, the work arrays polys .. S and g), and where the overlap's
+    clipped (``_clip_pair``, the work arrays polys .. areas of ``_work``, and g (3,)), and where the overlap's
     volume and its gradient are positive, the contact written into row m of id1, id2, vol,
     cen, nrm, area, pc, pj (as ``pair_patch``); returns whether it was. ``touching``: a
     pair that touches within ``tol`` or is apart (``_apart``) is no contact, without a
     clip (module docstring, "Touching"). Row m of cen may be written when it is not."""
     if touching and _apart(GV[i], nv[i], GN[i], GD[i], nf[i], GV[j], nv[j], GN[j], GD[j], nf[j], tol):
         return False
-    na, nt = _clip_pair(GV[i], nv[i], faces[i], fk[i], nf[i], GN[i], GD[i], GV[j], nv[j], faces[j], fk[j], nf[j],
-                        GN[j], GD[j], tol, polys, counts, A, B, S)
-    v = _volume(polys, counts, na, nt, cen[m], g)
+    na, nt, r0, r1, r2, npts = _clip_pair(GV[i], nv[i], faces[i], fk[i], nf[i], GN[i], GD[i], GV[j], nv[j], faces[j],
+                                          fk[j], nf[j], GN[j], GD[j], tol, polys, counts, A, B, S)
+    v = _volume(polys, counts, na, nt, r0, r1, r2, npts, cen[m], g, areas)
     if v <= 0.0:
         return False
     ga = np.sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
     if ga <= 0.0:
         return False
-    _patch(polys, counts, na, nt, cen[m], g, pc[m], pj[m])  # its area is |g| (module docstring)
+    _patch(polys, counts, na, nt, cen[m], g, pc[m], pj[m], areas)  # its area is |g| (module docstring)
     id1[m] = i
     id2[m] = j
     vol[m] = v
@@ -608,11 +625,11 @@ def _contacts_of_pairs(GV, GN, GD, nv, nf, faces, fk, ia, ib, tol, touching):
     area = np.empty(cap)
     pc = np.empty((cap, 3))
     pj = np.empty((cap, 3, 3))
-    polys, counts, A, B, S = _work(GN.shape[1])
+    polys, counts, A, B, S, areas = _work(GN.shape[1])
     g = np.empty(3)
     m = 0
     for k in range(cap):
-        if pair_contact(GV, GN, GD, nv, nf, faces, fk, ia[k], ib[k], tol, touching, polys, counts, A, B, S, g,
+        if pair_contact(GV, GN, GD, nv, nf, faces, fk, ia[k], ib[k], tol, touching, polys, counts, A, B, S, areas, g,
                         id1, id2, vol, cen, nrm, area, pc, pj, m):
             m += 1
     return id1[:m], id2[:m], vol[:m], cen[:m], nrm[:m], area[:m], pc[:m], pj[:m]
