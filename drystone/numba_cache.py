@@ -32,11 +32,15 @@ LOCK_NAME = ".drystone-lock"
 @contextlib.contextmanager
 def locked(folder: str, exclusive: bool):
     """Hold the advisory lock of the cache ``folder`` (made if missing): exclusive for a
-    writer, shared for a reader; released when the block ends (the file is closed)."""
+    writer, shared for a reader; released when the block ends (the file is closed). Where
+    the file system takes no lock (some network mounts), numba's own unlocked way."""
     os.makedirs(folder, exist_ok=True)
     fd = os.open(os.path.join(folder, LOCK_NAME), os.O_RDWR | os.O_CREAT, 0o644)
     try:
-        fcntl.flock(fd, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
+        except OSError:
+            pass
         yield
     finally:
         os.close(fd)
