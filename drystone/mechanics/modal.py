@@ -39,28 +39,28 @@ Q(q*) = 0 by Newton's method on K (the tangential springs anchored at the settle
 carry the shear that balances the joints, as the stored forces would), and the modes are
 those of K(q*).
 
-K = -dQ/dq by differences (``stiffness``): steps of ``rel_step`` times the median
-overlap depth V / A_c for translations and that divided by the block's size for
-rotations, so that no overlap changes topology within a step and the truncation error,
-O(step^2) relative to the depth, is ~1e-6. Where two stones' faces are flush (a stack of
-equal boxes, a wall's front: coplanar faces, ``drystone.mechanics.overlap``), Q jumps as
-a stone moves across: the overlap gains or loses a thin strip of side face, its normal tilts
-by (strip area) / A_c one way or the other, and the normal force gets a sideways part
-(0.16 N either way on the 0.2 x 0.2 m joint of two stacked 37 kg boxes). A jump is no
-stiffness, but a central difference across it reads jump / (2 step), here 15 % of the
-joint's shear stiffness K_t A_c, and the tower's first mode fell from 6.07 to 1.59 Hz. So
-each entry takes the central difference over (-step, step) or the mean of the one-sided
-ones over (-2 step, -step) and (step, 2 step), both O(step^2): a jump within (-step, step)
-spoils the first, one within 2 steps but outside it the second, and the one kept is the
-nearer to the median of the three differences, which the jump leaves on the unspoiled
-side; where Q is smooth (and its slope monotone) the median is the central one, kept. Gravity's geometric stiffness is not a separate
-term: the preloaded normal forces move with the footprint (a block rotating by theta about
-its centroid at height h above its joint shifts its footprint by -h theta under the load W:
-the -W h of a rocking block) and the difference quotient sees it. The generalised force
-of a rotation vector is T(theta)^T M (T the exponential map's tangent, ``_tangent``), exact
-virtual work for finite steps. The FD matrix is symmetric at an equilibrium up to the
-tangential springs' path dependence; ``modes`` solves eigh((K + K^T)/2, M) and reports the
-relative asymmetry and the static residual Q(0).
+K = -dQ/dq by differences (``stiffness``): steps of ``rel_step`` times the median overlap
+depth V / A_c for translations and that divided by the block's size for rotations, so that
+no overlap changes topology within a step and the truncation error, O(step^2) relative to
+the depth, is ~1e-6. Where two stones' faces are flush (a stack of equal boxes, a wall's
+front: coplanar faces, ``drystone.mechanics.overlap``), Q jumps as a stone moves across:
+the overlap gains or loses a thin strip of side face, its normal tilts by (strip area) /
+A_c one way or the other, and the normal force gets a sideways part (0.16 N either way on
+the 0.2 x 0.2 m joint of two stacked 37 kg boxes). A jump is no stiffness, but a central
+difference across it reads jump / (2 step), here 15 % of the joint's shear stiffness K_t
+A_c, and the tower's first mode fell from 6.07 to 1.59 Hz. So each entry takes the central
+difference over (-step, step) or the mean of the one-sided ones over (-2 step, -step) and
+(step, 2 step), both O(step^2): a jump within (-step, step) spoils the first, one within 2
+steps but outside it the second, and the one kept is the nearer to the median of the three
+differences, which the jump leaves on the unspoiled side; where Q is smooth (and its slope
+monotone) the median is the central one, kept. Gravity's geometric stiffness is not a
+separate term: the preloaded normal forces move with the footprint (a block rotating by
+theta about its centroid at height h above its joint shifts its footprint by -h theta
+under the load W: the -W h of a rocking block) and the difference quotient sees it. The
+generalised force of a rotation vector is T(theta)^T M (T the exponential map's tangent,
+``_tangent``), exact virtual work for finite steps. The FD matrix is symmetric at an
+equilibrium up to the tangential springs' path dependence; ``modes`` solves eigh((K +
+K^T)/2, M) and reports the relative asymmetry and the static residual Q(0).
 
 Units: SI (m, kg, N, rad, Hz); K_n, K_t in N/m^3.
 """
