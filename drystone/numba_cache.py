@@ -6,8 +6,9 @@ writes the index, then the data file, without a lock: two processes compiling di
 overloads of one function at the same time (the test suite's workers, a sweep's runs after
 a kernel changed) can both take number 1, and the index then names one overload's file
 while the file holds the other's machine code. The next process to load it calls that
-code with the wrong arguments: a segmentation fault, measured here once after a kernel
-change (``neighbours.update`` called with an explicit ``chunks``).
+code with the wrong arguments: a segmentation fault. (The one crash seen here that was
+put down to this race, ``neighbours.update`` called directly after a kernel change,
+fits the thread-pool fault below better: it recurs from a warm cache.)
 
 ``install`` wraps numba's index-and-data reads and writes in an advisory lock (``fcntl``)
 on a file in the cache's root (``NUMBA_CACHE_DIR``, which ``drystone/__init__.py`` sets;
@@ -15,6 +16,15 @@ else each function's cache folder): writers one at a time, readers not during a 
 module with cached kernels calls it when imported, before any of its kernels can be
 loaded or saved; installing twice does nothing. The cost is a lock per cache lookup (a
 few microseconds, at a kernel's first call in a process).
+
+``install`` also starts numba's thread pool. A cached kernel that calls a ``parallel``
+one (the compiled step calls the neighbour list's ``update`` and ``search``) is loaded
+from the cache with its callee's code but without the callee's dispatcher running, and
+that dispatcher is what starts the pool on first use (github.com/numba/numba/issues/8578, open for 0.58):
+the first ``prange`` then jumps into a pool that does not exist, a segmentation fault,
+in a process whose first compiled call is such a kernel from a warm cache (a script
+calling ``neighbours.update`` directly; ``CompiledStep`` sets the thread count first and
+so started the pool by chance). Starting it costs about a millisecond per process.
 """
 from __future__ import annotations
 
@@ -23,6 +33,7 @@ import fcntl
 import functools
 import os
 
+import numba
 from numba.core import caching, config
 
 #: the lock file in the cache's root
@@ -56,7 +67,9 @@ def _under_lock(method, exclusive: bool):
 
 
 def install() -> None:
-    """Serialise numba's cache writes (and keep reads out of them) across processes."""
+    """Serialise numba's cache writes (and keep reads out of them) across processes, and
+    start numba's thread pool (module docstring)."""
+    numba.get_num_threads()  # starts the pool (numba.np.ufunc.parallel._launch_threads) if it is not running
     cls = caching.IndexDataCacheFile
     if getattr(cls.save, "drystone_locked", False):
         return

@@ -24,6 +24,40 @@ KERNEL = textwrap.dedent('''
 ''')
 
 
+NESTED = textwrap.dedent('''
+    from drystone.mechanics import overlap  # a kernel module: starts numba's thread pool
+    import numpy as np
+    from numba import njit, prange
+
+    @njit(cache=True, parallel=True)
+    def doubled(x):
+        out = np.zeros(len(x))
+        for t in prange(len(x)):
+            out[t] = 2.0 * x[t]
+        return out
+
+    @njit(cache=True)
+    def total(x):
+        return doubled(x).sum()
+
+    print(total(np.ones(4)), flush=True)
+''')
+
+
+def test_a_cached_kernel_calling_a_parallel_one_loads(tmp_path):
+    """A cached kernel whose first call in a process runs a parallel one from the cache
+    (the compiled step's ``neighbours.update``): without the thread pool that a kernel
+    module starts, the second process (loading from the cache) crashed (github.com/numba/numba/issues/8578)."""
+    (tmp_path / "nested.py").write_text(NESTED)
+    env = {"NUMBA_CACHE_DIR": str(tmp_path / "cache"), "PYTHONPATH": str(tmp_path), "PATH": "/usr/bin:/bin"}
+    for run in ("compiles", "loads"):
+        proc = subprocess.run([sys.executable, "-c", "import nested"], env=env, cwd=tmp_path, capture_output=True,
+                              text=True, timeout=300)
+        assert proc.returncode == 0, (run, proc.returncode, proc.stderr[-2000:])
+        assert proc.stdout.split() == ["8.0"]
+    assert list((tmp_path / "cache").rglob("*total*.nbi"))
+
+
 def test_kernel_modules_install_the_lock():
     from numba.core import caching
     assert getattr(caching.IndexDataCacheFile.save, "drystone_locked", False)
