@@ -45,6 +45,12 @@ candidate pairs, in lexicographic order, which are then clipped. A non-convex st
 several convex shapes of one body (``contacts_of_shapes``: its parts never pair with
 each other).
 
+Reference counts. The per-pair kernels (``pair_contact`` and what it calls) allocate
+nothing and are compiled without numba's reference counting (``_nrt=False``): every view
+of a shape's arrays (``GV[i]``) and of a contact's row would otherwise cost an atomic add
+and subtract, a fifth of the time of a pair loop (measured with ``perf``); their callers
+pass whole arrays and indices and keep the references.
+
 Units: metres. Arrays: per body, local vertices (nv, 3), face planes (nf, 3) + (nf,),
 faces as vertex indices padded with -1, counter-clockwise seen from outside.
 """
@@ -111,7 +117,7 @@ def too_large(vertices) -> str | None:
             f"largest face's corners <= {MAXV // 2}); give the block fewer corners")
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _twice_area_vector(polys, s, k):
     """Twice the area vector (m^2) of the planar polygon polys[s, :k] (counter-clockwise about it)."""
     ax = 0.0
@@ -125,7 +131,7 @@ def _twice_area_vector(polys, s, k):
     return ax, ay, az
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _clip(P, k, S, Q):
     """Sutherland-Hodgman: keep the part of polygon P[:k] whose signed distances S[:k] to
     a plane are <= 0; into Q. Returns the new vertex count."""
@@ -148,7 +154,7 @@ def _clip(P, k, S, Q):
     return m
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _coplanar(NA, DA, VA, FA, FKA, f, NB, DB, VB, FB, FKB, p, tol):
     """Face f of A and face p of B lie in one plane with the same outward normal: normals
     parallel to 1e-12 (their cosine), every vertex of each face within ``tol`` of the other
@@ -167,7 +173,7 @@ def _coplanar(NA, DA, VA, FA, FKA, f, NB, DB, VB, FB, FKB, p, tol):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _faces_inside(V, F, FK, nf, N1, D1, V2, F2, FK2, nv2, N2, D2, nf2, dedup, tol, polys, counts, start, A, B, S, r0, r1,
                   r2, npts):
     """Clip every face of one body (global vertices V, faces F, FK, planes N1, D1) to the
@@ -258,7 +264,7 @@ def _work(maxf):
             np.empty(MAXV), np.empty((2 * maxf, 3)))
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _clip_pair(VA, nva, FA, FKA, nfa, NA, DA, VB, nvb, FB, FKB, nfb, NB, DB, tol, polys, counts, A, B, S):
     """The polygons bounding A ∩ B into ``polys``: A's faces clipped to B (the first
     ``na``), then B's faces clipped to A (to ``nt``); returns (na, nt, r0, r1, r2, npts):
@@ -285,7 +291,7 @@ def pair(VA, nva, FA, FKA, nfa, NA, DA, VB, nvb, FB, FKB, nfb, NB, DB, tol):
     return v, cen, g
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _volume(polys, counts, na, nt, r0, r1, r2, npts, cen, g, areas):
     """Volume (returned) of the overlap bounded by ``polys[:nt]`` (the first ``na`` from
     A's faces); its centroid into ``cen`` and dV/dx_B into ``g`` ((3,) each; zero when the
@@ -337,7 +343,7 @@ def _volume(polys, counts, na, nt, r0, r1, r2, npts, cen, g, areas):
     return vol / 6.0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _patch(polys, counts, first, last, cen, g, p, J, areas):
     """Footprint of the overlap (module docstring) from the faces of B inside A
     (``polys[first:last]``, their twice area vectors ``areas[first:last]`` from
@@ -557,7 +563,7 @@ def sweep_pairs(lo, hi, moving):
     return keys // nb, keys % nb
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _apart(VA, nva, NA, DA, nfa, VB, nvb, NB, DB, nfb, tol):
     """True when a face plane of A has every vertex of B outside it or on it within
     ``tol`` (signed distance >= -tol), or a face plane of B every vertex of A: the bodies
@@ -581,7 +587,7 @@ def _apart(VA, nva, NA, DA, nfa, VB, nvb, NB, DB, nfb, tol):
     return False
 
 
-@njit(cache=True, inline="always")  # inlined into the pair loops: no call with its many arguments per pair
+@njit(cache=True, _nrt=False)
 def pair_contact(GV, GN, GD, nv, nf, faces, fk, i, j, tol, touching, polys, counts, A, B, S, areas, g, id1, id2, vol,
                  cen, nrm, area, pc, pj, m):
     """A listed pair's contact: shapes i and j (their global vertices GV, planes GN, GD)
