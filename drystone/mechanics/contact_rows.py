@@ -44,10 +44,12 @@ def range_count(rows, chunks):
     """Ranges to cut ``rows`` rows into: ``chunks`` (one per thread numba may run, as the
     caller passes it), 1 (the calling thread) below PARALLEL_ROWS rows. A kernel loops over
     its rows within a range: one call per range, not per row (a call of a kernel with many
-    array arguments costs a reference count per array, which outweighed a contact's law)."""
+    array arguments costs a reference count per array, which outweighed a contact's law).
+    The kernels called per row allocate nothing and are compiled without reference counts
+    (``_nrt=False``; ``drystone.mechanics.overlap``, "Reference counts")."""
     return max(1, chunks) if rows >= PARALLEL_ROWS else 1
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _global_inverse(R, d, out):
     """out = R diag(d) R^T: a body's inverse inertia in the global frame."""
     for i in range(3):
@@ -55,7 +57,7 @@ def _global_inverse(R, d, out):
             out[i, j] = R[i, 0] * d[0] * R[j, 0] + R[i, 1] * d[1] * R[j, 1] + R[i, 2] * d[2] * R[j, 2]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _props(a, b, nb, mat, table, jkeys, jvals, k, kn, kt, mu, xi):
     """kn, kt, mu, damping of contact k between bodies a and b into its rows: the material
     pair's, or the joint's override (jkeys: sorted a * nb + b of the overridden pairs of
@@ -72,7 +74,7 @@ def _props(a, b, nb, mat, table, jkeys, jvals, k, kn, kt, mu, xi):
     xi[k] = p[3]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _law_range(r0, r1, oa, ob, c, n, area, pc, pj, vol, pos, vel, angvel, rot, inv_inertia_local, mat, table, jkeys,
                jvals, prev, prev_shear, prev_basis, dt, kn, kt, mu, xi, fn, fs, basis, jp, slipping, ra, rb, pa, pb,
                lever, twist, iia, iib, slip_terms):
@@ -234,7 +236,7 @@ def _by_body(oa, ob, nb):
     return start, entries
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _wrench_terms(k, on_a, fs, fn, n, fd, md, ra, rb, pa, pb, out):
     """Contact k's terms on one of its bodies into out (4, 3): the force on B (elastic
     normal + shear spring + damping) and the damping's, and the torques about the body's
@@ -312,7 +314,7 @@ def body_sums(oa, ob, nb, fs, fn, n, fd, md, ra, rb, pa, pb, chunks=1):
     return F, T, Fd, Td
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _energy_range(r0, r1, ia, ib, oa, ob, kn, kt, vol, c, n, area, fs, jp, normals, offsets, nf, rot, pos, e):
     """Each contact's elastic energy (J), contacts r0 <= k < r1: its normal and shear
     springs' (e[k, 0]) and its twist spring's (e[k, 1]); zeros for a contact without area."""

@@ -127,7 +127,7 @@ def load_work(dt, c, Fb, Tb, moving, lin_free, rot_free, v0, w0, v1, w1):
     return w * dt
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _face_depth(normals, offsets, nf, rot, pos, s, b, c, d, k, sign):
     """(alignment, depth) of the face of convex shape s (of body b) whose outward normal is
     closest to the direction sign x d[k] (sign +-1): the cosine between them and the
@@ -152,7 +152,7 @@ def _face_depth(normals, offsets, nf, rot, pos, s, b, c, d, k, sign):
     return best, -(normals[s, f, 0] * cl0 + normals[s, f, 1] * cl1 + normals[s, f, 2] * cl2 + offsets[s, f])
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def normal_energy(kn, vol, c, n, k, normals, offsets, nf, rot, pos, sa, ba, sb, bb):
     """Elastic energy (J) of contact k's normal spring, K_n V e (module docstring): kn
     N/m^3, vol m^3, c (m, 3) the overlaps' centroids, n (m, 3) the unit normals from A to

@@ -22,7 +22,7 @@ from drystone import numba_cache
 numba_cache.install()  # numba's cache safe for processes compiling at once
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _quat_matrix(q, R):
     """R = rotation matrix of the unit quaternion q (x, y, z, w), the same arithmetic as
     ``rotations.to_matrix`` (touching faces make contacts sensitive to its round-off)."""
@@ -38,7 +38,7 @@ def _quat_matrix(q, R):
     R[2, 2] = 1 - 2 * (x * x + y * y)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _eigen_matrix(q, R):
     """R = rotation matrix of q (x, y, z, w) as Eigen computes it (YADE's ``A`` in the
     aspherical integration)."""
@@ -58,7 +58,7 @@ def _eigen_matrix(q, R):
     R[2, 2] = 1.0 - (txx + tyy)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _dot_q(w, q, out):
     """dQ/dt into ``out`` (4,) for the body-frame angular velocity w at orientation q (x, y, z, w)."""
     out[3] = (-q[0] * w[0] - q[1] * w[1] - q[2] * w[2]) / 2.0
@@ -67,7 +67,7 @@ def _dot_q(w, q, out):
     out[2] = (-q[1] * w[0] + q[0] * w[1] + q[3] * w[2]) / 2.0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _to_body(A, x, inertia, out):
     """out = (A x) / inertia, elementwise (3,): A x row by row, left to right, as Eigen's
     3 x 3 product without fused multiply-adds (numpy's ``@`` calls BLAS, whose order and
@@ -76,7 +76,7 @@ def _to_body(A, x, inertia, out):
         out[a] = (A[a, 0] * x[0] + A[a, 1] * x[1] + A[a, 2] * x[2]) / inertia[a]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _normalise(q):
     """q /= |q|, summing the squares in the order of Eigen's vectorised norm (YADE)."""
     s = np.sqrt((q[0] * q[0] + q[2] * q[2]) + (q[1] * q[1] + q[3] * q[3]))
