@@ -545,27 +545,26 @@ def _series_root(A, S, Q, s, x):
 
 
 @njit(cache=True, inline="always")
-def _add_body(W, r, im, ii):
-    """W += G^T diag(im, ii) G for one body (see ``mobility``), written out in 3 x 3
-    blocks with S = [r]x: [[im 1 - S ii S, -S ii], [ii S, ii]]."""
-    r0, r1, r2 = r[0], r[1], r[2]
-    IS = np.empty((3, 3))  # ii S
-    for a in range(3):
-        IS[a, 0] = ii[a, 1] * r2 - ii[a, 2] * r1
-        IS[a, 1] = ii[a, 2] * r0 - ii[a, 0] * r2
-        IS[a, 2] = ii[a, 0] * r1 - ii[a, 1] * r0
-    for b in range(3):
-        W[0, b] -= r1 * IS[2, b] - r2 * IS[1, b]  # (S ii S)[., b]
+def _add_body(W, IS, r, im, ii, c):
+    """W += G^T diag(im, ii[c]) G for one body (see ``mobility``) at its point r[c], written
+    out in 3 x 3 blocks with S = [r]x: [[im 1 - S ii S, -S ii], [ii S, ii]]; only the lower
+    triangle, which the Cholesky factor reads (W is symmetric). IS: 3 x 3 work array."""
+    r0, r1, r2 = r[c, 0], r[c, 1], r[c, 2]
+    for a in range(3):  # ii S
+        IS[a, 0] = ii[c, a, 1] * r2 - ii[c, a, 2] * r1
+        IS[a, 1] = ii[c, a, 2] * r0 - ii[c, a, 0] * r2
+        IS[a, 2] = ii[c, a, 0] * r1 - ii[c, a, 1] * r0
+    W[0, 0] -= r1 * IS[2, 0] - r2 * IS[1, 0]  # (S ii S)[a, b], b <= a
+    for b in range(2):
         W[1, b] -= r2 * IS[0, b] - r0 * IS[2, b]
+    for b in range(3):
         W[2, b] -= r0 * IS[1, b] - r1 * IS[0, b]
-        W[0, 3 + b] -= r1 * ii[2, b] - r2 * ii[1, b]  # (S ii)[., b]
-        W[1, 3 + b] -= r2 * ii[0, b] - r0 * ii[2, b]
-        W[2, 3 + b] -= r0 * ii[1, b] - r1 * ii[0, b]
     for a in range(3):
         W[a, a] += im
         for b in range(3):
             W[3 + a, b] += IS[a, b]
-            W[3 + a, 3 + b] += ii[a, b]
+        for b in range(a + 1):
+            W[3 + a, 3 + b] += ii[c, a, b]
 
 
 @njit(cache=True)
@@ -652,7 +651,8 @@ def damping_wrenches_warm(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, 
 def _damp_range(c0, c1, n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, iib, twist, fn_el, fs, mu, lever,
                 basis, warm, fd, md, om):
     """``damping_wrenches_warm``'s contacts c0 <= c < c1 into fd, md, om (and basis)."""
-    W = np.empty((6, 6))
+    W = np.empty((6, 6))  # its lower triangle
+    IS = np.empty((3, 3))
     K = np.empty((6, 6))
     L = np.empty((6, 6))
     KL = np.empty((6, 6))
@@ -671,9 +671,11 @@ def _damp_range(c0, c1, n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, ii
     for c in range(c0, c1):
         if xi[c] <= 0.0 or parea[c] <= 0.0:
             continue
-        W[:, :] = 0.0
-        _add_body(W, ra[c], ima[c], iia[c])
-        _add_body(W, rb[c], imb[c], iib[c])
+        for i in range(6):
+            for j in range(i + 1):
+                W[i, j] = 0.0
+        _add_body(W, IS, ra, ima[c], iia, c)
+        _add_body(W, IS, rb, imb[c], iib, c)
         # K at the patch centroid: K_n A n n^T + K_t A (1 - n n^T); K_n [n]x J [n]x^T
         nc = n[c]
         n0, n1, n2 = nc[0], nc[1], nc[2]
