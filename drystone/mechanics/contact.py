@@ -691,14 +691,12 @@ def _damp_range(c0, c1, n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, ii
         for a in range(3):
             for b in range(3):
                 Rr[a, b] = SJ[a, 0] * S[b, 0] + SJ[a, 1] * S[b, 1] + SJ[a, 2] * S[b, 2]
-        K[:, :] = 0.0
-        for a in range(3):
+        for a in range(3):  # (the blocks off the diagonal are zero, never read)
             for b in range(3):
                 nn = nc[a] * nc[b]
                 K[a, b] = kna * nn + kta * ((1.0 if a == b else 0.0) - nn)
                 K[3 + a, 3 + b] = kn[c] * Rr[a, b] + ktj * nn
-        # Cholesky W = L L^T
-        L[:, :] = 0.0
+        # Cholesky W = L L^T (L's lower triangle; its upper one is zero, never read)
         ok = True
         for i in range(6):
             for j in range(i + 1):
@@ -716,18 +714,18 @@ def _damp_range(c0, c1, n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, ii
                 break
         if not ok:
             continue
-        # B = L^T K L (K block diagonal; L lower triangular)
+        # B = L^T K L (K block diagonal, L lower triangular: the sums skip their zero terms)
         for i in range(6):
-            for j in range(6):
+            lo = 0 if i < 3 else 3
+            for j in range(lo + 3):  # KL[i, j] = 0 for j > lo + 2
                 acc = 0.0
-                lo = 0 if i < 3 else 3
-                for k in range(lo, lo + 3):
+                for k in range(max(lo, j), lo + 3):
                     acc += K[i, k] * L[k, j]
                 KL[i, j] = acc
         for i in range(6):
             for j in range(i, 6):
                 acc = 0.0
-                for k in range(i, 6):
+                for k in range(max(i, 3) if j > 2 else i, 6):
                     acc += L[k, i] * KL[k, j]
                 B[i, j] = acc
         for i in range(6):
