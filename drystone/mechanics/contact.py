@@ -354,20 +354,24 @@ def critical_time_step(mass, stiffness, damping_ratio=0.0) -> float:
 # The same damping as mobility -> patch_stiffness -> damping_matrix -> cap_damping, one
 # contact at a time without temporaries (the numpy functions above are the reference:
 # tests/test_damping.py checks that both agree). W = L L^T by Cholesky, B = L^T K L, its
-# square root by cyclic Jacobi rotations (6 x 6), and C u = 2 xi L^-T B^1/2 L^-1 u by
-# triangular solves.
+# square root in the contact's modal basis of an earlier step (a second-order series where
+# that basis nearly diagonalises B, else cyclic Jacobi rotations, 6 x 6), and
+# C u = 2 xi L^-T B^1/2 L^-1 u by triangular solves.
 
 @njit(cache=True, inline="always")
 def _jacobi_sqrt(B, T, Q, s6, x6, A, V, warm):
     """B^1/2 = V diag(A) V^T for a symmetric positive semi-definite 6 x 6 B: on exit V
     holds B's eigenvectors (columns) and A's diagonal the square roots of its eigenvalues
     (negative round-off ones clipped to 0); returns (the largest eigenvalue, ``series``).
-    With ``series`` the sweeps stopped early, V only nearly diagonalising B, and A is the
-    whole square root of V^T B V to below round-off (``_series_root``): B^1/2 = V A V^T. T, Q
-    (6 x 6), s6, x6 (6,): work arrays. On entry, with ``warm``, V is a basis to start from (the previous step's
-    eigenvectors of the same contact, which nearly diagonalise B: cyclic Jacobi, quadratically
-    convergent, then needs fewer sweeps; the result is a cold solve's to ~1e-9 of the
-    largest eigenvalue's scale). A basis whose columns have drifted from unit length (round-off over many
+    With ``series`` the sweeps stopped early (or never started), V only nearly diagonalising
+    B, and A is the whole square root of V^T B V to below round-off (``_series_root``):
+    B^1/2 = V A V^T. T, Q (6 x 6), s6, x6 (6,): work arrays. On entry, with ``warm``, V is a
+    basis to start from (the contact's eigenvectors of an earlier step, which nearly
+    diagonalise B: usually the series alone then gives the root, and V stays as it came
+    until a step's B has moved too far from it for the series, when sweeps refresh it;
+    cyclic Jacobi is quadratically convergent; the result is a cold solve's to ~1e-9 of the
+    largest eigenvalue's scale). The largest eigenvalue returned is V^T B V's largest
+    diagonal entry, to the square of V's misalignment (~1e-10 relative). A basis whose columns have drifted from unit length (round-off over many
     steps: > 1e-13) is re-orthonormalised first (modified Gram-Schmidt); one with a column
     far from unit length or not finite is not used."""
     n = 6
@@ -621,9 +625,10 @@ def damping_wrenches(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, 
 def damping_wrenches_warm(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, iib, twist,
                           fn_el, fs, mu, lever, basis, warm, chunks=1):
     """``damping_wrenches`` with each contact's modal basis carried between steps:
-    ``basis`` (m,6,6) holds on entry, where ``warm``, the contact's eigenvectors of the
-    previous step (of B = L^T K L, the scaled stiffness), and on exit this step's, for every
-    contact damped here (``_jacobi_sqrt``). A basis that is not one (zeros, NaN) gives a cold
+    ``basis`` (m,6,6) holds on entry, where ``warm``, the contact's eigenvectors of an
+    earlier step (of B = L^T K L, the scaled stiffness), and on exit the basis this step's
+    square root was taken in, for every contact damped here (``_jacobi_sqrt``: refreshed
+    when the step's B has moved too far from it). A basis that is not one (zeros, NaN) gives a cold
     solve. The result is the cold solve's to ~1e-9 of the largest wrench (while a contact
     slips the twist about n has no stiffness: the square root of B's zero eigenvalue
     amplifies round-off).
