@@ -354,20 +354,24 @@ def critical_time_step(mass, stiffness, damping_ratio=0.0) -> float:
 # The same damping as mobility -> patch_stiffness -> damping_matrix -> cap_damping, one
 # contact at a time without temporaries (the numpy functions above are the reference:
 # tests/test_damping.py checks that both agree). W = L L^T by Cholesky, B = L^T K L, its
-# square root by cyclic Jacobi rotations (6 x 6), and C u = 2 xi L^-T B^1/2 L^-1 u by
-# triangular solves.
+# square root in the contact's modal basis of an earlier step (a second-order series where
+# that basis nearly diagonalises B, else cyclic Jacobi rotations, 6 x 6), and
+# C u = 2 xi L^-T B^1/2 L^-1 u by triangular solves.
 
-@njit(cache=True)
-def _jacobi_sqrt(B, T, A, V, warm):
+@njit(cache=True, inline="always")
+def _jacobi_sqrt(B, T, Q, s6, x6, A, V, warm):
     """B^1/2 = V diag(A) V^T for a symmetric positive semi-definite 6 x 6 B: on exit V
     holds B's eigenvectors (columns) and A's diagonal the square roots of its eigenvalues
     (negative round-off ones clipped to 0); returns (the largest eigenvalue, ``series``).
-    With ``series`` the sweeps stopped early, V only nearly diagonalising B, and A is the
-    whole square root of V^T B V to below round-off (``_series_root``): B^1/2 = V A V^T. T:
-    6 x 6 work array. On entry, with ``warm``, V is a basis to start from (the previous step's
-    eigenvectors of the same contact, which nearly diagonalise B: cyclic Jacobi, quadratically
-    convergent, then needs fewer sweeps; the result is a cold solve's to ~1e-9 of the
-    largest eigenvalue's scale). A basis whose columns have drifted from unit length (round-off over many
+    With ``series`` the sweeps stopped early (or never started), V only nearly diagonalising
+    B, and A is the whole square root of V^T B V to below round-off (``_series_root``):
+    B^1/2 = V A V^T. T, Q (6 x 6), s6, x6 (6,): work arrays. On entry, with ``warm``, V is a
+    basis to start from (the contact's eigenvectors of an earlier step, which nearly
+    diagonalise B: usually the series alone then gives the root, and V stays as it came
+    until a step's B has moved too far from it for the series, when sweeps refresh it;
+    cyclic Jacobi is quadratically convergent; the result is a cold solve's to ~1e-9 of the
+    largest eigenvalue's scale). The largest eigenvalue returned is V^T B V's largest
+    diagonal entry, to the square of V's misalignment (~1e-10 relative). A basis whose columns have drifted from unit length (round-off over many
     steps: > 1e-13) is re-orthonormalised first (modified Gram-Schmidt); one with a column
     far from unit length or not finite is not used."""
     n = 6
@@ -427,7 +431,7 @@ def _jacobi_sqrt(B, T, A, V, warm):
                 off += A[i, j] * A[i, j]
         if off <= 1e-26 * scale or scale == 0.0:
             break
-        if _series_root(A, T):  # nearly diagonal: its square root to below round-off, no sweep more
+        if _series_root(A, T, Q, s6, x6):  # nearly diagonal: its square root to below round-off, no sweep more
             series = True
             break
         for p in range(n - 1):
@@ -473,76 +477,98 @@ def _jacobi_sqrt(B, T, A, V, warm):
     return lmax, False
 
 
-#: ``_series_root``'s bound on the neglected second-order term of the square root, over the
-#: largest square root: below double precision's round-off (2.2e-16)
+#: ``_series_root``'s bound on the neglected terms of the square root (third order and the
+#: fourth's leading part), over the largest square root: below double precision's round-off
+#: (2.2e-16)
 SERIES_TOL = 1e-16
 
 
-@njit(cache=True)
-def _series_root(A, S):
+@njit(cache=True, inline="always")
+def _series_root(A, S, Q, s, x):
     """The square root S (6 x 6) of a symmetric positive semi-definite A = D + E that is
-    nearly diagonal (D its diagonal), when the expansion's first-order term gives it to
-    below round-off; returns whether it did (S then written; else S is scratch). With
-    s_i = sqrt(D_ii), S = diag(s) + X + S2 + ..., where X solves diag(s) X + X diag(s) = E,
-    X_ij = E_ij / (s_i + s_j), and S2_ij = -(X X)_ij / (s_i + s_j) (the square of S matching A
-    to second order). S = diag(s) + X is taken when every |S2_ij| <= SERIES_TOL max(s): the
-    neglected terms are then below the round-off of the largest entry (the higher terms
-    smaller still, each a further factor X / s). This stands for the last Jacobi sweeps
-    (quadratic convergence: each sweep squares the off-diagonal part) at a fraction of their
-    cost; a zero eigenvalue of B (a slipping contact) coupled to the others fails the test
-    (s_i + s_j near 0), and the sweeps go on there."""
+    nearly diagonal (D its diagonal), when the expansion to second order gives it to below
+    round-off; returns whether it did (S then written; else S is scratch). Q (6 x 6), s, x
+    (6,): work arrays. With s_i = sqrt(D_ii), S = diag(s) + X + S2 + S3 + ..., each term
+    matching S S to A at the next order: diag(s) X + X diag(s) = E, X_ij = E_ij / (s_i +
+    s_j); S2_ij = -(X X)_ij / (s_i + s_j); S3_ij = -(X S2 + S2 X)_ij / (s_i + s_j); the
+    fourth order -(X S3 + S3 X + S2 S2)_ij / (s_i + s_j). S = diag(s) + X + S2 is taken when
+    the bound |(X S2 + S2 X)_ij| + |(S2 S2)_ij| <= q (x_i + x_j) + 6 q^2 (q the largest
+    |S2_kl|, x_i the sum of |X_ik| over k) is <= SERIES_TOL max(s) (s_i + s_j) for every
+    i, j: the neglected terms are then below the round-off of the largest entry (the rest a
+    further factor X / s smaller). This stands for the Jacobi sweeps (quadratic
+    convergence: each sweep squares the off-diagonal part) at a fraction of their cost: a
+    warm start (the previous step's modes) leaves off-diagonal terms that small (X / s ~
+    1e-6) on a settled or shaken wall, where the first order alone (neglecting S2 ~ X X / s)
+    needed a sweep first. A zero eigenvalue of B (a slipping contact) coupled to the others
+    fails the test (s_i + s_j near 0), and the sweeps go on there."""
     n = 6
     smax = 0.0
     for i in range(n):
-        S[i, i] = np.sqrt(A[i, i]) if A[i, i] > 0.0 else 0.0
-        if S[i, i] > smax:
-            smax = S[i, i]
-    for i in range(n):
+        s[i] = np.sqrt(A[i, i]) if A[i, i] > 0.0 else 0.0
+        if s[i] > smax:
+            smax = s[i]
+    for i in range(n):  # X into S (zero diagonal), 1 / (s_i + s_j) into Q's upper triangle
+        S[i, i] = 0.0
+        Q[i, i] = 0.5 / s[i] if s[i] > 0.0 else 0.0
         for j in range(i + 1, n):
-            d = S[i, i] + S[j, j]
+            d = s[i] + s[j]
             if d > 0.0:
-                x = A[i, j] / d
+                Q[i, j] = 1.0 / d
             elif A[i, j] == 0.0:
-                x = 0.0
+                Q[i, j] = 0.0
             else:
                 return False
-            S[i, j] = x
-            S[j, i] = x
-    lim = SERIES_TOL * smax
+            S[i, j] = A[i, j] * Q[i, j]
+            S[j, i] = S[i, j]
+    q = 0.0  # S2 over Q's upper triangle
     for i in range(n):
         for j in range(i, n):
             acc = 0.0
             for k in range(n):
-                if k != i and k != j:
-                    acc += S[i, k] * S[k, j]
-            d = S[i, i] + S[j, j]
-            if acc != 0.0 and not abs(acc) <= lim * d:
+                acc += S[i, k] * S[k, j]
+            if Q[i, j] == 0.0 and acc != 0.0:  # s_i + s_j = 0 with (X X)_ij nonzero
                 return False
+            Q[i, j] = -acc * Q[i, j]
+            q = max(q, abs(Q[i, j]))
+    for i in range(n):
+        acc = 0.0
+        for k in range(n):
+            acc += abs(S[i, k])
+        x[i] = acc
+    lim = SERIES_TOL * smax
+    for i in range(n):
+        for j in range(i, n):
+            if q * (x[i] + x[j]) + 6.0 * q * q > lim * (s[i] + s[j]):
+                return False
+    for i in range(n):
+        S[i, i] = s[i] + Q[i, i]
+        for j in range(i + 1, n):
+            S[i, j] += Q[i, j]
+            S[j, i] = S[i, j]
     return True
 
 
-@njit(cache=True)
-def _add_body(W, r, im, ii):
-    """W += G^T diag(im, ii) G for one body (see ``mobility``), written out in 3 x 3
-    blocks with S = [r]x: [[im 1 - S ii S, -S ii], [ii S, ii]]."""
-    r0, r1, r2 = r[0], r[1], r[2]
-    IS = np.empty((3, 3))  # ii S
-    for a in range(3):
-        IS[a, 0] = ii[a, 1] * r2 - ii[a, 2] * r1
-        IS[a, 1] = ii[a, 2] * r0 - ii[a, 0] * r2
-        IS[a, 2] = ii[a, 0] * r1 - ii[a, 1] * r0
-    for b in range(3):
-        W[0, b] -= r1 * IS[2, b] - r2 * IS[1, b]  # (S ii S)[., b]
+@njit(cache=True, inline="always")
+def _add_body(W, IS, r, im, ii, c):
+    """W += G^T diag(im, ii[c]) G for one body (see ``mobility``) at its point r[c], written
+    out in 3 x 3 blocks with S = [r]x: [[im 1 - S ii S, -S ii], [ii S, ii]]; only the lower
+    triangle, which the Cholesky factor reads (W is symmetric). IS: 3 x 3 work array."""
+    r0, r1, r2 = r[c, 0], r[c, 1], r[c, 2]
+    for a in range(3):  # ii S
+        IS[a, 0] = ii[c, a, 1] * r2 - ii[c, a, 2] * r1
+        IS[a, 1] = ii[c, a, 2] * r0 - ii[c, a, 0] * r2
+        IS[a, 2] = ii[c, a, 0] * r1 - ii[c, a, 1] * r0
+    W[0, 0] -= r1 * IS[2, 0] - r2 * IS[1, 0]  # (S ii S)[a, b], b <= a
+    for b in range(2):
         W[1, b] -= r2 * IS[0, b] - r0 * IS[2, b]
+    for b in range(3):
         W[2, b] -= r0 * IS[1, b] - r1 * IS[0, b]
-        W[0, 3 + b] -= r1 * ii[2, b] - r2 * ii[1, b]  # (S ii)[., b]
-        W[1, 3 + b] -= r2 * ii[0, b] - r0 * ii[2, b]
-        W[2, 3 + b] -= r0 * ii[1, b] - r1 * ii[0, b]
     for a in range(3):
         W[a, a] += im
         for b in range(3):
             W[3 + a, b] += IS[a, b]
-            W[3 + a, 3 + b] += ii[a, b]
+        for b in range(a + 1):
+            W[3 + a, 3 + b] += ii[c, a, b]
 
 
 @njit(cache=True)
@@ -599,9 +625,10 @@ def damping_wrenches(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, 
 def damping_wrenches_warm(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, iib, twist,
                           fn_el, fs, mu, lever, basis, warm, chunks=1):
     """``damping_wrenches`` with each contact's modal basis carried between steps:
-    ``basis`` (m,6,6) holds on entry, where ``warm``, the contact's eigenvectors of the
-    previous step (of B = L^T K L, the scaled stiffness), and on exit this step's, for every
-    contact damped here (``_jacobi_sqrt``). A basis that is not one (zeros, NaN) gives a cold
+    ``basis`` (m,6,6) holds on entry, where ``warm``, the contact's eigenvectors of an
+    earlier step (of B = L^T K L, the scaled stiffness), and on exit the basis this step's
+    square root was taken in, for every contact damped here (``_jacobi_sqrt``: refreshed
+    when the step's B has moved too far from it). A basis that is not one (zeros, NaN) gives a cold
     solve. The result is the cold solve's to ~1e-9 of the largest wrench (while a contact
     slips the twist about n has no stiffness: the square root of B's zero eigenvalue
     amplifies round-off).
@@ -629,12 +656,16 @@ def damping_wrenches_warm(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, 
 def _damp_range(c0, c1, n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, iib, twist, fn_el, fs, mu, lever,
                 basis, warm, fd, md, om):
     """``damping_wrenches_warm``'s contacts c0 <= c < c1 into fd, md, om (and basis)."""
-    W = np.empty((6, 6))
+    W = np.empty((6, 6))  # its lower triangle
+    IS = np.empty((3, 3))
     K = np.empty((6, 6))
     L = np.empty((6, 6))
     KL = np.empty((6, 6))
     B = np.empty((6, 6))
-    T6 = np.empty((6, 6))  # work array of _jacobi_sqrt
+    T6 = np.empty((6, 6))  # work arrays of _jacobi_sqrt
+    Q6 = np.empty((6, 6))
+    s6 = np.empty(6)
+    x6 = np.empty(6)
     w6 = np.empty(6)
     A6 = np.empty((6, 6))
     Rr = np.empty((3, 3))
@@ -645,9 +676,11 @@ def _damp_range(c0, c1, n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, ii
     for c in range(c0, c1):
         if xi[c] <= 0.0 or parea[c] <= 0.0:
             continue
-        W[:, :] = 0.0
-        _add_body(W, ra[c], ima[c], iia[c])
-        _add_body(W, rb[c], imb[c], iib[c])
+        for i in range(6):
+            for j in range(i + 1):
+                W[i, j] = 0.0
+        _add_body(W, IS, ra, ima[c], iia, c)
+        _add_body(W, IS, rb, imb[c], iib, c)
         # K at the patch centroid: K_n A n n^T + K_t A (1 - n n^T); K_n [n]x J [n]x^T
         nc = n[c]
         n0, n1, n2 = nc[0], nc[1], nc[2]
@@ -663,14 +696,12 @@ def _damp_range(c0, c1, n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, ii
         for a in range(3):
             for b in range(3):
                 Rr[a, b] = SJ[a, 0] * S[b, 0] + SJ[a, 1] * S[b, 1] + SJ[a, 2] * S[b, 2]
-        K[:, :] = 0.0
-        for a in range(3):
+        for a in range(3):  # (the blocks off the diagonal are zero, never read)
             for b in range(3):
                 nn = nc[a] * nc[b]
                 K[a, b] = kna * nn + kta * ((1.0 if a == b else 0.0) - nn)
                 K[3 + a, 3 + b] = kn[c] * Rr[a, b] + ktj * nn
-        # Cholesky W = L L^T
-        L[:, :] = 0.0
+        # Cholesky W = L L^T (L's lower triangle; its upper one is zero, never read)
         ok = True
         for i in range(6):
             for j in range(i + 1):
@@ -688,25 +719,25 @@ def _damp_range(c0, c1, n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, ii
                 break
         if not ok:
             continue
-        # B = L^T K L (K block diagonal; L lower triangular)
+        # B = L^T K L (K block diagonal, L lower triangular: the sums skip their zero terms)
         for i in range(6):
-            for j in range(6):
+            lo = 0 if i < 3 else 3
+            for j in range(lo + 3):  # KL[i, j] = 0 for j > lo + 2
                 acc = 0.0
-                lo = 0 if i < 3 else 3
-                for k in range(lo, lo + 3):
+                for k in range(max(lo, j), lo + 3):
                     acc += K[i, k] * L[k, j]
                 KL[i, j] = acc
         for i in range(6):
             for j in range(i, 6):
                 acc = 0.0
-                for k in range(i, 6):
+                for k in range(max(i, 3) if j > 2 else i, 6):
                     acc += L[k, i] * KL[k, j]
                 B[i, j] = acc
         for i in range(6):
             for j in range(i + 1, 6):
                 B[j, i] = B[i, j]
         V6 = basis[c]
-        lmax, series = _jacobi_sqrt(B, T6, A6, V6, warm[c])
+        lmax, series = _jacobi_sqrt(B, T6, Q6, s6, x6, A6, V6, warm[c])
         om[c] = np.sqrt(lmax)
         # y = L^-1 u (forward), z = B^1/2 y, w = L^-T z (backward); wrench = -2 xi w
         for i in range(6):
