@@ -358,7 +358,8 @@ def critical_time_step(mass, stiffness, damping_ratio=0.0) -> float:
 # that basis nearly diagonalises B, else cyclic Jacobi rotations, 6 x 6), and
 # C u = 2 xi L^-T B^1/2 L^-1 u by triangular solves.
 
-@njit(cache=True, inline="always")
+# not inlined into the contact loop: numba then took 290 s to compile the damping (47 s so)
+@njit(cache=True, _nrt=False)  # it allocates nothing: no reference counts on its arrays
 def _jacobi_sqrt(B, T, Q, s6, x6, A, V, warm):
     """B^1/2 = V diag(A) V^T for a symmetric positive semi-definite 6 x 6 B: on exit V
     holds B's eigenvectors (columns) and A's diagonal the square roots of its eigenvalues
