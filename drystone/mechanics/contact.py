@@ -358,7 +358,7 @@ def critical_time_step(mass, stiffness, damping_ratio=0.0) -> float:
 # that basis nearly diagonalises B, else cyclic Jacobi rotations, 6 x 6), and
 # C u = 2 xi L^-T B^1/2 L^-1 u by triangular solves.
 
-# not inlined into the contact loop: numba then took 290 s to compile the damping (47 s so)
+# called, not inlined into the contact loop: inlined, numba took 290 s to compile the damping (47 s called)
 @njit(cache=True, _nrt=False)  # it allocates nothing: no reference counts on its arrays
 def _jacobi_sqrt(B, T, Q, s6, x6, A, V, warm):
     """B^1/2 = V diag(A) V^T for a symmetric positive semi-definite 6 x 6 B: on exit V
@@ -372,9 +372,10 @@ def _jacobi_sqrt(B, T, Q, s6, x6, A, V, warm):
     until a step's B has moved too far from it for the series, when sweeps refresh it;
     cyclic Jacobi is quadratically convergent; the result is a cold solve's to ~1e-9 of the
     largest eigenvalue's scale). The largest eigenvalue returned is V^T B V's largest
-    diagonal entry, to the square of V's misalignment (~1e-10 relative). A basis whose columns have drifted from unit length (round-off over many
-    steps: > 1e-13) is re-orthonormalised first (modified Gram-Schmidt); one with a column
-    far from unit length or not finite is not used."""
+    diagonal entry, to the square of V's misalignment (~1e-10 relative). A basis whose
+    columns have drifted from unit length (round-off over many steps: > 1e-13) is
+    re-orthonormalised first (modified Gram-Schmidt); one with a column far from unit
+    length or not finite is not used."""
     n = 6
     drift = False
     if warm:
