@@ -9,10 +9,10 @@ from pathlib import Path as _Path
 
 __version__ = "0.1.0"
 
-#: the modules with numba kernels (``@njit(cache=True)``)
+#: the modules with numba kernels (``@njit(cache=True)``), and numba_cache (its ``FIRST`` is compiled in)
 _KERNEL_SOURCES = ("mechanics/overlap.py", "mechanics/contact.py", "mechanics/contact_step.py",
                    "mechanics/contact_rows.py", "mechanics/neighbours.py", "mechanics/energy.py",
-                   "mechanics/integration.py")
+                   "mechanics/integration.py", "numba_cache.py")
 
 
 def _numba_cache_dir() -> None:

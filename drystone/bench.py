@@ -517,7 +517,7 @@ def step_times(run_dir: Path, budget_s: float = 1.0) -> dict:
     return {"contacts": int(len(step.keys)), "forces_ms": t1, "forces_ms_2_threads": t2,
             "forces_efficiency": t1 / (2.0 * t2), "threads_available": step2.threads,
             "integrate_ms": _best_ms(lambda: integration.integrate(dt, np.zeros(3), F, T, m_int, inertia, free, free,
-                                                          moving.copy(), *state), budget_s / 2)}
+                                                          moving.copy(), *state, 1), budget_s / 2)}
 
 
 def scale_section(workdir: Path, sizes=SIZES, walls=WALLS, steps: int = 300, engines=None) -> dict:

@@ -34,10 +34,20 @@ import functools
 import os
 
 import numba
+import numpy as np
 from numba.core import caching, config
 
 #: the lock file in the cache's root
 LOCK_NAME = ".drystone-lock"
+
+#: the first row of a kernel's range where its caller does all rows on its own thread
+#: (``_damp_range(FIRST, m, ...)``): a literal 0 there is typed as the constant 0
+#: (``Literal[int](0)``), not int64, and numba compiles the range kernel a second time for
+#: it beside the threads' ``_damp_range(t * m // nt, ...)``; a numpy integer is typed int64.
+#: Likewise a kernel called from compiled code and from Python takes no argument with a
+#: default: an omitted argument is a type of its own, another compilation of the kernel
+#: and of what it calls (together 30-60 s of a fresh cache's first run)
+FIRST = np.int64(0)
 
 
 @contextlib.contextmanager

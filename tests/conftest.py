@@ -36,10 +36,13 @@ def have_yade() -> bool:
 
 requires_yade = pytest.mark.skipif(not have_yade(), reason="YADE is not installed (run make setup)")
 
-#: the smallest run through the default step engine: one box settling for a few steps
+#: the smallest run through the default step engine: one box settling for a few steps, several
+#: between two samples (the compiled call of many steps, ``CompiledStep.advance``, as well)
 _WARM_CASE = {"case": {"name": "numba_warm", "geometry": {"generator": "boxes_on_platform", "mu": 0.6, "boxes": [
     {"id": 1, "center_xy": [0.0, 0.0], "size": [0.4, 0.4, 0.2]}]}},
-    "stages": [{"type": "gravity", "duration": 0.002, "ramp": 0.001}], "output": {"interval": 0.001}}
+    "stages": [{"type": "gravity", "duration": 0.01, "ramp": 0.005}], "output": {"interval": 0.005}}
+#: the same case through the other engines' kernels (the numpy law; YADE's contact geometry)
+_WARM_OTHERS = (["--engine", "python"], ["--set", "contact.detection=yade"])
 #: cost of the test files (s), to order the files for ``-n N``: each file's tests' durations summed
 #: (setup, call, teardown) in one run of the whole suite as ``make test`` runs it (``-n 2``, nice)
 #: on a shared 2-core machine, so only their ratios matter; files not here (under 3 s) are costed
@@ -64,10 +67,15 @@ _COST_S = {"slow": 30.0, "yade": 3.0, "other": 0.3}
 
 def pytest_configure(config):
     """In the controller of a parallel run (``-n N``: it runs no test itself) with numba's cache
-    cold, compile the contact kernels once, by running the smallest case, before the workers
-    start: otherwise each worker, and each YADE run a test starts before the cache is written,
-    compiles them on its own (60-90 s of a core each)."""
+    cold, compile the contact kernels once, before the workers start: otherwise each worker,
+    and each YADE run a test starts before the cache is written, compiles them on its own
+    (60-90 s of a core each). The smallest case runs through the compiled step here and,
+    meanwhile on the other core, through the other engines' kernels (``_WARM_OTHERS``, one
+    command-line run each: a second YADE)."""
+    import subprocess
+    import sys
     import tempfile
+    import threading
 
     import drystone
 
@@ -75,10 +83,22 @@ def pytest_configure(config):
     if not parallel or config.option.collectonly or drystone.kernels_cached() or not have_yade():
         return
     from drystone import runner, simulate
+    from drystone.tomlio import to_toml
 
-    print("conftest: numba's cache is cold: compiling the contact kernels once (60-90 s)", flush=True)
+    print("conftest: numba's cache is cold: compiling the contact kernels once (about a minute)", flush=True)
     with tempfile.TemporaryDirectory(prefix="drystone-warm-") as d:
-        runner.run_dict(_WARM_CASE, Path(d) / "warm.toml", out_dir=Path(d) / "out", quiet=True)
+        case = Path(d) / "warm.toml"
+
+        def others():
+            for k, args in enumerate(_WARM_OTHERS):
+                subprocess.run([sys.executable, "-m", "drystone", "run", str(case), "--out", f"{d}/other{k}", "-q", *args],
+                               capture_output=True)
+
+        case.write_text(to_toml(_WARM_CASE))
+        second = threading.Thread(target=others)
+        second.start()
+        runner.run(case, out_dir=Path(d) / "out", quiet=True)
+        second.join()
     simulate.end_workers()  # this process runs no test: its YADE worker would idle all session
 
 

@@ -126,7 +126,7 @@ def test_integrate_uniform_acceleration_is_leapfrog_exact():
     F = np.array([[4.0, 4.0, 0.0]])
     dt, n = 1e-3, 500
     for _ in range(n):
-        integration.integrate(dt, g, F, np.zeros((1, 3)), m, I, lin, rf, asph, pos, vel, angvel, angmom, quat, rot)
+        integration.integrate(dt, g, F, np.zeros((1, 3)), m, I, lin, rf, asph, pos, vel, angvel, angmom, quat, rot, 1)
     # leapfrog from rest: v = n a dt, x = a dt^2 n (n + 1) / 2 (exact for a constant force)
     a = np.array([2.0, 0.0, -9.81])  # y blocked
     np.testing.assert_allclose(vel[0], n * a * dt, rtol=tol.EXACT_REL)
@@ -141,7 +141,7 @@ def _spin(dt, t_end=2.5):
     e0 = 0.5 * np.sum(L0 * L0 / I[0])
     for _ in range(int(round(t_end / dt))):
         integration.integrate(dt, np.zeros(3), np.zeros((1, 3)), np.zeros((1, 3)), m, I, lin, rf, asph, pos, vel, angvel,
-                     angmom, quat, rot)
+                              angmom, quat, rot, 1)
     assert abs(np.linalg.norm(quat[0]) - 1) < 10 * tol.FEW_ULP_REL
     wl = rot[0].T @ angvel[0]  # body-frame angular velocity at the last half step
     return angmom[0].copy(), 0.5 * np.sum(I[0] * wl * wl) / e0 - 1
@@ -167,7 +167,8 @@ def test_integrate_blocked_rotation_spins_about_the_free_axis():
     T = np.array([[1.0, 5.0, 5.0]])
     dt, n = 1e-3, 1000
     for _ in range(n):
-        integration.integrate(dt, np.zeros(3), np.zeros((1, 3)), T, m, I, lin, rf, asph, pos, vel, angvel, angmom, quat, rot)
+        integration.integrate(dt, np.zeros(3), np.zeros((1, 3)), T, m, I, lin, rf, asph, pos, vel, angvel, angmom, quat,
+                              rot, 1)
     assert angvel[0, 1] == 0 and angvel[0, 2] == 0
     np.testing.assert_allclose(angvel[0, 0], n * dt * 0.5, rtol=tol.EXACT_REL)
     angle = 0.5 * dt * dt * n * (n + 1) / 2  # sum of w_k dt
@@ -180,7 +181,7 @@ def test_non_moving_body_moves_with_its_velocity():
     vel[0] = [0.0, 0.0, -0.01]
     for _ in range(100):
         integration.integrate(1e-3, np.array([0.0, 0.0, -9.81]), np.ones((1, 3)), np.ones((1, 3)), m, I, lin, rf, asph, pos,
-                     vel, angvel, angmom, quat, rot)
+                              vel, angvel, angmom, quat, rot, 1)
     np.testing.assert_allclose(vel[0], [0.0, 0.0, -0.01])
     np.testing.assert_allclose(pos[0], [0.0, 0.0, -1e-3], rtol=tol.EXACT_REL)
 

@@ -232,14 +232,14 @@ def test_warm_start_gives_the_cold_result_and_survives_a_broken_basis():
     args = (n, area, pj, kn, kt, xi, stick, ra, rb, ima, imb, iia, iib, twist, fn, fs, mu, lever)
     f0, m0, om0 = law.damping_wrenches(*args)
     basis = np.zeros((m, 6, 6))
-    law.damping_wrenches_warm(*args[:5], 0.999 * xi, *args[6:], basis, np.zeros(m, bool))  # modes of this state
+    law.damping_wrenches_warm(*args[:5], 0.999 * xi, *args[6:], basis, np.zeros(m, bool), 1)  # modes of this state
     ra2 = ra + 1e-3 * rng.normal(size=(m, 3))  # a nearby state: its modes are the start
     near = basis.copy()
     law.damping_wrenches_warm(n, area, pj, kn, kt, xi, stick, ra2, rb, ima, imb, iia, iib, twist, fn, fs, mu, lever,
-                              near, np.zeros(m, bool))
+                              near, np.zeros(m, bool), 1)
     starts = {"near": near, "identity": np.tile(np.eye(6), (m, 1, 1)), "nan": np.full((m, 6, 6), np.nan)}
     for name, b in starts.items():
-        f1, m1, om1 = law.damping_wrenches_warm(*args, b.copy(), np.ones(m, bool))
+        f1, m1, om1 = law.damping_wrenches_warm(*args, b.copy(), np.ones(m, bool), 1)
         assert np.allclose(f1, f0, rtol=0, atol=tol.KERNEL_REL * np.abs(f0).max()), name
         assert np.allclose(m1, m0, rtol=0, atol=tol.KERNEL_REL * np.abs(m0).max()), name
         assert np.allclose(om1, om0, rtol=tol.NUMERICAL_REL), name

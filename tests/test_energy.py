@@ -130,7 +130,7 @@ def _drop(dt, steps, xi=0.0, push=0.0, height=0.0, chunk=25, split=True, spin=0.
                      *step.energy])
         for k in range(chunk):
             v0, w0 = vel.copy(), angvel.copy()
-            integration.integrate(dt, g, F, T, *motion[:5], pos, vel, angvel, angmom, quat, rot)
+            integration.integrate(dt, g, F, T, *motion[:5], pos, vel, angvel, angmom, quat, rot, 1)
             step.account(dt, g, F, T, F_ext, lin, v0, w0, vel, angvel)
             if k == chunk - 1:
                 break

@@ -28,7 +28,7 @@ def _wall():
 def _compare(s, owner, moving, L, pos, rot):
     full = ov.contacts_of_shapes(s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, owner, pos, rot, moving,
                                  ov.TOL)
-    L.arrays = nbr.update(L.arrays, s.verts, s.nv, s.normals, s.offsets, s.nf, owner, pos, rot)
+    L.arrays = nbr.update(L.arrays, s.verts, s.nv, s.normals, s.offsets, s.nf, owner, pos, rot, 1)
     m, L.contacts = nbr.search(L.arrays, L.contacts, s.nv, s.nf, s.faces, s.fk, ov.TOL, ov.TOUCHING_IS_NO_CONTACT)
     assert m == len(full[0])
     for a, b in zip(full, L.contacts[:8]):

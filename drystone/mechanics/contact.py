@@ -52,6 +52,7 @@ from numba import njit, prange
 
 from drystone.geometry import blockfile as bf
 from drystone import numba_cache
+from drystone.numba_cache import FIRST
 
 numba_cache.install()  # numba's cache safe for processes compiling at once
 
@@ -485,7 +486,7 @@ def _jacobi_sqrt(B, T, Q, s6, x6, A, V, warm):
 SERIES_TOL = 1e-16
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, _nrt=False)
 def _series_root(A, S, Q, s, x):
     """The square root S (6 x 6) of a symmetric positive semi-definite A = D + E that is
     nearly diagonal (D its diagonal), when the expansion to second order gives it to below
@@ -550,7 +551,7 @@ def _series_root(A, S, Q, s, x):
     return True
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, _nrt=False)
 def _add_body(W, IS, r, im, ii, c):
     """W += G^T diag(im, ii[c]) G for one body (see ``mobility``) at its point r[c], written
     out in 3 x 3 blocks with S = [r]x: [[im 1 - S ii S, -S ii], [ii S, ii]]; only the lower
@@ -605,27 +606,24 @@ def joint_share(ia, ib, nb, area):
     return out
 
 
-@njit(cache=True)
 def damping_wrenches(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, iib, twist,
                      fn_el, fs, mu, lever):
     """Capped damping force and moment on B at each patch centroid (m,3) + (m,3), and each
     contact's highest modal frequency omega_max (m,) rad/s. Arguments as in ``mobility``,
     ``patch_stiffness``, ``damping_matrix`` and ``cap_damping``; ``twist`` (m,6) is B's
     velocity and angular velocity relative to A at the patch centroid. Every contact is
-    solved from scratch (``damping_wrenches_warm`` reuses each contact's modes), on one
-    thread (its callers run in YADE's Python engines)."""
+    solved from scratch (``damping_wrenches_warm`` without modes to start from), on one
+    thread (its callers run in YADE's Python engines). The arrays are passed on contiguous:
+    the compiled step's call of the same kernel, not another compilation of it."""
     m = len(parea)
-    fd = np.zeros((m, 3))
-    md = np.zeros((m, 3))
-    om = np.zeros(m)
-    _damp_range(0, m, n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, iib, twist, fn_el, fs, mu, lever,
-                np.zeros((m, 6, 6)), np.zeros(m, np.bool_), fd, md, om)
-    return fd, md, om
+    args = [np.ascontiguousarray(a, bool if k == 6 else float) for k, a in enumerate(
+        (n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, iib, twist, fn_el, fs, mu, lever))]
+    return damping_wrenches_warm(*args, np.zeros((m, 6, 6)), np.zeros(m, np.bool_), 1)
 
 
 @njit(cache=True, parallel=True)
 def damping_wrenches_warm(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, iib, twist,
-                          fn_el, fs, mu, lever, basis, warm, chunks=1):
+                          fn_el, fs, mu, lever, basis, warm, chunks):
     """``damping_wrenches`` with each contact's modal basis carried between steps:
     ``basis`` (m,6,6) holds on entry, where ``warm``, the contact's eigenvectors of an
     earlier step (of B = L^T K L, the scaled stiffness), and on exit the basis this step's
@@ -645,8 +643,8 @@ def damping_wrenches_warm(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, 
     om = np.zeros(m)
     nt = max(1, chunks)  # (numba.get_num_threads() here would keep numba from caching the kernels)
     if nt == 1:  # on the calling thread
-        _damp_range(0, m, n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, iib, twist, fn_el, fs, mu, lever,
-                    basis, warm, fd, md, om)
+        _damp_range(FIRST, m, n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, iib, twist, fn_el, fs, mu,
+                    lever, basis, warm, fd, md, om)
         return fd, md, om
     for t in prange(nt):
         _damp_range(t * m // nt, (t + 1) * m // nt, n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, iib,

@@ -30,6 +30,7 @@ from numba import njit, prange
 from drystone.mechanics import contact as law
 from drystone.mechanics import energy
 from drystone import numba_cache
+from drystone.numba_cache import FIRST
 
 numba_cache.install()  # numba's cache safe for processes compiling at once
 
@@ -193,9 +194,9 @@ def law_rows(oa, ob, c, n, area, pc, pj, vol, pos, vel, angvel, rot, inv_inertia
     m = len(oa)
     nt = range_count(m, chunks)
     if nt == 1:
-        _law_range(0, m, oa, ob, c, n, area, pc, pj, vol, pos, vel, angvel, rot, inv_inertia_local, mat, table, jkeys,
-                   jvals, prev, prev_shear, prev_basis, dt, kn, kt, mu, xi, fn, fs, basis, jp, slipping, ra, rb, pa, pb,
-                   lever, twist, iia, iib, slip_terms)
+        _law_range(FIRST, m, oa, ob, c, n, area, pc, pj, vol, pos, vel, angvel, rot, inv_inertia_local, mat, table,
+                   jkeys, jvals, prev, prev_shear, prev_basis, dt, kn, kt, mu, xi, fn, fs, basis, jp, slipping, ra, rb, pa,
+                   pb, lever, twist, iia, iib, slip_terms)
     else:
         for t in prange(nt):
             _law_range(t * m // nt, (t + 1) * m // nt, oa, ob, c, n, area, pc, pj, vol, pos, vel, angvel, rot,
@@ -292,7 +293,7 @@ def _add_by_body(start, entries, fs, fn, n, fd, md, ra, rb, pa, pb, F, T, Fd, Td
     nb = len(start) - 1
     nt = range_count(nb, chunks)
     if nt == 1:
-        _body_range(0, nb, start, entries, fs, fn, n, fd, md, ra, rb, pa, pb, F, T, Fd, Td)
+        _body_range(FIRST, nb, start, entries, fs, fn, n, fd, md, ra, rb, pa, pb, F, T, Fd, Td)
     else:
         for t in prange(nt):
             _body_range(t * nb // nt, (t + 1) * nb // nt, start, entries, fs, fn, n, fd, md, ra, rb, pa, pb, F, T, Fd,
@@ -300,7 +301,7 @@ def _add_by_body(start, entries, fs, fn, n, fd, md, ra, rb, pa, pb, F, T, Fd, Td
 
 
 @njit(cache=True)
-def body_sums(oa, ob, nb, fs, fn, n, fd, md, ra, rb, pa, pb, chunks=1):
+def body_sums(oa, ob, nb, fs, fn, n, fd, md, ra, rb, pa, pb, chunks):
     """(F, T, Fd, Td) (nb, 3): the contact forces and torques on every body (N, N m) and
     those of the damping alone (energy.account): each contact's force on B, fs + fn n +
     fd at its centroids, its torque about B's centre r_b x (fs + fn n) + p_b x fd + md +

@@ -308,7 +308,7 @@ def _previous(keys, prev_keys):
 @njit(cache=True)
 def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving, inv_mass,
                     inv_inertia_local, mat, table, jkeys, jvals, prev_keys, prev_shear, prev_basis, dt, tol, size, shared,
-                    nl, buf, with_energy=True):
+                    nl, buf, with_energy):
     """One step's contacts between shapes (ia, ib: shape indices; shape s a convex part of
     body ``owner[s]``, ``size`` per shape; ``shared``: some body has several shapes) and
     the forces and torques on the bodies. The contacts come from the neighbour list ``nl``
@@ -473,7 +473,7 @@ class CompiledStep:
          self.depth_ratio, slip, Fd, Td, nl, buf) = _contact_forces(
             s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, self.owner, pos, rot, vel, angvel, self.moving,
             self.inv_mass, self.inv_inertia_local, self.material, self.table, self.jkeys, self.jvals, self.keys,
-            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared, *self._search_state())
+            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared, *self._search_state(), True)
         self._keep_search_state(nl, buf)
         self.keys, self.shear_store, self.basis_store = keys, fs, basis
         self.elastic = (self.elastic[1], e_el)
@@ -491,7 +491,7 @@ class CompiledStep:
         out = _contact_forces(
             s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, self.owner, pos, rot, vel, angvel, self.moving,
             self.inv_mass, self.inv_inertia_local, self.material, self.table, self.jkeys, self.jvals, self.keys,
-            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared, *self._search_state())
+            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared, *self._search_state(), True)
         self._keep_search_state(out[20], out[21])
         return float(out[14]), float(out[17])
 

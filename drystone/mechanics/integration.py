@@ -18,6 +18,7 @@ from numba import njit, prange
 from drystone.mechanics import rotations
 from drystone.mechanics.contact_rows import range_count
 from drystone import numba_cache
+from drystone.numba_cache import FIRST
 
 numba_cache.install()  # numba's cache safe for processes compiling at once
 
@@ -155,7 +156,7 @@ def _integrate_range(r0, r1, dt, g, F, T, mass, inertia, lin_free, rot_free, asp
 
 
 @njit(cache=True, parallel=True)
-def integrate(dt, g, F, T, mass, inertia, lin_free, rot_free, aspherical, pos, vel, angvel, angmom, quat, rot, chunks=1):
+def integrate(dt, g, F, T, mass, inertia, lin_free, rot_free, aspherical, pos, vel, angvel, angmom, quat, rot, chunks):
     """One leapfrog step of every body, in place (module docstring). ``g`` (3,) body
     acceleration m/s^2; F, T (nb, 3) N, N m; lin_free, rot_free (nb, 3) 1.0 on free
     directions (all 0 for non-moving bodies, which still move with their velocity);
@@ -165,8 +166,8 @@ def integrate(dt, g, F, T, mass, inertia, lin_free, rot_free, aspherical, pos, v
     nb = len(mass)
     nt = range_count(nb, chunks)
     if nt == 1:
-        _integrate_range(0, nb, dt, g, F, T, mass, inertia, lin_free, rot_free, aspherical, pos, vel, angvel, angmom,
-                         quat, rot)
+        _integrate_range(FIRST, nb, dt, g, F, T, mass, inertia, lin_free, rot_free, aspherical, pos, vel, angvel,
+                         angmom, quat, rot)
     else:
         for t in prange(nt):
             _integrate_range(t * nb // nt, (t + 1) * nb // nt, dt, g, F, T, mass, inertia, lin_free, rot_free,

@@ -39,6 +39,7 @@ from numba import njit, prange
 from drystone.mechanics import overlap as ov
 from drystone.mechanics.contact_rows import range_count
 from drystone import numba_cache
+from drystone.numba_cache import FIRST
 
 numba_cache.install()  # numba's cache safe for processes compiling at once
 
@@ -148,7 +149,7 @@ def _shape_geometry(verts, nv, normals, offsets, nf, owner, pos, rot, GV, GN, GD
     ns = len(nv)
     nt = range_count(ns, chunks)
     if nt == 1:
-        _shape_range(0, ns, verts, nv, normals, offsets, nf, owner, pos, rot, GV, GN, GD, lo, hi, ok)
+        _shape_range(FIRST, ns, verts, nv, normals, offsets, nf, owner, pos, rot, GV, GN, GD, lo, hi, ok)
     else:
         for t in prange(nt):
             _shape_range(t * ns // nt, (t + 1) * ns // nt, verts, nv, normals, offsets, nf, owner, pos, rot, GV, GN, GD,
@@ -198,7 +199,7 @@ def _build(lo, hi, ok, moving_s, owner, half_skin):
 
 
 @njit(cache=True)
-def update(nl, verts, nv, normals, offsets, nf, owner, pos, rot, chunks=1):
+def update(nl, verts, nv, normals, offsets, nf, owner, pos, rot, chunks):
     """The shapes' global geometry into the list's work arrays, and the list rebuilt if it
     is stale (``_stale``) or invalidated; returns the list's arrays (new pair arrays after
     a rebuild). ``chunks``: ranges of shapes for numba's threads (``_shape_geometry``)."""
@@ -235,8 +236,8 @@ def search(nl, buf, nv, nf, faces, fk, tol, touching):
     id1, id2, vol, cen, nrm, area, pc, pj, polys, counts, A, B, S, g, hit, areas = buf
     nt = range_count(n, polys.shape[0])
     if nt == 1:
-        _search_range(0, n, la, lb, ok, lo, hi, GV, GN, GD, nv, nf, faces, fk, tol, touching, polys[0], counts[0], A[0],
-                      B[0], S[0], areas[0], g[0], id1, id2, vol, cen, nrm, area, pc, pj, hit)
+        _search_range(FIRST, n, la, lb, ok, lo, hi, GV, GN, GD, nv, nf, faces, fk, tol, touching, polys[0], counts[0],
+                      A[0], B[0], S[0], areas[0], g[0], id1, id2, vol, cen, nrm, area, pc, pj, hit)
     else:
         for r in prange(nt):
             t = numba.get_thread_id()

@@ -365,7 +365,7 @@ class CompiledEngine(Engine):
         run = self.run
         v0, w0 = self._velocities_before(), run.angvel.copy()
         integration.integrate(dt, g, F, T, self.mass_int, self.inertia_int, self.lin_free, self.rot_free, self.aspherical,
-                     run.pos, run.vel, run.angvel, self.angmom, run.quat, run.rot)
+                              run.pos, run.vel, run.angvel, self.angmom, run.quat, run.rot, 1)
         loads = None if c is None else (c, run.loads.force, run.loads.moment, self.rot_free)
         self.step.account(dt, g, F, T, F_ext, self.lin_free, v0, w0, run.vel, run.angvel, loads)
 
