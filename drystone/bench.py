@@ -41,6 +41,11 @@
                   fingerprint); ``--tolerance`` (g, ``FRAGILITY_TOLERANCE``) and
                   ``--duration`` (s of each record from 1 s before its peak; default whole)
                   trade precision for runs and simulated time.
+``compile``       the 40-block wall for ``WARM`` steps through the compiled step in a fresh
+                  process on an empty numba cache (what the first run after a change of the
+                  kernels' sources, or on a fresh clone, pays), then again on the cache it
+                  left: the wall seconds of each, their difference (the compilation) and the
+                  kernels' compiled overloads (numba's cache files).
 
 ms per step: a run's YADE wall time has a fixed start-up (about a second: the first step
 loads the compiled kernels) besides its steps, so each measured run goes with a short one
@@ -73,7 +78,7 @@ from drystone.mechanics import laws
 
 from drystone import paths, runner
 
-SECTIONS = ("running_bond", "scale", "threads", "sacsayhuaman", "limit", "fragility_ida")
+SECTIONS = ("running_bond", "scale", "threads", "sacsayhuaman", "limit", "fragility_ida", "compile")
 
 CASE = {
     "case": {"name": "bench_running_bond", "geometry": {"generator": "running_bond"}},
@@ -790,6 +795,34 @@ def print_sacsayhuaman(sacs: list[dict]) -> None:
               f"{done}", flush=True)
 
 
+# -- e: compilation on a cold cache ----------------------------------------------------------
+
+def compile_section(workdir: Path) -> dict:
+    """The ``compile`` section (module docstring): one ``python -m drystone run`` of the
+    40-block wall's ``warm_case`` (several steps in one compiled call, as a run's) on an
+    empty numba cache of its own (``NUMBA_CACHE_DIR``), then one more on what it wrote."""
+    from drystone.tomlio import to_toml
+
+    dt = time_step(build_wall(CASE["case"]["geometry"]))
+    case_path = workdir / "compile.toml"
+    atomic.write_text(case_path, to_toml(warm_case(CASE, dt)))
+    cache = workdir / "numba_cache_cold"
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
+    out: dict = {}
+    print("\ncompile: the 40-block wall's first steps on an empty numba cache, then on the one it wrote:", flush=True)
+    for tag in ("cold", "warm"):
+        t0 = time.perf_counter()
+        subprocess.run([sys.executable, "-m", "drystone", "run", str(case_path), "--out", str(workdir / f"compile_{tag}"),
+                        "-q", "--set", "contact.law=penalty_coulomb", "--set", "contact.detection=native"], env=env,
+                       check=True, capture_output=True)
+        out[f"{tag}_s"] = time.perf_counter() - t0
+    out["compile_s"] = out["cold_s"] - out["warm_s"]
+    out["overloads"] = len(list(cache.rglob("*.nbc")))
+    print(f"  {out['cold_s']:.1f} s on the empty cache, {out['warm_s']:.1f} s on the full one: {out['compile_s']:.1f} s "
+          f"compiling {out['overloads']} overloads", flush=True)
+    return out
+
+
 # -- main ----------------------------------------------------------------------------------
 
 def write_results(results: dict, path: Path | None = None) -> Path:
@@ -936,7 +969,7 @@ def main(only=None, sizes=SIZES, walls=WALLS, steps: int = 300, engines=None, fr
     t0 = time.time()
     with tempfile.TemporaryDirectory(dir=paths.ROOT) as tmp:
         tmp = Path(tmp)
-        if set(only) - {"limit", "fragility_ida"}:  # the limit analysis runs no YADE; fragility primes itself
+        if set(only) - {"limit", "fragility_ida", "compile"}:  # limit: no YADE; fragility primes; compile: a cold cache
             prime(tmp)
         if "running_bond" in only:
             results["running_bond"] = running_bond_section(tmp)
@@ -954,6 +987,8 @@ def main(only=None, sizes=SIZES, walls=WALLS, steps: int = 300, engines=None, fr
             results["limit"] = {"rows": limit_section(), "machine": facts}
         if "fragility_ida" in only:
             results["fragility_ida"] = dict(fragility_section(**(fragility or {})), machine=facts)
+        if "compile" in only:
+            results["compile"] = dict(compile_section(tmp), machine=facts)
     results["machine"] = dict(facts, sections=only, wall_s=time.time() - t0)
     out = write_results(results)
     print(f"written {out} ({time.time() - t0:.0f} s)")
