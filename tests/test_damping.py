@@ -243,3 +243,68 @@ def test_warm_start_gives_the_cold_result_and_survives_a_broken_basis():
         assert np.allclose(f1, f0, rtol=0, atol=tol.KERNEL_REL * np.abs(f0).max()), name
         assert np.allclose(m1, m0, rtol=0, atol=tol.KERNEL_REL * np.abs(m0).max()), name
         assert np.allclose(om1, om0, rtol=tol.NUMERICAL_REL), name
+
+
+def _near_basis(rng, eps):
+    """A symmetric positive definite 6 x 6 B (eigenvalues 1e2-1e8, a contact's omega^2 spread)
+    and an orthonormal basis V within ``eps`` rad of its eigenvectors; B's exact square root."""
+    from scipy.linalg import expm
+
+    Q, _ = np.linalg.qr(rng.normal(size=(6, 6)))
+    lam = 10.0 ** rng.uniform(2.0, 8.0, 6)
+    skew = rng.normal(size=(6, 6))
+    V = Q @ expm(eps * (skew - skew.T) / 2.0)
+    B = (Q * lam) @ Q.T
+    return 0.5 * (B + B.T), V, (Q * np.sqrt(lam)) @ Q.T
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_series_root_is_the_square_root_where_it_accepts(seed):
+    """The series square root (contact._series_root) of A = S S for a known S = diag(s) + Y
+    (Y 3e-6 of s off the diagonal: a warm start's misalignment) is accepted and is S to
+    SERIES_EXACT_REL of the largest root, where its first order alone is 100 times further
+    off. Then through ``_jacobi_sqrt``: on a basis V within 1e-8 rad of the eigenvectors of
+    B the series is taken, the basis kept, and V S V^T is the cold sweeps' root and B's
+    exact one to SERIES_ROOT_REL."""
+    rng = np.random.default_rng(seed)
+    sq = 10.0 ** rng.uniform(3.0, 4.0, 6)
+    Y = 3e-6 * rng.uniform(-1.0, 1.0, (6, 6)) * (sq[:, None] + sq[None, :]) / 2.0
+    Y = 0.5 * (Y + Y.T)
+    np.fill_diagonal(Y, 0.0)
+    known = np.diag(sq) + Y
+    A = known @ known
+    S, Q, s, x = np.empty((6, 6)), np.empty((6, 6)), np.empty(6), np.empty(6)
+    assert law._series_root(0.5 * (A + A.T), S, Q, s, x)
+    assert np.abs(S - known).max() <= tol.SERIES_EXACT_REL * sq.max()
+    d = np.sqrt(np.diag(A))
+    first = np.diag(d) + (A - np.diag(np.diag(A))) / (d[:, None] + d[None, :])
+    assert np.abs(first - known).max() > 100 * tol.SERIES_EXACT_REL * sq.max()  # the second order shows
+
+    B, V, exact = _near_basis(rng, 1e-8)
+    scale = np.sqrt(np.linalg.eigvalsh(B).max())
+
+    def root(warm, start):  # B^1/2 by _jacobi_sqrt: V A V^T, A diagonal unless the series gave it
+        basis, T, Q6, A6 = start.copy(), np.empty((6, 6)), np.empty((6, 6)), np.empty((6, 6))
+        _, series = law._jacobi_sqrt(B.copy(), T, Q6, s, x, A6, basis, warm)
+        return basis @ (A6 if series else np.diag(np.diag(A6))) @ basis.T, series, basis
+
+    cold, _, _ = root(False, np.eye(6))  # sweeps from the identity
+    assert np.abs(cold - exact).max() <= tol.SERIES_ROOT_REL * scale
+    warm, series, basis = root(True, V)
+    assert series and np.array_equal(basis, V)  # no sweep: the basis kept, the series' root in it
+    assert np.abs(warm - cold).max() <= tol.SERIES_ROOT_REL * scale
+
+
+def test_series_root_refuses_what_its_bound_does_not_cover():
+    """The series is refused (Jacobi sweeps go on) for a basis 1e-3 rad off B's eigenvectors
+    (its dropped third-order terms above SERIES_TOL of the largest root) and for a zero
+    diagonal entry coupled to the others (a slipping contact's twist: s_i + s_j = 0)."""
+    rng = np.random.default_rng(7)
+    B, V, _ = _near_basis(rng, 1e-3)
+    S, Q, s, x = np.empty((6, 6)), np.empty((6, 6)), np.empty(6), np.empty(6)
+    assert not law._series_root(V.T @ B @ V, S, Q, s, x)
+    A = np.diag([1e6, 2e6, 3e6, 4e6, 5e6, 0.0])
+    A[5, 4] = A[4, 5] = 1e-3
+    assert not law._series_root(A, S, Q, s, x)
+    A[5, 4] = A[4, 5] = 0.0  # uncoupled, a zero eigenvalue is exact: root 0 there
+    assert law._series_root(A, S, Q, s, x) and np.array_equal(S, np.diag(np.sqrt(np.diag(A))))

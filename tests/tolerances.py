@@ -201,6 +201,18 @@ FLAT_SLAB_COUPLING_REL = 1e-4
 #: the Cholesky + Jacobi kernel and scipy agree to ~2e-6 on these contacts: 1e-5 of the
 #: largest wrench
 KERNEL_REL = 1e-5
+#: the damping's second-order series square root (contact._series_root) of A = S S for a
+#: known S = diag(s) + Y, s_i 1e3-1e4, Y 3e-6 of s off the diagonal: A's entries (<= s_max^2)
+#: are rounded by ~2 eps s_max^2, which moves the root by that over s_i + s_j >= 2 s_min:
+#: eps s_max (s_max / s_min) = 2.2e-15 of the largest root; the terms the series drops are
+#: below SERIES_TOL (1e-16) of it: 1e-14. The first order alone (no S2 = -X X / (s_i + s_j))
+#: is off by ~Y^2 / s, 2e-12 to 5e-12 of it (the test checks that it shows above 1e-12)
+SERIES_EXACT_REL = 1e-14
+#: the same series inside ``_jacobi_sqrt`` on a basis V within 1e-8 rad of the eigenvectors
+#: of B (eigenvalues 1e2-1e8, a contact's omega^2 spread), against the cold sweeps' root:
+#: forming V^T B V rounds its entries by ~6 eps lambda_max = 1.3e-7, which moves the root by
+#: that over s_i + s_j >= 20: 7e-9, 7e-13 of the largest root (1e4); 1e-11
+SERIES_ROOT_REL = 1e-11
 #: free decay in YADE, damping ratio by logarithmic decrement (the issue's 20 %): the
 #: integration lags the dashpot by half a step (omega dt / 2 < 0.02), the projection on
 #: approximate modes leaves a few per cent of coupling, and the decrement is read from
