@@ -328,19 +328,34 @@ def bench(results: Path) -> str:
     if sc:
         out += ["", "Large walls under gravity (one thread, native geometry):", "",
                 "| wall | stones | ms/step | contacts | µs per contact-step | contact search alone (ms) | "
-                "contact forces alone (ms) | integration alone (ms) |",
-                "|---|---|---|---|---|---|---|---|"]
+                "contact forces alone (ms) | integration alone (ms) | settled step alone, µs per contact-step |",
+                "|---|---|---|---|---|---|---|---|---|"]
+        effs = []
         for r in sc:
             if "failed" in r:
-                out.append(f"| {r['wall']} | {r['stones']} | failed | - | - | - | - | - |")
+                out.append(f"| {r['wall']} | {r['stones']} | failed | - | - | - | - | - | - |")
                 continue
             split = r.get("split") or {}  # bench.json of runs before the split was timed: "-"
             halves = " | ".join(f"{split[k]:.3f}" if k in split else "-" for k in ("forces_ms", "integrate_ms"))
+            alone = f"{r['advance_us_per_contact_step']:.2f}" if "advance_us_per_contact_step" in r else "-"
             out.append(f"| {r['wall']} | {r['stones']} | {r['ms_per_step']:.2f} | {r['final_contacts']} | "
-                       f"{r['us_per_contact_step']:.1f} | {r['search']['search_ms']:.2f} | {halves} |")
+                       f"{r['us_per_contact_step']:.1f} | {r['search']['search_ms']:.2f} | {halves} | {alone} |")
+            if "advance_efficiency" in split and "parallel_efficiency" in r:
+                effs.append(f"{r['wall']} {r['stones']}: {split['advance_efficiency']:.2f} (the settled step, 1 and 2 "
+                            f"threads alternating), {r['parallel_efficiency']:.2f} (the two runs)")
+        out += ["", "The settled step alone: `CompiledStep.advance` on the run's last state outside YADE, the fastest "
+                    "of 20 rounds alternating with 2 threads (less disturbed by the machine's other load than the "
+                    "run's ms/step)."]
+        if effs:
+            out += ["", "Parallel efficiency t1 / (2 t2) on 2 threads: " + "; ".join(effs) + "."]
         g = d["scale"].get("growth_exponent") or {}
         if g:
             out += ["", "Cost ~ N^k: " + ", ".join(f"{k} k = {v:.2f}" for k, v in g.items()) + "."]
+    cp = d.get("compile") or {}
+    if cp:
+        out += ["", f"Compilation (the 40-block wall's first run on an empty numba cache): {cp['cold_s']:.0f} s, against "
+                    f"{cp['warm_s']:.1f} s on the cache it wrote: {cp['compile_s']:.0f} s compiling {cp['overloads']} "
+                    "kernel overloads."]
     th = d.get("threads") or {}
     if th.get("rows"):
         out += ["", "Threads (40-block wall, ms/step): " + "; ".join(
