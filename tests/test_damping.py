@@ -154,7 +154,7 @@ def test_free_decay_rocking_and_sliding(outdir, detection, xi):
 
 @pytest.mark.parametrize("sticking", [True, False])
 def test_compiled_kernel_matches_the_reference(sticking):
-    """``damping_wrenches`` (numba, used in YADE) = mobility -> patch_stiffness ->
+    """``damping_wrenches`` (the numba kernel, cold) = mobility -> patch_stiffness ->
     damping_matrix -> cap_damping (numpy) on random contacts, caps included. Tolerance
     1e-5 of the largest wrench: the square root of a semi-definite matrix loses digits
     near its null space (the twist has no stiffness): numpy's eigh, this Cholesky + Jacobi
