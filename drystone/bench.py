@@ -441,27 +441,11 @@ def settled_configuration(run_dir: Path):
     return ov.Shapes(local), np.array(pos), np.array(rot), np.array(moving), np.array(owner, np.int64)
 
 
-def _best_ms(fn, budget_s: float = 1.0, repeats: int = 3) -> float:
-    """Fastest of ``repeats`` means over ~budget_s / repeats of calls (ms): the least
-    disturbed by other jobs."""
-    fn()  # compiled / loaded from numba's cache
-    best = math.inf
-    for _ in range(repeats):
-        t0, k = time.perf_counter(), 0
-        while True:
-            fn()
-            k += 1
-            dt = time.perf_counter() - t0
-            if dt > budget_s / repeats:
-                break
-        best = min(best, dt / k)
-    return 1e3 * best
-
-
 def _interleaved_ms(fns, budget_s: float = 1.0, rounds: int = 6) -> list[float]:
     """Fastest ms per call of each of ``fns``, timed in ``rounds`` alternating rounds of
-    ~budget_s / (rounds len(fns)) each: what the machine's other load does to one it does
-    to the others (two variants compared in one run, not one after the other)."""
+    ~budget_s / (rounds len(fns)) each (a round's mean over its calls): what the machine's
+    other load does to one it does to the others (two variants compared in one run, not one
+    after the other)."""
     for fn in fns:
         fn()  # compiled / loaded from numba's cache
     best = [math.inf] * len(fns)
@@ -476,6 +460,12 @@ def _interleaved_ms(fns, budget_s: float = 1.0, rounds: int = 6) -> list[float]:
                     break
             best[i] = min(best[i], dt / k)
     return [1e3 * b for b in best]
+
+
+def _best_ms(fn, budget_s: float = 1.0, repeats: int = 3) -> float:
+    """Fastest of ``repeats`` means over ~budget_s / repeats of calls (ms): the least
+    disturbed by other jobs."""
+    return _interleaved_ms([fn], budget_s, repeats)[0]
 
 
 #: steps per call of ``CompiledStep.advance`` in ``step_times``'s threads figure
@@ -602,8 +592,7 @@ def scale_section(workdir: Path, sizes=SIZES, walls=WALLS, steps: int = 300, eng
             r["search"] = contact_search_times(run_dir)
             r["split"] = step_times(run_dir)
             # the step on the settled wall outside YADE, alternating with 2 threads: less disturbed by other jobs
-            r["advance_ms_per_step"] = r["split"]["advance_ms_per_step"]
-            r["advance_us_per_contact_step"] = 1e3 * r["advance_ms_per_step"] / max(1, r["split"]["contacts"])
+            r["advance_us_per_contact_step"] = 1e3 * r["split"]["advance_ms_per_step"] / max(1, r["split"]["contacts"])
             if size in THREADED_SIZES:  # the same run on 2 threads
                 try:
                     r2 = timed_run(scale_case(run_geo, dt, scale_steps(steps, size)), workdir, tag + "_2", 2,
@@ -626,7 +615,7 @@ def scale_section(workdir: Path, sizes=SIZES, walls=WALLS, steps: int = 300, eng
                   f"{sr['clip_ms']:.2f} ms" + (f"; the former all-pairs search {sr['all_pairs_ms']:.2f} ms" if "all_pairs_ms" in sr else "") + "\n"
                   f"  {'':21s} step in two halves alone: contact forces (search, law, damping) "
                   f"{r['split']['forces_ms']:.3f} ms, integration of {n} stones {r['split']['integrate_ms']:.3f} ms; "
-                  f"the whole step as a run calls it (advance, fastest of 20 rounds) {r['advance_ms_per_step']:.3f} ms, "
+                  f"the whole step as a run calls it (advance, fastest of 20 rounds) {r['split']['advance_ms_per_step']:.3f} ms, "
                   f"{r['advance_us_per_contact_step']:.2f} us/contact-step"
                   + (f"\n  {'':21s} 2 threads: {r['ms_per_step_2_threads']:.2f} ms/step, parallel efficiency t1/(2 t2) "
                      f"{r['parallel_efficiency']:.2f} (the runs, one after the other); alternating with 1 thread: "

@@ -85,7 +85,7 @@ def pytest_configure(config):
     from drystone import runner, simulate
     from drystone.tomlio import to_toml
 
-    print("conftest: numba's cache is cold: compiling the contact kernels once (about a minute)", flush=True)
+    print("conftest: numba's cache is cold: compiling the contact kernels once (one to two minutes)", flush=True)
     with tempfile.TemporaryDirectory(prefix="drystone-warm-") as d:
         case = Path(d) / "warm.toml"
 

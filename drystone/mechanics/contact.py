@@ -616,9 +616,10 @@ def damping_wrenches(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, 
     thread (its callers run in YADE's Python engines). The arrays are passed on contiguous:
     the compiled step's call of the same kernel, not another compilation of it."""
     m = len(parea)
-    args = [np.ascontiguousarray(a, bool if k == 6 else float) for k, a in enumerate(
-        (n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, iib, twist, fn_el, fs, mu, lever))]
-    return damping_wrenches_warm(*args, np.zeros((m, 6, 6)), np.zeros(m, np.bool_), 1)
+    c = [np.ascontiguousarray(a, float) for a in (n, parea, pj, kn, kt, xi)]
+    rest = [np.ascontiguousarray(a, float) for a in (ra, rb, ima, imb, iia, iib, twist, fn_el, fs, mu, lever)]
+    return damping_wrenches_warm(*c, np.ascontiguousarray(sticking, np.bool_), *rest, np.zeros((m, 6, 6)),
+                                 np.zeros(m, np.bool_), 1)
 
 
 @njit(cache=True, parallel=True)
