@@ -305,19 +305,30 @@ def _previous(keys, prev_keys):
     return out
 
 
+# The neighbour list's arrays (14: ``NeighbourList.arrays``) and the search's buffers (16:
+# ``neighbours.contact_buffers``) reach the two kernels called from Python (``_contact_forces``,
+# ``_advance``) one per argument, not as two tuples: numba 0.58 types an argument whose type
+# fingerprint outgrows 40 bytes (a tuple of more than four arrays) in Python at every call, 0.1 to
+# 0.4 ms, more than a small wall's whole step (the fingerprint's first bytes are lost when its
+# buffer grows, so its cache never hits: github.com/numba/numba/issues/9097, fixed in 0.59); an
+# array argument is typed in C (about 0.1 us). Within compiled code they travel as tuples.
 @njit(cache=True)
 def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving, inv_mass,
                     inv_inertia_local, mat, table, jkeys, jvals, prev_keys, prev_shear, prev_basis, dt, tol, size, shared,
-                    nl, buf, with_energy):
+                    with_energy, l0, l1, l2, l3, l4, l5, l6, l7, l8, l9, l10, l11, l12, l13,
+                    b0, b1, b2, b3, b4, b5, b6, b7, b8, b9, b10, b11, b12, b13, b14, b15):
     """One step's contacts between shapes (ia, ib: shape indices; shape s a convex part of
     body ``owner[s]``, ``size`` per shape; ``shared``: some body has several shapes) and
-    the forces and torques on the bodies. The contacts come from the neighbour list ``nl``
-    (``drystone.mechanics.neighbours``: the full search's contacts, in its order), into
-    the search's buffers ``buf``; both are returned last (grown, rebuilt). The elastic
+    the forces and torques on the bodies. The contacts come from the neighbour list's arrays
+    l0 .. l13 (``drystone.mechanics.neighbours``: the full search's contacts, in its order),
+    into the search's buffers b0 .. b15; both are returned last as tuples (``nl``, ``buf``:
+    grown, rebuilt). They come one by one, not as two tuples (the note above). The elastic
     energy e_el only ``with_energy`` or for a step deeper than its sizes allow (``depth_ratio``
     > 1), else NaN: it is recorded at samples only. The work
     per contact and per body runs on numba's threads (``drystone.mechanics.contact_rows``:
     the same numbers for any number)."""
+    nl = (l0, l1, l2, l3, l4, l5, l6, l7, l8, l9, l10, l11, l12, l13)
+    buf = (b0, b1, b2, b3, b4, b5, b6, b7, b8, b9, b10, b11, b12, b13, b14, b15)
     nb = len(pos)
     ns = len(nv)
     nt = buf[8].shape[0]  # ranges of rows for the threads: one per thread numba may run
@@ -451,9 +462,11 @@ class CompiledStep:
         self.neighbours.invalidate()
 
     def _search_state(self) -> tuple:
+        """The neighbour list's arrays and the search's buffers, one tuple (the kernels take them one
+        by one: the note above ``_contact_forces``)."""
         numba.set_num_threads(self.threads)  # the search's (numba's setting is per calling thread)
         nl = self.neighbours
-        return nl.arrays, nl.contacts
+        return nl.arrays + nl.contacts
 
     def _keep_search_state(self, arrays, contacts) -> None:
         self.neighbours.arrays, self.neighbours.contacts = arrays, contacts
@@ -473,7 +486,7 @@ class CompiledStep:
          self.depth_ratio, slip, Fd, Td, nl, buf) = _contact_forces(
             s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, self.owner, pos, rot, vel, angvel, self.moving,
             self.inv_mass, self.inv_inertia_local, self.material, self.table, self.jkeys, self.jvals, self.keys,
-            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared, *self._search_state(), True)
+            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared, True, *self._search_state())
         self._keep_search_state(nl, buf)
         self.keys, self.shear_store, self.basis_store = keys, fs, basis
         self.elastic = (self.elastic[1], e_el)
@@ -491,7 +504,7 @@ class CompiledStep:
         out = _contact_forces(
             s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, self.owner, pos, rot, vel, angvel, self.moving,
             self.inv_mass, self.inv_inertia_local, self.material, self.table, self.jkeys, self.jvals, self.keys,
-            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared, *self._search_state(), True)
+            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared, True, *self._search_state())
         self._keep_search_state(out[20], out[21])
         return float(out[14]), float(out[17])
 
@@ -529,8 +542,8 @@ class CompiledStep:
          self.depth_ratio, slip, Fd, Td, nl, buf) = _advance(
             s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, self.owner, pos, rot, vel, angvel, self.moving,
             self.inv_mass, self.inv_inertia_local, self.material, self.table, self.jkeys, self.jvals, self.keys,
-            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared, *self._search_state(), g, F_ext,
-            coef, Fb, Tb, self.elastic[1], self.energy, *motion)
+            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared, g, F_ext, coef, Fb, Tb,
+            self.elastic[1], self.energy, *motion, *self._search_state())
         self._keep_search_state(nl, buf)
         self.last = {"Fd": Fd, "Td": Td, "slip": slip}
         self.keys, self.shear_store, self.basis_store = keys, fs, basis
@@ -581,8 +594,9 @@ def applied_wrench(c, Fb, Tb, F, T):
 
 @njit(cache=True)
 def _advance(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving, inv_mass, inv_inertia_local,
-             mat, table, jkeys, jvals, keys, shear, basis, dt, tol, size, shared, nl, buf, g, F_ext, coef, Fb, Tb, e_last,
-             acc, mass, inertia, lin_free, rot_free, aspherical, angmom, quat):
+             mat, table, jkeys, jvals, keys, shear, basis, dt, tol, size, shared, g, F_ext, coef, Fb, Tb, e_last,
+             acc, mass, inertia, lin_free, rot_free, aspherical, angmom, quat, l0, l1, l2, l3, l4, l5, l6, l7, l8, l9, l10, l11, l12, l13,
+             b0, b1, b2, b3, b4, b5, b6, b7, b8, b9, b10, b11, b12, b13, b14, b15):
     """``CompiledStep.advance``: len(g) steps of ``_contact_forces`` + ``integrate`` (+
     ``energy.account`` into ``acc``) without leaving compiled code; the arithmetic of each
     step is that of one call of each (the same results bit for bit). The loads' wrench of
@@ -590,6 +604,8 @@ def _advance(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, a
     elastic energy (``e_prev``, ``e_last``) of the last two steps only (what a sample
     after them records): a step that stops the call on the depth check has its own, the
     step before it NaN unless it was one of the last two."""
+    nl = (l0, l1, l2, l3, l4, l5, l6, l7, l8, l9, l10, l11, l12, l13)
+    buf = (b0, b1, b2, b3, b4, b5, b6, b7, b8, b9, b10, b11, b12, b13, b14, b15)
     n = len(g)
     loaded = coef.shape[1] > 0
     e_prev = e_last
@@ -601,7 +617,7 @@ def _advance(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, a
         (ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, basis, F, T, e_el, om, depth, slip, Fd,
          Td, nl, buf) = _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving,
                                         inv_mass, inv_inertia_local, mat, table, jkeys, jvals, keys, shear, basis, dt,
-                                        tol, size, shared, nl, buf, s >= n - 2)
+                                        tol, size, shared, s >= n - 2, *nl, *buf)
         shear = fs
         e_prev = e_last
         e_last = e_el
