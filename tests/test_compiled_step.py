@@ -216,3 +216,35 @@ def test_two_threads_give_the_one_thread_history_bit_for_bit():
         hist.append(rows)
     for two, one in zip(*hist):  # (the contacts, so the shear rows, change between samples)
         np.testing.assert_array_equal(two, one)
+
+
+def test_python_calls_of_the_step_type_no_argument_in_python(monkeypatch):
+    """Each call of ``CompiledStep.forces``, ``peek`` and ``advance`` types its arguments in
+    numba's C dispatcher, never through numba's Python ``typeof``: a tuple of more than four
+    arrays (the neighbour list's and the search's state passed as two tuples) went through it
+    at every call in numba 0.58 (its type fingerprint outgrows 40 bytes and never hits numba's
+    cache), 0.4 ms a call, more than a small wall's step (the note above
+    ``contact_step._contact_forces``). After a first call of each (which may type and
+    compile), further calls must not reach ``typeof_pyval``."""
+    local, mass, inertia, pos, quat, vel, angvel, moving = _wall(0, courses=2, per_course=2)
+    nb = len(mass)
+    table = np.array([[[law.pair_properties(MAT, MAT)[k] for k in ("kn", "kt", "mu", "damping")]]])
+    step = cs.CompiledStep(mass, inertia, local, np.zeros(nb, int), table)
+    rot = rotations.to_matrix(quat)
+    free = np.where(moving[:, None], 1.0, 0.0) * np.ones((nb, 3))
+    motion = (np.where(moving, mass, 1.0), inertia, free, free, moving.copy(), np.zeros((nb, 3)), quat)
+    g = np.tile([0.0, 0.0, -9.81], (3, 1))
+
+    def calls():
+        step.forces(pos, rot, vel, angvel, 2e-4)
+        step.peek(pos, rot, vel, angvel, 2e-4)
+        step.advance(pos, rot, vel, angvel, 2e-4, g, np.zeros((nb, 3)), motion)
+
+    calls()
+    typed = []
+    for kernel in (cs._contact_forces, cs._advance):
+        monkeypatch.setattr(kernel, "typeof_pyval", lambda val, k=kernel, f=kernel.typeof_pyval: typed.append(
+            (k.__name__, type(val).__name__)) or f(val), raising=False)
+    for _ in range(3):
+        calls()
+    assert typed == []
