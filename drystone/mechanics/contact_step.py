@@ -310,7 +310,7 @@ def _previous(keys, prev_keys):
 # ``_advance``) one per argument, not as two tuples: numba 0.58 types an argument whose type
 # fingerprint outgrows 40 bytes (a tuple of more than four arrays) in Python at every call, 0.1 to
 # 0.4 ms, more than a small wall's whole step (the fingerprint's first bytes are lost when its
-# buffer grows, so its cache never hits: github.com/numba/numba/issues/9097, fixed in 0.59); an
+# buffer grows, so its cache never hits: github.com/numba/numba/issues/9097); an
 # array argument is typed in C (about 0.1 us). Within compiled code they travel as tuples.
 @njit(cache=True)
 def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving, inv_mass,
