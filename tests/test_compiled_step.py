@@ -242,9 +242,16 @@ def test_python_calls_of_the_step_type_no_argument_in_python(monkeypatch):
 
     calls()
     typed = []
+
+    def recording(kernel):
+        def typeof_pyval(val):
+            typed.append((kernel.__name__, type(val).__name__))
+            return original(val)
+        original = kernel.typeof_pyval
+        return typeof_pyval
+
     for kernel in (cs._contact_forces, cs._advance):
-        monkeypatch.setattr(kernel, "typeof_pyval", lambda val, k=kernel, f=kernel.typeof_pyval: typed.append(
-            (k.__name__, type(val).__name__)) or f(val), raising=False)
+        monkeypatch.setattr(kernel, "typeof_pyval", recording(kernel), raising=False)
     for _ in range(3):
         calls()
     assert typed == []

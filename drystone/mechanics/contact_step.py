@@ -595,7 +595,8 @@ def applied_wrench(c, Fb, Tb, F, T):
 @njit(cache=True)
 def _advance(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving, inv_mass, inv_inertia_local,
              mat, table, jkeys, jvals, keys, shear, basis, dt, tol, size, shared, g, F_ext, coef, Fb, Tb, e_last,
-             acc, mass, inertia, lin_free, rot_free, aspherical, angmom, quat, l0, l1, l2, l3, l4, l5, l6, l7, l8, l9, l10, l11, l12, l13,
+             acc, mass, inertia, lin_free, rot_free, aspherical, angmom, quat,
+             l0, l1, l2, l3, l4, l5, l6, l7, l8, l9, l10, l11, l12, l13,
              b0, b1, b2, b3, b4, b5, b6, b7, b8, b9, b10, b11, b12, b13, b14, b15):
     """``CompiledStep.advance``: len(g) steps of ``_contact_forces`` + ``integrate`` (+
     ``energy.account`` into ``acc``) without leaving compiled code; the arithmetic of each
@@ -603,7 +604,8 @@ def _advance(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, a
     step s is ``applied_wrench(coef[s], Fb, Tb)`` (nothing when coef has no column). The
     elastic energy (``e_prev``, ``e_last``) of the last two steps only (what a sample
     after them records): a step that stops the call on the depth check has its own, the
-    step before it NaN unless it was one of the last two."""
+    step before it NaN unless it was one of the last two. l0 .. l13, b0 .. b15: the
+    neighbour list's arrays and the search's buffers one by one, as ``_contact_forces``."""
     nl = (l0, l1, l2, l3, l4, l5, l6, l7, l8, l9, l10, l11, l12, l13)
     buf = (b0, b1, b2, b3, b4, b5, b6, b7, b8, b9, b10, b11, b12, b13, b14, b15)
     n = len(g)
