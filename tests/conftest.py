@@ -65,13 +65,24 @@ _FILE_COST_S = {
 _COST_S = {"slow": 30.0, "yade": 3.0, "other": 0.3}
 
 
+#: set by the controller of a parallel run while it compiles numba's cache (``pytest_configure``):
+#: the file that exists once the compile is done; the workers wait for it before a kernel is needed
+WARMING = "DRYSTONE_TEST_WARMING"
+#: words of a test file's source that mark it as one that may need the compiled kernels (only to
+#: order the files while the cache is compiled: the waits below make any order correct)
+_KERNEL_WORDS = ("run_case", "runner", "simulate", "sweep", "studies", "overlap", "contact_step", "neighbours",
+                 "numba", "analyses", "subprocess")
+
+
 def pytest_configure(config):
     """In the controller of a parallel run (``-n N``: it runs no test itself) with numba's cache
-    cold, compile the contact kernels once, before the workers start: otherwise each worker,
-    and each YADE run a test starts before the cache is written, compiles them on its own
-    (60-90 s of a core each). The smallest case runs through the compiled step here and,
-    meanwhile on the other core, through the other engines' kernels (``_WARM_OTHERS``, one
-    command-line run each: a second YADE)."""
+    cold, compile the contact kernels once, in the background, while the workers start on the
+    tests that need no kernel: otherwise each worker, and each YADE run a test starts before the
+    cache is written, compiles them on its own (60-90 s of a core each). The smallest case runs
+    through the compiled step in one process and through the other engines' kernels
+    (``_WARM_OTHERS``) in another; when both end, the file named by ``$DRYSTONE_TEST_WARMING``
+    is written. A worker waits for that file before a test that runs YADE, a run, or a numba
+    kernel's first call (``_wait_for_the_kernels``), so that every kernel comes from the cache."""
     import subprocess
     import sys
     import tempfile
@@ -79,27 +90,91 @@ def pytest_configure(config):
 
     import drystone
 
-    parallel = getattr(config.option, "numprocesses", None) and not hasattr(config, "workerinput")
+    if hasattr(config, "workerinput"):
+        config._drystone_warming = bool(os.environ.get(WARMING))  # the same in every worker: one order of files
+        if config._drystone_warming:
+            _wait_before_kernels()
+        return
+    parallel = getattr(config.option, "numprocesses", None)
     if not parallel or config.option.collectonly or drystone.kernels_cached() or not have_yade():
         return
-    from drystone import runner, simulate
     from drystone.tomlio import to_toml
 
-    print("conftest: numba's cache is cold: compiling the contact kernels once (one to two minutes)", flush=True)
-    with tempfile.TemporaryDirectory(prefix="drystone-warm-") as d:
-        case = Path(d) / "warm.toml"
+    print("conftest: numba's cache is cold: compiling the contact kernels once, in the background "
+          "(one to two minutes; the tests that need them wait)", flush=True)
+    d = Path(tempfile.mkdtemp(prefix="drystone-warm-"))
+    case, done = d / "warm.toml", d / "done"
+    case.write_text(to_toml(_WARM_CASE))
+    os.environ[WARMING] = str(done)  # before the workers start: they inherit it
 
-        def others():
-            for k, args in enumerate(_WARM_OTHERS):
-                subprocess.run([sys.executable, "-m", "drystone", "run", str(case), "--out", f"{d}/other{k}", "-q", *args],
-                               capture_output=True)
+    def run(k, args=()):
+        subprocess.run([sys.executable, "-m", "drystone", "run", str(case), "--out", str(d / f"out{k}"), "-q", *args],
+                       capture_output=True)
 
-        case.write_text(to_toml(_WARM_CASE))
-        second = threading.Thread(target=others)
-        second.start()
-        runner.run(case, out_dir=Path(d) / "out", quiet=True)
-        second.join()
-    simulate.end_workers()  # this process runs no test: its YADE worker would idle all session
+    def others():
+        for k, args in enumerate(_WARM_OTHERS):
+            run(k + 1, args)
+
+    def warm():
+        try:
+            second = threading.Thread(target=others)
+            second.start()
+            run(0)
+            second.join()
+        finally:
+            done.write_text("done\n")
+
+    config._drystone_warm = (threading.Thread(target=warm, daemon=True), d)
+    config._drystone_warm[0].start()
+
+
+def pytest_unconfigure(config):
+    warm = getattr(config, "_drystone_warm", None)
+    if warm is not None:
+        warm[0].join()
+        shutil.rmtree(warm[1], ignore_errors=True)
+
+
+def _wait_for_the_kernels() -> None:
+    """Block until the controller's compile of numba's cache is done (``$DRYSTONE_TEST_WARMING``;
+    at most 15 min: a warm-up that hangs leaves the tests to compile on their own)."""
+    import time
+
+    done = os.environ.get(WARMING)
+    t0 = time.time()
+    while done and not os.path.exists(done) and time.time() - t0 < 900:
+        time.sleep(0.2)
+    os.environ.pop(WARMING, None)
+
+
+def _wait_before_kernels() -> None:
+    """In a worker while the cache is compiled: a numba kernel's first call in this process
+    (numba's ``Dispatcher._compile_for_args``: it compiles or loads from the cache) and a run
+    (``drystone.simulate._simulate``: YADE loads the kernels) wait for the compile first."""
+    from numba.core import dispatcher
+
+    from drystone import simulate as sim
+
+    first_call, simulate = dispatcher.Dispatcher._compile_for_args, sim._simulate
+
+    def waiting_first_call(self, *args, **kws):
+        _wait_for_the_kernels()
+        return first_call(self, *args, **kws)
+
+    def waiting_simulate(*args, **kws):
+        _wait_for_the_kernels()
+        return simulate(*args, **kws)
+
+    dispatcher.Dispatcher._compile_for_args = waiting_first_call
+    sim._simulate = waiting_simulate
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_runtest_setup(item):
+    """A test that runs YADE waits for the controller's compile of numba's cache (its YADE
+    process loads the kernels from it)."""
+    if os.environ.get(WARMING) and _cost(item) > _COST_S["other"]:
+        _wait_for_the_kernels()
 
 
 def _cost(item) -> float:
@@ -113,7 +188,8 @@ def pytest_collection_modifyitems(config, items):
     """The files in decreasing order of their cost (``_FILE_COST_S``, else by marks), each
     file's tests in their order: ``make test`` (``-n N --dist loadfile --no-loadscope-reorder``)
     hands the next file to the first idle worker, so the longest start first and the workers
-    finish together, and one worker runs a whole file (a module fixture's runs are made once)."""
+    finish together, and one worker runs a whole file (a module fixture's runs are made once).
+    While the controller compiles numba's cache, the files that need no kernel come first."""
     files: dict = {}
     for item in items:
         files.setdefault(item.nodeid.split("::", 1)[0], []).append(item)
@@ -121,7 +197,14 @@ def pytest_collection_modifyitems(config, items):
     def cost(path: str) -> float:
         return _FILE_COST_S.get(Path(path).name) or sum(_cost(i) for i in files[path])
 
-    items[:] = [i for path in sorted(files, key=lambda p: -cost(p)) for i in files[path]]  # stable
+    def later(path: str) -> bool:
+        """While numba's cache is compiled: a file that may need the kernels (its tests would wait)."""
+        if not getattr(config, "_drystone_warming", False):
+            return False
+        text = Path(files[path][0].fspath).read_text()
+        return any(_cost(i) > _COST_S["other"] for i in files[path]) or any(w in text for w in _KERNEL_WORDS)
+
+    items[:] = [i for path in sorted(files, key=lambda p: (later(p), -cost(p))) for i in files[path]]  # stable
 
 
 def run_case(case: dict, outdir: Path, name: str = "case", **kw) -> tuple[dict, dict, dict]:
