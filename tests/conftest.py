@@ -68,10 +68,10 @@ _COST_S = {"slow": 30.0, "yade": 3.0, "other": 0.3}
 #: set by the controller of a parallel run while it compiles numba's cache (``pytest_configure``):
 #: the file that exists once the compile is done; the workers wait for it before a kernel is needed
 WARMING = "DRYSTONE_TEST_WARMING"
-#: words of a test file's source that mark it as one that may need the compiled kernels (only to
-#: order the files while the cache is compiled: the waits below make any order correct)
-_KERNEL_WORDS = ("run_case", "runner", "simulate", "sweep", "studies", "overlap", "contact_step", "neighbours",
-                 "numba", "analyses", "subprocess")
+#: words of a test file's source that mark it as one that calls the compiled kernels in its own process
+#: (its runs are marked ``yade``): only to order the files while the cache is compiled, the waits
+#: below make any order correct
+_KERNEL_WORDS = ("contact_step", "overlap", "neighbours", "numba", "CompiledStep")
 
 
 def pytest_configure(config):

@@ -85,6 +85,31 @@ def test_ida_bootstrap_covers_the_true_median():
     assert abs(hits / m - level) <= tol.coverage_band(level, m)
 
 
+@pytest.mark.parametrize("n, cap", [(6, 0.9), (40, 2.0)])
+def test_ida_bootstrap_replicates_are_fit_ida_of_their_resamples(n, cap):
+    """The bootstrap fits its replicates together (each one's counts of the records); each
+    replicate's theta and beta are those of fit_ida on its resample, and the replicates fit_ida
+    refuses are the ones counted as failed."""
+    br, ce = synthetic(np.random.default_rng(5), n, 0.8, 0.5, step=0.1, cap=cap)
+    lo, hi, c = F._ida_check(br, ce)
+    rng = np.random.default_rng(2)
+    theta, beta, refused = [], [], 0
+    for _ in range(30):  # the draws of bootstrap_ida(seed=2)
+        k = rng.integers(0, len(lo) + len(c), len(lo) + len(c))
+        kb, kc = k[k < len(lo)], k[k >= len(lo)] - len(lo)
+        try:
+            f = F.fit_ida(np.column_stack([lo[kb], hi[kb]]), c[kc])
+        except F.FitError:
+            refused += 1
+            continue
+        theta.append(f.theta)
+        beta.append(f.beta)
+    b = F.bootstrap_ida(br, ce, n_boot=30, seed=2, level=0.8)
+    assert b["failed"] == refused and len(theta) >= 20
+    for got, ref in ((b["theta_ci"], theta), (b["beta_ci"], beta)):
+        assert got == pytest.approx([np.percentile(ref, 10), np.percentile(ref, 90)], rel=tol.BOOT_REPLICATE_REL)
+
+
 def test_brackets_of_one_records_runs():
     assert F.brackets_of_runs([0.1, 0.2, 0.4, 0.3], [False, False, True, True]) == ([0.2, 0.3], None)
     assert F.brackets_of_runs([0.1, 0.2], [False, False]) == (None, 0.2)

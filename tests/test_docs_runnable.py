@@ -8,7 +8,8 @@ document's earlier ``<!-- file: PATH -->`` blocks are written and its earlier ru
 python blocks run (they make the inputs the block may use, as a reader following the page
 has them), then the block itself: a python block as one script, a sh block line by line,
 stopping at the first line that fails (the message names it). Each sh line starts with
-``.venv/bin/python`` (run with this interpreter) and a run's ``--out`` is under
+``.venv/bin/python`` (run with this interpreter; ``-m MODULE`` lines in this process, as ``-m``
+runs them: ``_module_in_process``) and a run's ``--out`` is under
 ``results/``. A finished ``drystone run`` must leave summary.json and histories.npz, a
 ``drystone report`` its report.html, ``drystone.geometry make`` its block file. A
 ``drystone run`` of a repository case that an earlier block of the session already ran with
@@ -111,6 +112,48 @@ def _run_key(argv: list[str], work: Path):
     return case.read_bytes(), tuple(argv[:k] + argv[k + 2:])
 
 
+def _subprocess(argv: list[str], work: Path) -> tuple[int, str]:
+    r = subprocess.run(argv, cwd=work, capture_output=True, text=True, timeout=TIMEOUT_S)
+    return r.returncode, r.stderr
+
+
+def _module_in_process(module: str, args: list[str], work: Path) -> tuple[int, str]:
+    """``python -m MODULE ARGS`` run as ``-m`` runs it (``runpy.run_module`` as ``__main__``, ``sys.argv``
+    set), in this process with ``work`` as the current folder: (exit code, stderr). This process's
+    imports and its YADE worker (drystone/simulate.py) serve every line; a fresh interpreter per line
+    cost about 2 s of imports and, for a run, 3 s of YADE's start and numba's cache load."""
+    import contextlib
+    import io
+    import os
+    import runpy
+    import signal
+    import traceback
+    import warnings
+
+    err = io.StringIO()
+    argv, cwd, sigterm = sys.argv, os.getcwd(), signal.getsignal(signal.SIGTERM)
+    sys.argv = [module, *args]
+    os.chdir(work)
+    try:
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err), warnings.catch_warnings():
+            warnings.filterwarnings("ignore", category=RuntimeWarning, module="runpy")  # a module already imported
+            try:
+                runpy.run_module(module, run_name="__main__", alter_sys=True)
+                rc = 0
+            except SystemExit as exc:
+                rc = exc.code if isinstance(exc.code, int) else int(exc.code is not None)
+                if isinstance(exc.code, str):
+                    print(exc.code, file=err)
+            except Exception:  # noqa: BLE001 (reported as the line's failure, with its traceback)
+                rc = 1
+                traceback.print_exc(file=err)
+    finally:
+        os.chdir(cwd)
+        sys.argv = argv
+        signal.signal(signal.SIGTERM, sigterm)  # python -m drystone turns SIGTERM into Ctrl-C
+    return rc, err.getvalue()
+
+
 def _sh(b: Block, work: Path) -> None:
     for k, line in enumerate(b.code.splitlines()):
         if not line.strip() or line.lstrip().startswith("#"):
@@ -125,8 +168,8 @@ def _sh(b: Block, work: Path) -> None:
         if key in _RUNS and _RUNS[key].is_dir():
             shutil.copytree(_RUNS[key], work / argv[argv.index("--out") + 1])
         else:
-            r = subprocess.run(argv, cwd=work, capture_output=True, text=True, timeout=TIMEOUT_S)
-            assert r.returncode == 0, f"{where}\nexit {r.returncode}\n{r.stderr[-3000:]}"
+            rc, err = _module_in_process(argv[2], argv[3:], work) if argv[1] == "-m" else _subprocess(argv, work)
+            assert rc == 0, f"{where}\nexit {rc}\n{err[-3000:]}"
         _check_outputs(argv, work, where)
         if key is not None and key not in _RUNS:
             _RUNS[key] = work / argv[argv.index("--out") + 1]

@@ -390,11 +390,12 @@ def _ida_logs(lo, hi, c) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         return np.log(lo), np.log(hi), np.log(c)
 
 
-def _ida_negll(params, log_lo, log_hi, log_c):
-    """-log L and its gradient in (m, s) = (ln theta, ln beta), from the data's logarithms
-    (``_ida_logs``)."""
-    m, s = params
-    beta = math.exp(s)
+def _ida_terms(m, s, log_lo, log_hi, log_c):
+    """Each record's log-likelihood term and its derivatives in (m, s) = (ln theta, ln beta),
+    from the data's logarithms (``_ida_logs``); ``m`` and ``s`` broadcast against the records
+    (scalars, or (R, 1) for R data sets at once). Returns (ld, d ld/dm, d ld/ds) of the brackets
+    and (lq, d lq/dm, d lq/ds) of the censored records."""
+    beta = np.exp(s)
     a = (log_lo - m) / beta
     b = (log_hi - m) / beta
     ld = _log_diff_ndtr(a, b)
@@ -405,11 +406,77 @@ def _ida_negll(params, log_lo, log_hi, log_c):
     u = (log_c - m) / beta
     lq = log_ndtr(-u)
     rc = np.exp(-0.5 * u * u - _LOG_SQRT_2PI - lq)          # phi(u)/Q
-    ll = float(ld.sum() + lq.sum())
     # d ln D / dm = -(phi(b) - phi(a))/(beta D); d ln D / ds = -(b phi(b) - a phi(a))/D
-    gm = float(np.sum(-(rb - ra)) / beta + np.sum(rc) / beta)
-    gs = float(np.sum(-(b * rb - a0 * ra)) + np.sum(u * rc))
-    return -ll, -np.array([gm, gs])
+    return (ld, -(rb - ra) / beta, -(b * rb - a0 * ra)), (lq, rc / beta, u * rc)
+
+
+def _ida_negll(params, log_lo, log_hi, log_c):
+    """-log L and its gradient in (m, s) = (ln theta, ln beta), from the data's logarithms
+    (``_ida_logs``)."""
+    m, s = params
+    (ld, dm, ds), (lq, cm, cs) = _ida_terms(m, s, log_lo, log_hi, log_c)
+    ll = float(ld.sum() + lq.sum())
+    return -ll, -np.array([float(dm.sum() + cm.sum()), float(ds.sum() + cs.sum())])
+
+
+def _ida_start(mid_log, log_c, wb, wc) -> np.ndarray:
+    """The starting point (m, s) of each weighted data set: the mean and standard deviation
+    (at least 0.1) of ln of the brackets' mid-points and the censoring intensities (as ``fit_ida``)."""
+    pts = np.concatenate([mid_log, log_c])
+    w = np.concatenate([wb, wc], axis=1)
+    mean = (w * pts).sum(1) / w.sum(1)
+    std = np.sqrt((w * (pts - mean[:, None]) ** 2).sum(1) / w.sum(1))
+    return np.column_stack([mean, np.log(np.maximum(std, 0.1))])
+
+
+def _fit_ida_weighted(logs, wb, wc, x0, gtol: float = 1e-9, max_iter: int = 60) -> tuple[np.ndarray, np.ndarray]:
+    """Maximise R weighted IDA likelihoods at once (``wb`` (R, n_b), ``wc`` (R, n_c): each data
+    set's count of each bracket and censored record), by Newton's method from ``x0`` (R, 2):
+    the Hessian from central differences of the analytic gradient (a positive definite one, else
+    the gradient's direction), steps halved until the objective decreases. Returns the
+    parameters (R, 2) in (ln theta, ln beta) and the largest gradient component of each."""
+    def wsum(w, v):  # a record drawn 0 times adds nothing, even where its term is not finite
+        return np.where(w > 0, w * v, 0.0).sum(1)
+
+    def objective(x, rows):  # -log L and its gradient of data sets ``rows`` at x (len(rows), 2)
+        b, c = wb[rows], wc[rows]
+        with np.errstate(invalid="ignore", over="ignore"):
+            (ld, dm, ds), (lq, cm, cs) = _ida_terms(x[:, :1], x[:, 1:], *logs)
+            return (-(wsum(b, ld) + wsum(c, lq)),
+                    -np.column_stack([wsum(b, dm) + wsum(c, cm), wsum(b, ds) + wsum(c, cs)]))
+
+    x = np.array(x0, float)
+    f, g = objective(x, slice(None))
+    h = 1e-6
+    for _ in range(max_iter):
+        todo = np.flatnonzero(np.isfinite(f) & (np.abs(g).max(1) > gtol))
+        if len(todo) == 0:
+            break
+        xt, ft, gt = x[todo], f[todo], g[todo]
+        cols = [(objective(xt + h * e, todo)[1] - objective(xt - h * e, todo)[1]) / (2 * h) for e in np.eye(2)]
+        H = np.stack(cols, axis=2)
+        a, b, d = H[:, 0, 0], 0.5 * (H[:, 0, 1] + H[:, 1, 0]), H[:, 1, 1]
+        det = a * d - b * b
+        newton = (a > 0) & (det > 0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step = np.where(newton[:, None], -np.column_stack([d * gt[:, 0] - b * gt[:, 1],
+                                                               a * gt[:, 1] - b * gt[:, 0]]) / det[:, None], -gt)
+        slope = (step * gt).sum(1)
+        t = np.ones(len(todo))
+        open_ = np.ones(len(todo), bool)
+        for _ in range(40):  # halve each step until f decreases (Armijo; within f's round-off at the optimum)
+            fn, gn = objective(xt + t[:, None] * step, todo)
+            ok = np.isfinite(fn) & (fn <= ft + 1e-4 * t * slope + 4 * np.finfo(float).eps * np.abs(ft))
+            take = open_ & ok
+            x[todo[take]] = (xt + t[:, None] * step)[take]
+            f[todo[take]], g[todo[take]] = fn[take], gn[take]
+            open_ &= ~ok
+            if not open_.any():
+                break
+            t = np.where(open_, 0.5 * t, t)
+        if open_.all():  # no data set could move: round-off at their optimum
+            break
+    return x, np.abs(g).max(1)
 
 
 def fit_ida(brackets, censored=()) -> IdaFit:
@@ -435,23 +502,25 @@ def bootstrap_ida(brackets, censored=(), n_boot: int = 1000, seed: int = 0, leve
     """Record-resampling bootstrap of ``fit_ida``: each replicate draws as many records as
     there are, with replacement, from the brackets and censored records together, refits,
     and the ``level`` percentile intervals of theta and beta are returned; replicates with no
-    finite maximum are counted (``failed``) and left out."""
+    finite maximum are counted (``failed``) and left out. The replicates are fitted together
+    (``_fit_ida_weighted``: each one's counts of the records), to the optimum ``fit_ida``
+    reaches, with the same test of convergence."""
     lo, hi, c = _ida_check(brackets, censored)
     k_br, n = len(lo), len(lo) + len(c)
     rng = np.random.default_rng(seed)
-    thetas, betas, failed = [], [], 0
-    for _ in range(n_boot):
-        k = rng.integers(0, n, n)
-        kb, kc = k[k < k_br], k[k >= k_br] - k_br
-        try:
-            f = fit_ida(np.column_stack([lo[kb], hi[kb]]), c[kc])
-        except FitError:
-            failed += 1
-            continue
-        thetas.append(f.theta)
-        betas.append(f.beta)
-    return _intervals(thetas, betas, level, {"n_boot": n_boot, "seed": seed, "level": level, "failed": failed,
-                                             "method": "records resampled"})
+    counts = np.array([np.bincount(rng.integers(0, n, n), minlength=n) for _ in range(n_boot)], float).reshape(-1, n)
+    wb, wc = counts[:, :k_br], counts[:, k_br:]
+    # no finite maximum (why_no_ida_fit): no bracket drawn, or the drawn ones share a point below every censored one
+    top = np.where(wb > 0, lo, -np.inf).max(1, initial=-np.inf)
+    fits = (wb.sum(1) > 0) & ~((top <= np.where(wb > 0, hi, np.inf).min(1, initial=np.inf))
+                               & (top < np.where(wc > 0, c, np.inf).min(1, initial=np.inf)))
+    logs = _ida_logs(lo, hi, c)
+    mid = np.log(np.where(lo > 0, np.sqrt(np.maximum(lo, 1e-300) * hi), hi / 2))
+    x, gmax = _fit_ida_weighted(logs, wb[fits], wc[fits], _ida_start(mid, logs[2], wb[fits], wc[fits]))
+    good = np.all(np.isfinite(x), axis=1) & (gmax <= 1e-5 * max(1.0, n))
+    return _intervals(np.exp(x[good, 0]).tolist(), np.exp(x[good, 1]).tolist(), level,
+                      {"n_boot": n_boot, "seed": seed, "level": level, "failed": int(n_boot - good.sum()),
+                       "method": "records resampled"})
 
 
 def brackets_of_runs(runs, exceeded) -> tuple[list, float | None]:
