@@ -48,7 +48,7 @@ _WARM_OTHERS = (["--engine", "python"], ["--set", "contact.detection=yade"])
 #: on a shared 2-core machine, so only their ratios matter; files not here (under 3 s) are costed
 #: by marks (``_COST_S``, the same units). A stale figure only makes the two workers finish less together.
 _FILE_COST_S = {
-    "test_site_study.py": 160, "test_yade_contact.py": 65, "test_docs_runnable.py": 94, "test_shape_study.py": 80,
+    "test_site_study.py": 160, "test_yade_contact.py": 65, "test_docs_runnable.py": 30, "test_shape_study.py": 80,
     "test_analyses_assess.py": 56, "test_yade_worker.py": 50, "test_analyses_tilt.py": 24,
     "test_analyses_fragility.py": 28, "test_sweep.py": 31, "test_fragility.py": 27, "test_reliability_site.py": 24,
     "test_tilt_block.py": 23, "test_analyses_collapse.py": 23, "test_motions_catalogue.py": 22,
