@@ -87,6 +87,7 @@ def pytest_configure(config):
     import sys
     import tempfile
     import threading
+    import time
 
     import drystone
 
@@ -116,16 +117,29 @@ def pytest_configure(config):
             run(k + 1, args)
 
     def warm():
+        t0 = time.time()
         try:
             second = threading.Thread(target=others)
             second.start()
             run(0)
             second.join()
         finally:
-            done.write_text("done\n")
+            done.write_text(f"{time.time() - t0:.1f}\n")  # the compile's wall time, s
 
     config._drystone_warm = (threading.Thread(target=warm, daemon=True), d)
     config._drystone_warm[0].start()
+
+
+def pytest_terminal_summary(terminalreporter, config):
+    """After a run that compiled numba's cache: how long the compile took and how long each
+    worker waited for it (``waits-<worker>`` files beside the ``done`` file)."""
+    warm = getattr(config, "_drystone_warm", None)
+    if warm is None or not (warm[1] / "done").is_file():
+        return
+    waits = sorted(warm[1].glob("waits-*"))
+    terminalreporter.write_line(
+        f"conftest: numba's cache compiled in the background in {(warm[1] / 'done').read_text().strip()} s; "
+        + ("; ".join(f"{w.name[6:]} waited {w.read_text().strip()} s for it" for w in waits) or "no worker waited"))
 
 
 def pytest_unconfigure(config):
@@ -144,6 +158,8 @@ def _wait_for_the_kernels() -> None:
     t0 = time.time()
     while done and not os.path.exists(done) and time.time() - t0 < 900:
         time.sleep(0.2)
+    if done:  # the time this worker waited (the controller's summary says it)
+        Path(done).with_name(f"waits-{os.environ.get('PYTEST_XDIST_WORKER', 'gw')}").write_text(f"{time.time() - t0:.1f}\n")
     os.environ.pop(WARMING, None)
 
 
