@@ -217,7 +217,7 @@ def pytest_collection_modifyitems(config, items):
         """While numba's cache is compiled: a file that may need the kernels (its tests would wait)."""
         if not getattr(config, "_drystone_warming", False):
             return False
-        text = Path(files[path][0].fspath).read_text()
+        text = files[path][0].path.read_text()
         return any(_cost(i) > _COST_S["other"] for i in files[path]) or any(w in text for w in _KERNEL_WORDS)
 
     items[:] = [i for path in sorted(files, key=lambda p: (later(p), -cost(p))) for i in files[path]]  # stable

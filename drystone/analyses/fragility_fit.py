@@ -419,10 +419,16 @@ def _ida_negll(params, log_lo, log_hi, log_c):
     return -ll, -np.array([float(dm.sum() + cm.sum()), float(ds.sum() + cs.sum())])
 
 
-def _ida_start(mid_log, log_c, wb, wc) -> np.ndarray:
-    """The starting point (m, s) of each weighted data set: the mean and standard deviation
-    (at least 0.1) of ln of the brackets' mid-points and the censoring intensities (as ``fit_ida``)."""
-    pts = np.concatenate([mid_log, log_c])
+def _mid_points(lo, hi) -> np.ndarray:
+    """The brackets' geometric mid-points (hi / 2 where lo = 0): where a fit starts from."""
+    return np.where(lo > 0, np.sqrt(np.maximum(lo, 1e-300) * hi), hi / 2)
+
+
+def _ida_start(lo, hi, c, wb, wc) -> np.ndarray:
+    """The starting point (m, s) of each weighted data set (``_fit_ida_weighted``'s counts): the
+    weighted mean and standard deviation (at least 0.1) of ln of the mid-points and of the
+    censoring intensities (``fit_ida``'s, with weights)."""
+    pts = np.log(np.concatenate([_mid_points(lo, hi), c]))
     w = np.concatenate([wb, wc], axis=1)
     mean = (w * pts).sum(1) / w.sum(1)
     std = np.sqrt((w * (pts - mean[:, None]) ** 2).sum(1) / w.sum(1))
@@ -487,8 +493,7 @@ def fit_ida(brackets, censored=()) -> IdaFit:
     reason = why_no_ida_fit(np.column_stack([lo, hi]), c)
     if reason:
         raise FitError(reason)
-    mid = np.where(lo > 0, np.sqrt(np.maximum(lo, 1e-300) * hi), hi / 2)
-    pts = np.log(np.concatenate([mid, c]))
+    pts = np.log(np.concatenate([_mid_points(lo, hi), c]))
     x0 = np.array([pts.mean(), math.log(max(float(np.std(pts)), 0.1))])
     res = optimize.minimize(_ida_negll, x0, args=_ida_logs(lo, hi, c), jac=True, method="BFGS",
                             options={"gtol": 1e-9})
@@ -514,9 +519,7 @@ def bootstrap_ida(brackets, censored=(), n_boot: int = 1000, seed: int = 0, leve
     top = np.where(wb > 0, lo, -np.inf).max(1, initial=-np.inf)
     fits = (wb.sum(1) > 0) & ~((top <= np.where(wb > 0, hi, np.inf).min(1, initial=np.inf))
                                & (top < np.where(wc > 0, c, np.inf).min(1, initial=np.inf)))
-    logs = _ida_logs(lo, hi, c)
-    mid = np.log(np.where(lo > 0, np.sqrt(np.maximum(lo, 1e-300) * hi), hi / 2))
-    x, gmax = _fit_ida_weighted(logs, wb[fits], wc[fits], _ida_start(mid, logs[2], wb[fits], wc[fits]))
+    x, gmax = _fit_ida_weighted(_ida_logs(lo, hi, c), wb[fits], wc[fits], _ida_start(lo, hi, c, wb[fits], wc[fits]))
     good = np.all(np.isfinite(x), axis=1) & (gmax <= 1e-5 * max(1.0, n))
     return _intervals(np.exp(x[good, 0]).tolist(), np.exp(x[good, 1]).tolist(), level,
                       {"n_boot": n_boot, "seed": seed, "level": level, "failed": int(n_boot - good.sum()),
