@@ -10,6 +10,10 @@ from pathlib import Path as _Path
 __version__ = "0.1.0"
 
 #: the modules with numba kernels (``@njit(cache=True)``), and numba_cache (its ``FIRST`` is compiled in)
+#: drystone's own numba cache folder (``_numba_cache_dir``); numba's cache is there unless
+#: NUMBA_CACHE_DIR was set before drystone was first imported
+OWN_NUMBA_CACHE_DIR = ""
+
 _KERNEL_SOURCES = ("mechanics/overlap.py", "mechanics/contact.py", "mechanics/contact_step.py",
                    "mechanics/contact_rows.py", "mechanics/neighbours.py", "mechanics/energy.py",
                    "mechanics/integration.py", "numba_cache.py")
@@ -21,13 +25,13 @@ def _numba_cache_dir() -> None:
     one from another module (the compiled step calls the overlap clip) would otherwise keep
     running the old code after that module changes. Set before numba is imported; an
     explicit NUMBA_CACHE_DIR is respected."""
-    if "NUMBA_CACHE_DIR" in _os.environ:
-        return
+    global OWN_NUMBA_CACHE_DIR
     here = _Path(__file__).resolve().parent
     h = _hashlib.sha256()
     for name in _KERNEL_SOURCES:
         h.update((here / name).read_bytes())
-    _os.environ["NUMBA_CACHE_DIR"] = str(here.parent / ".numba_cache" / h.hexdigest()[:16])
+    OWN_NUMBA_CACHE_DIR = str(here.parent / ".numba_cache" / h.hexdigest()[:16])
+    _os.environ.setdefault("NUMBA_CACHE_DIR", OWN_NUMBA_CACHE_DIR)
 
 
 _numba_cache_dir()

@@ -25,12 +25,27 @@ the first ``prange`` then jumps into a pool that does not exist, a segmentation 
 in a process whose first compiled call is such a kernel from a warm cache (a script
 calling ``neighbours.update`` directly; ``CompiledStep`` sets the thread count first and
 so started the pool by chance). Starting it costs about a millisecond per process.
+
+``install`` also makes a cached kernel's freshness its source's content, not its place
+and time. numba stamps an index with its source file's modification time and size and
+files it under a digest of the file's absolute folder: a clone, a copy, a moved checkout
+or a ``git checkout`` that rewrote an unchanged file had a cache that no process could
+use, while ``drystone.kernels_cached`` said it was there, and every process that ran a
+kernel then compiled it (the test suite's study runs, a sweep's workers: each 60-140 s of
+a core). The stamp is now the file's size and SHA-256 (``content_stamp``), and in
+drystone's own cache (``drystone.OWN_NUMBA_CACHE_DIR``, named by the digest of every
+kernel module) a drystone module's kernels are filed under the module's package name
+(``drystone.mechanics``), not its folder's path. Elsewhere (an explicit
+``NUMBA_CACHE_DIR``, a user's own kernels) numba's folder key stays: there two versions
+of drystone could share a folder, and a kernel that inlines another module's code would
+load the other version's, which the digest rules out in drystone's own.
 """
 from __future__ import annotations
 
 import contextlib
 import fcntl
 import functools
+import hashlib
 import os
 
 import numba
@@ -77,10 +92,43 @@ def _under_lock(method, exclusive: bool):
     return wrapper
 
 
+_STAMPS: dict = {}
+
+
+def content_stamp(path: str) -> tuple:
+    """The freshness of a kernel's source file: ("sha256", its digest, its size in bytes),
+    kept per process by the file's modification time and size."""
+    st = os.stat(path)
+    key = (path, st.st_mtime_ns, st.st_size)
+    if key not in _STAMPS:
+        with open(path, "rb") as f:
+            _STAMPS[key] = ("sha256", hashlib.sha256(f.read()).hexdigest(), st.st_size)
+    return _STAMPS[key]
+
+
+def _source_stamp(self):
+    return content_stamp(self._py_file)
+
+
+def _cache_subpath(cls, py_file):
+    """Where under the cache folder the kernels of ``py_file`` live: in drystone's own cache,
+    a drystone module's package name (relocatable); else numba's key of the folder's path."""
+    import drystone
+    here = os.path.dirname(os.path.abspath(drystone.__file__))
+    folder = os.path.dirname(os.path.abspath(py_file))
+    if config.CACHE_DIR == drystone.OWN_NUMBA_CACHE_DIR and (folder == here or folder.startswith(here + os.sep)):
+        rel = os.path.relpath(folder, here)
+        return "drystone" if rel == "." else "drystone." + rel.replace(os.sep, ".")
+    return caching._CacheLocator.get_suitable_cache_subpath.__func__(cls, py_file)
+
+
 def install() -> None:
-    """Serialise numba's cache writes (and keep reads out of them) across processes, and
-    start numba's thread pool (module docstring)."""
+    """Serialise numba's cache writes (and keep reads out of them) across processes, key a
+    kernel by its source's content, and start numba's thread pool (module docstring)."""
     numba.get_num_threads()  # starts the pool (numba.np.ufunc.parallel._launch_threads) if it is not running
+    where = caching._UserProvidedCacheLocator  # the locator of a folder set by NUMBA_CACHE_DIR
+    where.get_source_stamp = _source_stamp
+    where.get_suitable_cache_subpath = classmethod(_cache_subpath)
     cls = caching.IndexDataCacheFile
     if getattr(cls.save, "drystone_locked", False):
         return

@@ -81,3 +81,39 @@ def test_a_compiling_process_waits_for_the_lock(tmp_path):
     assert proc.returncode == 0, err
     assert out.split() == ["42", "3.0"]
     assert list(cache.rglob("*twice*.nbi"))
+
+
+CLIP = textwrap.dedent('''
+    import numpy as np
+    from drystone.mechanics import overlap
+    P = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    m = overlap._clip(P, 3, np.array([-1.0, 1.0, -1.0]), np.empty((8, 3)))
+    print(m, sum(overlap._clip.stats.cache_hits.values()), flush=True)
+''')
+
+
+def test_a_copied_checkout_loads_the_kernels_its_original_compiled(tmp_path):
+    """A copy of a checkout (another folder, every file with a new modification time: a
+    clone, ``cp -r``, a ``git checkout`` that rewrote the files) loads the kernels from the
+    cache it carries instead of compiling them again in every process (numba's own keys, the
+    folder's path and the file's time, made the copy's cache unusable)."""
+    import shutil
+    from pathlib import Path
+    import drystone
+    package = Path(drystone.__file__).parent
+    original = tmp_path / "original"
+    shutil.copytree(package, original / "drystone", ignore=shutil.ignore_patterns("__pycache__"))
+    env = {"PYTHONPATH": "", "PATH": "/usr/bin:/bin", "HOME": str(tmp_path)}
+    hits = []
+    for where in ("original", "copy"):
+        if where == "copy":  # shutil.copy: new modification times
+            shutil.copytree(original, tmp_path / "copy", copy_function=shutil.copy)
+            shutil.rmtree(original)
+        env["PYTHONPATH"] = str(tmp_path / where)
+        proc = subprocess.run([sys.executable, "-c", CLIP], env=env, cwd=tmp_path / where, capture_output=True,
+                              text=True, timeout=300)
+        assert proc.returncode == 0, (where, proc.stderr[-2000:])
+        m, hit = proc.stdout.split()
+        assert m == "4"  # the triangle cut by a plane through two of its edges: a quadrilateral
+        hits.append(int(hit))
+    assert hits == [0, 1], hits
