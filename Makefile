@@ -80,8 +80,10 @@ $(STAMP): requirements.txt requirements-nodeps.txt requirements-crosscheck.txt c
 	$(PY) -c "import numpy, scipy; assert numpy.__version__ == '1.24.2' and scipy.__version__ == '1.10.1', 'numpy/scipy are not Debian''s'"
 	@touch $@
 
+# the suite's processes keep their bytecode (__pycache__/, ignored by git) where the environment says not to
+# (PYTHONDONTWRITEBYTECODE): each worker's collection otherwise rewrites and compiles every test module again
 test: setup
-	$(PY) -m pytest $(PYTEST_DIST) $(PYTEST_ARGS)
+	env -u PYTHONDONTWRITEBYTECODE $(PY) -m pytest $(PYTEST_DIST) $(PYTEST_ARGS)
 
 run: setup
 	@test -n "$(CASE)" || { echo "usage: make run CASE=path/to/case.toml [SET='key=value ...']"; exit 2; }

@@ -346,6 +346,9 @@ class AppliedLoads:
         self.last = np.zeros(j)
         self.abs_integral = np.zeros(j)
         self.loaded = np.flatnonzero(np.any(self.force != 0, axis=(0, 2)) | np.any(self.moment != 0, axis=(0, 2)))
+        # each loaded body's |F_j| and |M_j| (N, N m; fixed): what ``impulses`` weighs at every sample
+        self._norms = [(i, np.linalg.norm(self.force[:, i], axis=1), np.linalg.norm(self.moment[:, i], axis=1))
+                       for i in self.loaded]
 
     @classmethod
     def from_spec(cls, spec, prog, index: dict, nb: int) -> AppliedLoads | None:
@@ -386,8 +389,7 @@ class AppliedLoads:
         principal moment kg m^2) per loaded body, for ``stability.speed_budget`` (d sqrt(E_k)/dt
         <= |F| / sqrt(2 m) + |M| / sqrt(2 I_min))."""
         out = []
-        for i in self.loaded:
-            fi = float(self.abs_integral @ np.linalg.norm(self.force[:, i], axis=1))
-            ti = float(self.abs_integral @ np.linalg.norm(self.moment[:, i], axis=1))
-            out += [(fi, float(mass[i])), (ti, float(np.min(inertia[i])))]
+        for i, f_norm, m_norm in self._norms:
+            out += [(float(self.abs_integral @ f_norm), float(mass[i])),
+                    (float(self.abs_integral @ m_norm), float(np.min(inertia[i])))]
         return out
