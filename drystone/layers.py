@@ -36,7 +36,8 @@ LAYERS = (
           "`numba_cache.py`)",
           "where things are, units and g, processor-independent sin/cos, reading input files with one-line "
           "errors, this list of layers, every file written aside and renamed into place, a process's results "
-          "kept by their inputs, numba's cache safe for processes compiling at once and keyed by the kernels' source text"),
+          "kept by their inputs, numba's cache safe for processes compiling at once and keyed by the kernels' "
+          "source text"),
     Layer(1, "inputs", (), ("drystone.geometry", "drystone.motions"),
           "`drystone/geometry/`, `drystone/motions/`",
           "block files (`blockfile.py`: the format and its checks), hull helpers, generated walls and outlines; "
