@@ -129,7 +129,7 @@ class Stability(Monitor):
             budget = stability.speed_budget(float(np.sum(run.mass[d])), self.e0, run.g_integral, impulses,
                                             run.jump_dvs)
             msg = stability.speed_check(t, run.mass[d], run.vel[d], ke, budget, run.w_free,
-                                        [int(run.bid[int(i)]) for i in d])
+                                        Labels(lambda k: int(run.bid[int(d[k])])))
         if msg is None and len(st.fn):
             msg = tunnelling(run, st, self.size)
         if msg is not None:
@@ -138,8 +138,20 @@ class Stability(Monitor):
 
 def tunnelling(run, st, size) -> str | None:
     """stability.tunnelling on the contacts ``st`` (blocks named by id)."""
-    names = [f"{run.bid[int(a)]}-{run.bid[int(b)]}" for a, b in zip(st.id1, st.id2)]
+    names = Labels(lambda k: f"{run.bid[int(st.id1[k])]}-{run.bid[int(st.id2[k])]}")
     return stability.tunnelling(st.volume, st.area, size[st.id1], size[st.id2], names)
+
+
+class Labels:
+    """The labels of a check's rows (``labels[k]``), made only when a message names one: the
+    checks pass at nearly every sample, and a list of every block's or contact's name cost
+    more than the checks."""
+
+    def __init__(self, label_of):
+        self.label_of = label_of
+
+    def __getitem__(self, k):
+        return self.label_of(int(k))
 
 
 class LeftModel(Monitor):

@@ -46,13 +46,14 @@ class Recorder:
         self.hc = {name: {k: [] for k in CONTACT_KEYS} for name, _, _ in self.named}
         self.max_contacts = 0
 
-    def sample(self, t: float) -> Sample:
-        """Record the state at time ``t`` (s); returns what the monitors need."""
+    def sample(self, t: float, g=None) -> Sample:
+        """Record the state at time ``t`` (s); returns what the monitors need. ``g``: the body
+        acceleration at t (m/s^2, ``prog.body_acceleration(t)``) where the caller has it."""
         run, h = self.run, self.h
         st = run.engine.contacts()
         h["t"].append(t)
         h["tilt_deg"].append(run.prog.tilt_deg(t))
-        g = run.prog.body_acceleration(t)
+        g = run.prog.body_acceleration(t) if g is None else g
         h["g_eff"].append(g)
         h["base_acc"].append(run.prog.base_acceleration(t))
         d = run.dyn

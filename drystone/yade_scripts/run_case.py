@@ -123,7 +123,7 @@ class Driver:
         e.forces(t, g)
         if self.iter % self.rec_every == 0:
             e.before_sample()
-            self._sample(t)
+            self._sample(t, g)
         e.finish_step(g)
         self.progress.on_step(self, t, k)
         if self.stop_at is not None and t >= self.stop_at:
@@ -132,8 +132,8 @@ class Driver:
         if e.yade_integrates:
             self.python_time += time.perf_counter() - t_py
 
-    def _sample(self, t):
-        s = self.recorder.sample(t)
+    def _sample(self, t, g=None):
+        s = self.recorder.sample(t, g)
         for m in self.monitors:  # kept in their order (enter_stage)
             m.on_sample(self, s)
 
