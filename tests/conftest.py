@@ -3,7 +3,6 @@
 files in decreasing order of their cost."""
 from __future__ import annotations
 
-import json
 import os
 import shutil
 from pathlib import Path
@@ -69,9 +68,6 @@ _COST_S = {"slow": 30.0, "yade": 3.0, "other": 0.3}
 #: set by the controller of a parallel run while it compiles numba's cache (``pytest_configure``):
 #: the file that exists once the compile is done; the workers wait for it before a kernel is needed
 WARMING = "DRYSTONE_TEST_WARMING"
-#: the file beside it that exists once the compiled step's kernels are (the default engine and
-#: contact geometry); the other engines' are compiled after them
-COMPILED = "compiled"
 #: words of a test file's source that mark it as one that calls the compiled kernels in its own process
 #: (its runs are marked ``yade``): only to order the files while the cache is compiled, the waits
 #: below make any order correct
@@ -116,16 +112,17 @@ def pytest_configure(config):
         subprocess.run([sys.executable, "-m", "drystone", "run", str(case), "--out", str(d / f"out{k}"), "-q", *args],
                        capture_output=True)
 
+    def others():
+        for k, args in enumerate(_WARM_OTHERS):
+            run(k + 1, args)
+
     def warm():
-        # one after the other: the other engines share most of their kernels with the compiled
-        # step's (the numpy engine's first run compiled for 49 s of a core from an empty cache,
-        # 15 s after the compiled step's run), which then load from the cache
         t0 = time.time()
         try:
+            second = threading.Thread(target=others)
+            second.start()
             run(0)
-            done.with_name(COMPILED).write_text(f"{time.time() - t0:.1f}\n")
-            for k, args in enumerate(_WARM_OTHERS):
-                run(k + 1, args)
+            second.join()
         finally:
             done.write_text(f"{time.time() - t0:.1f}\n")  # the compile's wall time, s
 
@@ -140,10 +137,8 @@ def pytest_terminal_summary(terminalreporter, config):
     if warm is None or not (warm[1] / "done").is_file():
         return
     waits = sorted(warm[1].glob("waits-*"))
-    compiled = warm[1] / COMPILED
     terminalreporter.write_line(
-        f"conftest: numba's cache compiled in the background in {(warm[1] / 'done').read_text().strip()} s"
-        + (f" (the compiled step's kernels in {compiled.read_text().strip()} s)" if compiled.is_file() else "") + "; "
+        f"conftest: numba's cache compiled in the background in {(warm[1] / 'done').read_text().strip()} s; "
         + ("; ".join(f"{w.name[6:]} waited {w.read_text().strip()} s for it" for w in waits) or "no worker waited"))
 
 
@@ -154,34 +149,24 @@ def pytest_unconfigure(config):
         shutil.rmtree(warm[1], ignore_errors=True)
 
 
-_WAITED = [0.0]  # s this worker waited for the compile so far
-
-
-def _wait_for_the_kernels(compiled_only: bool = False) -> None:
+def _wait_for_the_kernels() -> None:
     """Block until the controller's compile of numba's cache is done (``$DRYSTONE_TEST_WARMING``;
-    at most 15 min: a warm-up that hangs leaves the tests to compile on their own);
-    ``compiled_only``: until the compiled step's kernels are (a run of the default engine and
-    contact geometry needs no more)."""
+    at most 15 min: a warm-up that hangs leaves the tests to compile on their own)."""
     import time
 
     done = os.environ.get(WARMING)
-    if not done:
-        return
-    target = Path(done).with_name(COMPILED) if compiled_only else Path(done)
     t0 = time.time()
-    while not target.exists() and not os.path.exists(done) and time.time() - t0 < 900:
+    while done and not os.path.exists(done) and time.time() - t0 < 900:
         time.sleep(0.2)
-    _WAITED[0] += time.time() - t0  # the time this worker waited (the controller's summary says it)
-    Path(done).with_name(f"waits-{os.environ.get('PYTEST_XDIST_WORKER', 'gw')}").write_text(f"{_WAITED[0]:.1f}\n")
-    if not compiled_only or os.path.exists(done):
-        os.environ.pop(WARMING, None)
+    if done:  # the time this worker waited (the controller's summary says it)
+        Path(done).with_name(f"waits-{os.environ.get('PYTEST_XDIST_WORKER', 'gw')}").write_text(f"{time.time() - t0:.1f}\n")
+    os.environ.pop(WARMING, None)
 
 
 def _wait_before_kernels() -> None:
     """In a worker while the cache is compiled: a numba kernel's first call in this process
-    (numba's ``Dispatcher._compile_for_args``: it compiles or loads from the cache) waits for
-    the compile first, and a run (``drystone.simulate._simulate``: YADE loads the kernels) for
-    its engine's kernels (the compiled step's for the default engine and contact geometry)."""
+    (numba's ``Dispatcher._compile_for_args``: it compiles or loads from the cache) and a run
+    (``drystone.simulate._simulate``: YADE loads the kernels) wait for the compile first."""
     from numba.core import dispatcher
 
     from drystone import simulate as sim
@@ -192,11 +177,9 @@ def _wait_before_kernels() -> None:
         _wait_for_the_kernels()
         return first_call(self, *args, **kws)
 
-    def waiting_simulate(spec_path, *args, **kws):
-        engine = kws.get("engine", args[2] if len(args) > 2 else "compiled")
-        detection = json.loads(Path(spec_path).read_text()).get("detection")
-        _wait_for_the_kernels(compiled_only=engine == "compiled" and detection != "yade")
-        return simulate(spec_path, *args, **kws)
+    def waiting_simulate(*args, **kws):
+        _wait_for_the_kernels()
+        return simulate(*args, **kws)
 
     dispatcher.Dispatcher._compile_for_args = waiting_first_call
     sim._simulate = waiting_simulate
@@ -204,11 +187,10 @@ def _wait_before_kernels() -> None:
 
 @pytest.hookimpl(tryfirst=True)
 def pytest_runtest_setup(item):
-    """A test that runs YADE waits for the controller's compile of the compiled step's kernels
-    (its YADE process loads them from numba's cache); a run of another engine waits for the
-    rest (``_wait_before_kernels``)."""
+    """A test that runs YADE waits for the controller's compile of numba's cache (its YADE
+    process loads the kernels from it)."""
     if os.environ.get(WARMING) and _cost(item) > _COST_S["other"]:
-        _wait_for_the_kernels(compiled_only=True)
+        _wait_for_the_kernels()
 
 
 def _cost(item) -> float:
