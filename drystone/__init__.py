@@ -9,11 +9,11 @@ from pathlib import Path as _Path
 
 __version__ = "0.1.0"
 
-#: the modules with numba kernels (``@njit(cache=True)``), and numba_cache (its ``FIRST`` is compiled in)
 #: drystone's own numba cache folder (``_numba_cache_dir``); numba's cache is there unless
 #: NUMBA_CACHE_DIR was set before drystone was first imported
 OWN_NUMBA_CACHE_DIR = ""
 
+#: the modules with numba kernels (``@njit(cache=True)``), and numba_cache (its ``FIRST`` is compiled in)
 _KERNEL_SOURCES = ("mechanics/overlap.py", "mechanics/contact.py", "mechanics/contact_step.py",
                    "mechanics/contact_rows.py", "mechanics/neighbours.py", "mechanics/energy.py",
                    "mechanics/integration.py", "numba_cache.py")

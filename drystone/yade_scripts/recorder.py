@@ -53,7 +53,7 @@ class Recorder:
         st = run.engine.contacts()
         h["t"].append(t)
         h["tilt_deg"].append(run.prog.tilt_deg(t))
-        g = run.prog.body_acceleration(t) if g is None else g
+        g = run.prog.body_acceleration(t) if g is None else np.array(g, float)  # (its own: the history keeps it)
         h["g_eff"].append(g)
         h["base_acc"].append(run.prog.base_acceleration(t))
         d = run.dyn
