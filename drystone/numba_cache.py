@@ -126,11 +126,11 @@ def install() -> None:
     """Serialise numba's cache writes (and keep reads out of them) across processes, key a
     kernel by its source's content, and start numba's thread pool (module docstring)."""
     numba.get_num_threads()  # starts the pool (numba.np.ufunc.parallel._launch_threads) if it is not running
-    where = caching._UserProvidedCacheLocator  # the locator of a folder set by NUMBA_CACHE_DIR
-    where.get_source_stamp = _source_stamp
-    where.get_suitable_cache_subpath = classmethod(_cache_subpath)
     cls = caching.IndexDataCacheFile
     if getattr(cls.save, "drystone_locked", False):
         return
     cls.save = _under_lock(cls.save, exclusive=True)
     cls.load = _under_lock(cls.load, exclusive=False)
+    where = caching._UserProvidedCacheLocator  # the locator of a folder set by NUMBA_CACHE_DIR
+    where.get_source_stamp = _source_stamp
+    where.get_suitable_cache_subpath = classmethod(_cache_subpath)
