@@ -83,7 +83,8 @@ def rocking_pulse(a_p: float, omega_p: float, b: float, h: float, r: float | Non
     |u_g''| > g tan(alpha) (the block rocks away from the acceleration); at each impact
     (theta through 0) the angular velocity is multiplied by ``r`` (default Housner's
     1 - 1.5 sin^2 alpha). Integrated (DOP853, relative tolerance 1e-10) until t_after (s)
-    past the pulse; returns {"overturned": bool (|theta| reached pi/2), "impacts",
+    past the pulse, the pulse's end a step's end and the extremes of theta found as events
+    (theta' = 0); returns {"overturned": bool (|theta| reached pi/2), "impacts",
     "max_theta_rad", "time_s" (of the overturn, or None)}. SI units. ``shape`` = "rectangle":
     u_g''(t) = a_p for 0 <= t <= pi / omega_p instead (Housner 1963's rectangular pulse, whose
     linearised overturning amplitude is g alpha / (1 - exp(-p t_1)), ``rectangle_overturning``)."""
@@ -121,14 +122,24 @@ def rocking_pulse(a_p: float, omega_p: float, b: float, h: float, r: float | Non
         def over(tt, yy, s=sgn):
             return abs(yy[0]) - 0.5 * math.pi
         over.terminal, over.direction = True, 1.0
-        # the first instants of a rocking phase start at theta = 0: nudge past the event
-        sol = solve_ivp(f, (t, t_end), y, args=(sgn,), method="DOP853", rtol=1e-10, atol=1e-12,
-                        events=(impact, over), max_step=min(0.01, tp / 50), first_step=1e-6)
+
+        def peak(tt, yy, s=sgn):  # theta' = 0: the rocking's extremes, found exactly
+            return yy[1]
+        # the pulse's end is a segment's end (the forcing is smooth within each); the first
+        # instants of a rocking phase start at theta = 0: nudge past the event
+        t_stop = tp if t < tp else t_end
+        sol = solve_ivp(f, (t, t_stop), y, args=(sgn,), method="DOP853", rtol=1e-10, atol=1e-12,
+                        events=(impact, over, peak), first_step=1e-6)
         top = max(top, float(np.max(np.abs(sol.y[0]))))
+        if sol.t_events[2].size:
+            top = max(top, float(np.max(np.abs(sol.y_events[2][:, 0]))))
         if sol.t_events[1].size:
             return {"overturned": True, "impacts": impacts, "max_theta_rad": 0.5 * math.pi,
                     "time_s": float(sol.t_events[1][0])}
         if not sol.t_events[0].size:
+            if t_stop < t_end:  # the pulse is over: the same rocking phase goes on
+                t, y = t_stop, sol.y[:, -1]
+                continue
             break
         t = float(sol.t_events[0][0])
         om = float(sol.y_events[0][0][1]) * r

@@ -306,29 +306,28 @@ def _previous(keys, prev_keys):
 
 
 # The neighbour list's arrays (14: ``NeighbourList.arrays``) and the search's buffers (16:
-# ``neighbours.contact_buffers``) reach the two kernels called from Python (``_contact_forces``,
-# ``_advance``) one per argument, not as two tuples: numba 0.58 types an argument whose type
+# ``neighbours.contact_buffers``) reach the kernel called from Python (``_advance``) one per argument,
+# not as two tuples: numba 0.58 types an argument whose type
 # fingerprint outgrows 40 bytes (a tuple of more than four arrays) in Python at every call, 0.1 to
 # 0.4 ms, more than a small wall's whole step (the fingerprint's first bytes are lost when its
 # buffer grows, so its cache never hits: github.com/numba/numba/issues/9097); an
 # array argument is typed in C (about 0.1 us). Within compiled code they travel as tuples.
-@njit(cache=True)
+# ``_contact_forces`` is inlined into ``_advance``, its only caller (``CompiledStep.forces`` and ``peek``
+# are calls of no step): numba emits a kernel's callees again in each kernel compiled on its own, and
+# this one on its own cost ~20 s of the first compile's ~140 s of a core.
+@njit(cache=True, inline="always")
 def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving, inv_mass,
                     inv_inertia_local, mat, table, jkeys, jvals, prev_keys, prev_shear, prev_basis, dt, tol, size, shared,
-                    with_energy, l0, l1, l2, l3, l4, l5, l6, l7, l8, l9, l10, l11, l12, l13,
-                    b0, b1, b2, b3, b4, b5, b6, b7, b8, b9, b10, b11, b12, b13, b14, b15):
+                    with_energy, nl, buf):
     """One step's contacts between shapes (ia, ib: shape indices; shape s a convex part of
     body ``owner[s]``, ``size`` per shape; ``shared``: some body has several shapes) and
     the forces and torques on the bodies. The contacts come from the neighbour list's arrays
-    l0 .. l13 (``drystone.mechanics.neighbours``: the full search's contacts, in its order),
-    into the search's buffers b0 .. b15; both are returned last as tuples (``nl``, ``buf``:
-    grown, rebuilt). They come one by one, not as two tuples (the note above). The elastic
+    ``nl`` (``drystone.mechanics.neighbours``: the full search's contacts, in its order), into
+    the search's buffers ``buf``; both are returned last (grown, rebuilt). The elastic
     energy e_el only ``with_energy`` or for a step deeper than its sizes allow (``depth_ratio``
     > 1), else NaN: it is recorded at samples only. The work
     per contact and per body runs on numba's threads (``drystone.mechanics.contact_rows``:
     the same numbers for any number)."""
-    nl = (l0, l1, l2, l3, l4, l5, l6, l7, l8, l9, l10, l11, l12, l13)
-    buf = (b0, b1, b2, b3, b4, b5, b6, b7, b8, b9, b10, b11, b12, b13, b14, b15)
     nb = len(pos)
     ns = len(nv)
     nt = buf[8].shape[0]  # ranges of rows for the threads: one per thread numba may run
@@ -454,6 +453,12 @@ class CompiledStep:
         self.last = {"Fd": np.zeros((nb, 3)), "Td": np.zeros((nb, 3)), "slip": 0.0}
         #: the contact search's neighbour list and its buffers
         self.neighbours = nbr.NeighbourList(self.shapes, self.owner, self.moving, nb, skin)
+        # ``_advance``'s arguments for no step (``_contacts``): g, F_ext, the loads' (no column); the
+        # accumulators; the motion's, unread but of the types ``advance`` is given (one compiled kernel)
+        self._idle = (np.zeros((0, 3)), np.zeros((nb, 3))) + self._no_loads(0)
+        self._idle_acc = np.zeros(3)
+        self._idle_motion = (np.ones(nb), np.ones((nb, 3)), np.zeros((nb, 3)), np.zeros((nb, 3)), np.zeros(nb, np.bool_),
+                             np.zeros((nb, 3)), np.tile([0.0, 0.0, 0.0, 1.0], (nb, 1)))
 
     def retire(self, shapes) -> None:
         """Take ``shapes`` (a mask or indices) out of the contact search: their vertices
@@ -476,18 +481,27 @@ class CompiledStep:
         self._raw = tuple(np.array(x) for x in raw)
         self._state = None
 
+    def _contacts(self, pos, rot, vel, angvel, dt) -> tuple:
+        """``_advance`` asked for no step: the contacts and forces of the state given, the
+        neighbour list kept, the rest of this object unchanged. Returns (ia, ib, vol, c, n,
+        area, fn, fs, fd, slipping, keys, basis, F, T, e_prev, e_last, om_max, depth_ratio,
+        slip, Fd, Td)."""
+        s = self.shapes
+        out = _advance(
+            s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, self.owner, pos, rot, vel, angvel, self.moving,
+            self.inv_mass, self.inv_inertia_local, self.material, self.table, self.jkeys, self.jvals, self.keys,
+            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared, *self._idle,
+            self.elastic[1], self._idle_acc, *self._idle_motion, *self._search_state())
+        self._keep_search_state(out[-2], out[-1])
+        return out[1:-2]
+
     def forces(self, pos, rot, vel, angvel, dt):
         """Contact forces and torques (nb, 3) on every body (N, N m) for the state given;
         updates the shear history, ``state``, ``elastic``, ``max_omega_dt`` and half of the
         step's slip work in ``energy`` (the rest and the work: ``account`` once the step is
         integrated)."""
-        s = self.shapes
-        (ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, basis, F, T, e_el, om_max,
-         self.depth_ratio, slip, Fd, Td, nl, buf) = _contact_forces(
-            s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, self.owner, pos, rot, vel, angvel, self.moving,
-            self.inv_mass, self.inv_inertia_local, self.material, self.table, self.jkeys, self.jvals, self.keys,
-            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared, True, *self._search_state())
-        self._keep_search_state(nl, buf)
+        (ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, basis, F, T, _, e_el, om_max, self.depth_ratio, slip, Fd,
+         Td) = self._contacts(pos, rot, vel, angvel, dt)
         self.keys, self.shear_store, self.basis_store = keys, fs, basis
         self.elastic = (self.elastic[1], e_el)
         self.max_omega_dt = max(self.max_omega_dt, om_max * dt)
@@ -500,13 +514,8 @@ class CompiledStep:
         """(elastic energy J, slip work J) of the next step from the state given, the
         state of this object unchanged: the last sample of a run, after its last step,
         centres its energies at that step's end (drystone.mechanics.energy)."""
-        s = self.shapes
-        out = _contact_forces(
-            s.verts, s.nv, s.normals, s.offsets, s.nf, s.faces, s.fk, self.owner, pos, rot, vel, angvel, self.moving,
-            self.inv_mass, self.inv_inertia_local, self.material, self.table, self.jkeys, self.jvals, self.keys,
-            self.shear_store, self.basis_store, dt, ov.TOL, self.size, self.shared, True, *self._search_state())
-        self._keep_search_state(out[20], out[21])
-        return float(out[14]), float(out[17])
+        out = self._contacts(pos, rot, vel, angvel, dt)
+        return float(out[15]), float(out[18])
 
     def account(self, dt, g, F, T, F_ext, lin_free, v0, w0, v1, w1, loads=None):
         """Add the step last computed by ``forces``, now integrated with the forces F, T
@@ -599,13 +608,15 @@ def _advance(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, a
              l0, l1, l2, l3, l4, l5, l6, l7, l8, l9, l10, l11, l12, l13,
              b0, b1, b2, b3, b4, b5, b6, b7, b8, b9, b10, b11, b12, b13, b14, b15):
     """``CompiledStep.advance``: len(g) steps of ``_contact_forces`` + ``integrate`` (+
-    ``energy.account`` into ``acc``) without leaving compiled code; the arithmetic of each
-    step is that of one call of each (the same results bit for bit). The loads' wrench of
+    ``energy.account`` into ``acc``) without leaving compiled code, the arithmetic of each
+    step that of one call of each (the same results bit for bit); with no step (len(g) = 0:
+    ``CompiledStep.forces``, ``peek``) the contacts of the state given, ``acc`` unchanged and
+    the neighbour list's arrays and the search's buffers the only state kept. The loads' wrench of
     step s is ``applied_wrench(coef[s], Fb, Tb)`` (nothing when coef has no column). The
     elastic energy (``e_prev``, ``e_last``) of the last two steps only (what a sample
     after them records): a step that stops the call on the depth check has its own, the
     step before it NaN unless it was one of the last two. l0 .. l13, b0 .. b15: the
-    neighbour list's arrays and the search's buffers one by one, as ``_contact_forces``."""
+    neighbour list's arrays and the search's buffers one by one (the note above ``_contact_forces``)."""
     nl = (l0, l1, l2, l3, l4, l5, l6, l7, l8, l9, l10, l11, l12, l13)
     buf = (b0, b1, b2, b3, b4, b5, b6, b7, b8, b9, b10, b11, b12, b13, b14, b15)
     n = len(g)
@@ -619,12 +630,15 @@ def _advance(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, a
         (ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, basis, F, T, e_el, om, depth, slip, Fd,
          Td, nl, buf) = _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving,
                                         inv_mass, inv_inertia_local, mat, table, jkeys, jvals, keys, shear, basis, dt,
-                                        tol, size, shared, s >= n - 2, *nl, *buf)
+                                        tol, size, shared, s >= n - 2, nl, buf)
         shear = fs
         e_prev = e_last
         e_last = e_el
         if om > om_max:
             om_max = om
+        if s == n:  # no step asked for (``forces``, ``peek``): the contacts of the state given
+            return (s, ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, basis, F, T, e_prev, e_last, om_max, depth,
+                    slip, Fd, Td, nl, buf)
         F += F_ext
         if loaded:
             applied_wrench(coef[s], Fb, Tb, F, T)
