@@ -332,7 +332,7 @@ def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot,
     ns = len(nv)
     nt = buf[8].shape[0]  # ranges of rows for the threads: one per thread numba may run
     nl = nbr.update(nl, verts, nv, normals, offsets, nf, owner, pos, rot, nt)
-    m, buf = nbr.search(nl, buf, nv, nf, faces, fk, tol, ov.TOUCHING_IS_NO_CONTACT)
+    m, buf = nbr.search(nl, buf, nv, nf, faces, fk, tol, bool(ov.TOUCHING_IS_NO_CONTACT))  # bool(): see the constant
     ia = buf[0][:m]
     ib = buf[1][:m]
     vol = buf[2][:m]

@@ -244,7 +244,7 @@ def search(nl, buf, nv, nf, faces, fk, tol, touching):
             _search_range(r * n // nt, (r + 1) * n // nt, la, lb, ok, lo, hi, GV, GN, GD, nv, nf, faces, fk, tol,
                           touching, polys[t], counts[t], A[t], B[t], S[t], areas[t], g[t], id1, id2, vol, cen, nrm,
                           area, pc, pj, hit)
-    m = 0
+    m = np.int64(0)  # not the literal 0 (overlap.TOUCHING_IS_NO_CONTACT)
     for k in range(n):
         if hit[k]:
             if m < k:

@@ -633,7 +633,7 @@ def _contacts_of_pairs(GV, GN, GD, nv, nf, faces, fk, ia, ib, tol, touching):
     pj = np.empty((cap, 3, 3))
     polys, counts, A, B, S, areas = _work(GN.shape[1])
     g = np.empty(3)
-    m = 0
+    m = np.int64(0)  # not the literal 0: pair_contact would be compiled for it too (TOUCHING_IS_NO_CONTACT)
     for k in range(cap):
         if pair_contact(GV, GN, GD, nv, nf, faces, fk, ia[k], ib[k], tol, touching, polys, counts, A, B, S, areas, g,
                         id1, id2, vol, cen, nrm, area, pc, pj, m):
@@ -642,7 +642,9 @@ def _contacts_of_pairs(GV, GN, GD, nv, nf, faces, fk, ia, ib, tol, touching):
 
 
 #: pairs touching within TOL are no contact (module docstring, "Touching"); False gives the
-#: contacts of the clip alone (round-off overlaps of touching faces included)
+#: contacts of the clip alone (round-off overlaps of touching faces included). Compiled code passes
+#: it, and any constant flag, as ``bool(...)``: numba compiles a kernel called with a constant for
+#: that constant's literal type, again for each constant, the whole clip with it (~10 s of a core each)
 TOUCHING_IS_NO_CONTACT = True
 
 
@@ -656,7 +658,7 @@ def contacts_with_patches(verts, nv, normals, offsets, nf, faces, fk, pos, rot, 
     (``TOUCHING_IS_NO_CONTACT``)."""
     GV, GN, GD, lo, hi = _global_geometry(verts, nv, normals, offsets, nf, pos, rot)
     ia, ib = sweep_pairs(lo, hi, moving)
-    return _contacts_of_pairs(GV, GN, GD, nv, nf, faces, fk, ia, ib, tol, TOUCHING_IS_NO_CONTACT)
+    return _contacts_of_pairs(GV, GN, GD, nv, nf, faces, fk, ia, ib, tol, bool(TOUCHING_IS_NO_CONTACT))
 
 
 @njit(cache=True)
@@ -674,7 +676,7 @@ def contacts_of_shapes(verts, nv, normals, offsets, nf, faces, fk, owner, pos, r
     GV, GN, GD, lo, hi = _global_geometry(verts, nv, normals, offsets, nf, pos_s, rot_s)
     ia, ib = sweep_pairs(lo, hi, moving_s)
     keep = owner[ia] != owner[ib]
-    return _contacts_of_pairs(GV, GN, GD, nv, nf, faces, fk, ia[keep], ib[keep], tol, TOUCHING_IS_NO_CONTACT)
+    return _contacts_of_pairs(GV, GN, GD, nv, nf, faces, fk, ia[keep], ib[keep], tol, bool(TOUCHING_IS_NO_CONTACT))
 
 
 @njit(cache=True)
@@ -696,7 +698,7 @@ def _contacts_all_pairs(verts, nv, normals, offsets, nf, faces, fk, pos, rot, mo
             keys[m] = i * nb + j
             m += 1
     keys = keys[:m]
-    return _contacts_of_pairs(GV, GN, GD, nv, nf, faces, fk, keys // nb, keys % nb, tol, False)
+    return _contacts_of_pairs(GV, GN, GD, nv, nf, faces, fk, keys // nb, keys % nb, tol, bool(False))
 
 
 @njit(cache=True)
