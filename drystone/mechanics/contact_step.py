@@ -313,8 +313,8 @@ def _previous(keys, prev_keys):
 # buffer grows, so its cache never hits: github.com/numba/numba/issues/9097); an
 # array argument is typed in C (about 0.1 us). Within compiled code they travel as tuples.
 # ``_contact_forces`` is inlined into ``_advance``, its only caller (``CompiledStep.forces`` and ``peek``
-# are calls of no step): numba emits a kernel's callees again in each kernel compiled on its own, and
-# this one on its own cost ~20 s of the first compile's ~140 s of a core.
+# are calls of no step): numba emits a kernel's callees again in each kernel compiled on its own (this
+# one on its own: 109 s of a core for the step's first compile, 104 s inlined).
 @njit(cache=True, inline="always")
 def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving, inv_mass,
                     inv_inertia_local, mat, table, jkeys, jvals, prev_keys, prev_shear, prev_basis, dt, tol, size, shared,
