@@ -39,6 +39,6 @@ _numba_cache_dir()
 
 def kernels_cached() -> bool:
     """Whether numba's cache holds the compiled step for the current kernel sources (else the
-    first run compiles them: 60-90 s on 2 cores)."""
+    first run compiles them: 1.5-2.5 min of a core)."""
     cache = _Path(_os.environ.get("NUMBA_CACHE_DIR", ""))
     return bool(_os.environ.get("NUMBA_CACHE_DIR")) and cache.is_dir() and any(cache.rglob("contact_step.*.nbi"))

@@ -78,7 +78,7 @@ def pytest_configure(config):
     """In the controller of a parallel run (``-n N``: it runs no test itself) with numba's cache
     cold, compile the contact kernels once, in the background, while the workers start on the
     tests that need no kernel: otherwise each worker, and each YADE run a test starts before the
-    cache is written, compiles them on its own (60-90 s of a core each). The smallest case runs
+    cache is written, compiles them on its own (1.5-2.5 min of a core each). The smallest case runs
     through the compiled step in one process and through the other engines' kernels
     (``_WARM_OTHERS``) in another; when both end, the file named by ``$DRYSTONE_TEST_WARMING``
     is written. A worker waits for that file before a test that runs YADE, a run, or a numba

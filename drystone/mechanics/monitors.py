@@ -280,7 +280,7 @@ class Progress:
     stage, tilt, contacts, ETA; a sweep reads the last one from the run's log)."""
 
     #: a pause longer than this (s of wall time) between two Python steps is not simulation pace
-    #: but numba compiling a kernel on its first call (60-90 s): the ETA clock restarts after it
+    #: but numba compiling a kernel on its first call (1.5-2.5 min): the ETA clock restarts after it
     STALL_S = 10.0
 
     def __init__(self, every_s: float = 5.0):
