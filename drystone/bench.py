@@ -498,6 +498,59 @@ def contact_search_times(run_dir: Path, budget_s: float = 1.0) -> dict:
     return r
 
 
+#: the step's phases ``step_phases`` times, in the order ``contact_step._contact_forces`` runs them
+PHASES = ("placement", "search", "law", "damping", "sums")
+
+
+def step_phases(step, pos, rot, vel, angvel, dt, budget_s: float = 1.0) -> dict:
+    """ms per call of each phase of one contact step (``contact_step._contact_forces``),
+    each kernel called from Python on ``step``'s state (a ``CompiledStep`` after a call of
+    ``forces`` on that state: its contacts' history and damping bases warm, as in a
+    settled run), one thread: the shapes' placement and the neighbour list's check
+    (``neighbours.update``), the search (the listed pairs' box test and the clip of those
+    that pass, ``neighbours.search``), the law (``contact_rows.law_rows``), the damping
+    (``contact.damping_wrenches_warm``, the bases copied first: each call starts from the
+    same ones) and the sums on the bodies (``contact_rows.body_sums``); ``contacts``: the
+    contacts found. Where a contact-step's time goes; their sum is near ``forces``."""
+    from drystone.mechanics import contact as law
+    from drystone.mechanics import contact_rows as crows
+    from drystone.mechanics import contact_step as cs
+    from drystone.mechanics import neighbours as nbr
+    from drystone.mechanics import overlap as ov
+
+    s, nl, buf = step.shapes, step.neighbours.arrays, step.neighbours.contacts
+    nl = nbr.update(nl, s.verts, s.nv, s.normals, s.offsets, s.nf, step.owner, pos, rot, 1)
+    m, buf = nbr.search(nl, buf, s.nv, s.nf, s.faces, s.fk, ov.TOL, bool(ov.TOUCHING_IS_NO_CONTACT))
+    ia, ib, vol, c, n, area, pc, pj = (np.array(buf[k][:m]) for k in range(8))
+    oa, ob = step.owner[ia], step.owner[ib]
+    prev = cs._previous(ia * len(s.nv) + ib, step.keys)
+    rows = (np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty((m, step.shear_store.shape[1])),
+            np.empty((m, 6, 6)), np.empty(m), np.empty(m, np.bool_), np.empty((m, 3)), np.empty((m, 3)),
+            np.empty((m, 3)), np.empty((m, 3)), np.empty((m, 3)), np.empty((m, 6)), np.empty((m, 3, 3)),
+            np.empty((m, 3, 3)), np.empty((m, 4)))
+    kn, kt, mu, xi, fn, fs, basis, jp, slipping, ra, rb, pa, pb, lever, twist, iia, iib, slip_terms = rows
+
+    def law_rows():
+        crows.law_rows(oa, ob, c, n, area, pc, pj, vol, pos, vel, angvel, rot, step.inv_inertia_local, step.material,
+                       step.table, step.jkeys, step.jvals, prev, step.shear_store, step.basis_store, dt, *rows, 1)
+
+    law_rows()
+    ima, imb = step.inv_mass[oa], step.inv_mass[ob]
+
+    def damping():
+        return law.damping_wrenches_warm(n, area, pj, kn, kt, xi, ~slipping, pa, pb, ima, imb, iia, iib, twist, fn,
+                                         fs, mu, lever, basis.copy(), prev >= 0, 1)
+
+    fd, md, _ = damping()
+    fns = {"placement": lambda: nbr.update(nl, s.verts, s.nv, s.normals, s.offsets, s.nf, step.owner, pos, rot, 1),
+           "search": lambda: nbr.search(nl, buf, s.nv, s.nf, s.faces, s.fk, ov.TOL, bool(ov.TOUCHING_IS_NO_CONTACT)),
+           "law": law_rows, "damping": damping,
+           "sums": lambda: crows.body_sums(oa, ob, len(pos), fs, fn, n, fd, md, ra, rb, pa, pb, 1)}
+    out = {k: _best_ms(fns[k], budget_s / len(PHASES)) for k in PHASES}
+    out["contacts"] = int(m)
+    return out
+
+
 def step_times(run_dir: Path, budget_s: float = 1.0) -> dict:
     """ms per call, outside YADE, on a run's settled positions (``settled_configuration``),
     of the compiled step's two halves: the contact forces (``CompiledStep.forces``: search,
@@ -505,7 +558,8 @@ def step_times(run_dir: Path, budget_s: float = 1.0) -> dict:
     every body (``integration.integrate``, Fincham's scheme for the free blocks); the
     forces and the whole step as a run takes it (``CompiledStep.advance``, ADVANCE_STEPS
     steps under gravity per call) on 1 and 2 threads, timed in alternating rounds
-    (``_interleaved_ms``), and their parallel efficiencies t1 / (2 t2). Masses
+    (``_interleaved_ms``), and their parallel efficiencies t1 / (2 t2); the contact
+    step's phases on one thread (``step_phases``: ``phases_ms``). Masses
     are the run's (histories.npz); principal moments those of each block's box in its body
     frame, materials the spec's first (the cost does not depend on their values)."""
     from scipy.spatial.transform import Rotation
@@ -548,9 +602,12 @@ def step_times(run_dir: Path, budget_s: float = 1.0) -> dict:
 
     a1, a2 = (ms / ADVANCE_STEPS for ms in _interleaved_ms([advance(step, copies[0]), advance(step2, copies[1])],
                                                            budget_s, rounds=20))
+    step.forces(pos, rot, vel, w, dt)  # the history of the settled state again (``advance`` moved its copy)
+    phases = step_phases(step, pos, rot, vel, w, dt, budget_s)
     return {"contacts": int(len(step.keys)), "forces_ms": t1, "forces_ms_2_threads": t2,
             "forces_efficiency": t1 / (2.0 * t2), "threads_available": step2.threads,
             "advance_ms_per_step": a1, "advance_ms_per_step_2_threads": a2, "advance_efficiency": a1 / (2.0 * a2),
+            "phases_ms": phases,
             "integrate_ms": _best_ms(lambda: integration.integrate(dt, np.zeros(3), F, T, m_int, inertia, free, free,
                                                           moving.copy(), *state, 1), budget_s / 2)}
 
@@ -617,6 +674,9 @@ def scale_section(workdir: Path, sizes=SIZES, walls=WALLS, steps: int = 300, eng
                   f"{r['split']['forces_ms']:.3f} ms, integration of {n} stones {r['split']['integrate_ms']:.3f} ms; "
                   f"the whole step as a run calls it (advance, fastest of 20 rounds) {r['split']['advance_ms_per_step']:.3f} ms, "
                   f"{r['advance_us_per_contact_step']:.2f} us/contact-step"
+                  + (f"\n  {'':21s} its phases alone, us per contact: " + ", ".join(
+                      f"{k} {1e3 * r['split']['phases_ms'][k] / max(1, r['split']['phases_ms']['contacts']):.2f}"
+                      for k in PHASES) if "phases_ms" in r["split"] else "")
                   + (f"\n  {'':21s} 2 threads: {r['ms_per_step_2_threads']:.2f} ms/step, parallel efficiency t1/(2 t2) "
                      f"{r['parallel_efficiency']:.2f} (the runs, one after the other); alternating with 1 thread: "
                      f"advance {r['split']['advance_ms_per_step']:.3f} -> {r['split']['advance_ms_per_step_2_threads']:.3f} "

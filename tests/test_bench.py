@@ -174,8 +174,8 @@ def test_settled_configuration_places_the_blocks(tmp_path):
 
 def test_step_times_run_the_compiled_step_on_the_settled_blocks(tmp_path):
     """The bench's split of a step (forces, integration) runs on a run's last state: a block
-    pressed 0.1 mm into the platform is one contact; both halves and the whole step on 1 and 2
-    threads report a time, the efficiencies their ratios."""
+    pressed 0.1 mm into the platform is one contact; both halves, the whole step on 1 and 2
+    threads and each phase of the contact step report a time, the efficiencies their ratios."""
     box = [[x, y, z] for x in (0.0, 2.0) for y in (0.0, 1.0) for z in (0.0, 0.5)]
     spec = {"blocks": [{"id": 0, "role": "platform", "vertices": [[x, y, z - 0.5] for x, y, z in box]},
                        {"id": 7, "role": "free", "vertices": box}],
@@ -188,6 +188,7 @@ def test_step_times_run_the_compiled_step_on_the_settled_blocks(tmp_path):
     assert r["contacts"] == 1 and r["forces_ms"] > 0 and r["integrate_ms"] > 0
     assert r["advance_ms_per_step"] > 0 and r["advance_ms_per_step_2_threads"] > 0
     assert r["advance_efficiency"] == pytest.approx(r["advance_ms_per_step"] / (2 * r["advance_ms_per_step_2_threads"]))
+    assert r["phases_ms"]["contacts"] == 1 and all(r["phases_ms"][k] > 0 for k in bench.PHASES)
 
 
 def _row(engine, threads, ms):

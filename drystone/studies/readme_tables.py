@@ -348,6 +348,17 @@ def bench(results: Path) -> str:
                     "run's ms/step)."]
         if effs:
             out += ["", "Parallel efficiency t1 / (2 t2) on 2 threads: " + "; ".join(effs) + "."]
+        ph = [r for r in sc if "phases_ms" in (r.get("split") or {})]
+        if ph:
+            from drystone.bench import PHASES as names
+            out += ["", "Where the settled step's time goes, µs per contact (each phase alone on one thread: the shapes "
+                        "placed and the neighbour list checked, the search's box tests and clip, the law, the damping, "
+                        "the sums on the bodies):", "",
+                    "| wall | stones | contacts | " + " | ".join(names) + " |", "|---|---|---|" + "---|" * len(names)]
+            for r in ph:
+                t = r["split"]["phases_ms"]
+                out.append(f"| {r['wall']} | {r['stones']} | {t['contacts']} | "
+                           + " | ".join(f"{1e3 * t[k] / max(1, t['contacts']):.2f}" for k in names) + " |")
         g = d["scale"].get("growth_exponent") or {}
         if g:
             out += ["", "Cost ~ N^k: " + ", ".join(f"{k} k = {v:.2f}" for k, v in g.items()) + "."]
