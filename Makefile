@@ -59,7 +59,7 @@ help:
 	@echo "make site-study-small           the site study's pipeline on 1 short record, coarse brackets (~3 min; not a result)"
 	@echo "make site-study-report          rewrite results/site/ from the runs made so far"
 	@echo "make crosscheck [XC=all]   LMGC90 (rigid) vs this package: toppling block + half-sine pulse (~3 min); XC=all adds the 40-block wall (~10 min) and the 5 tilt walls (hours); skipped without compas_lmgc90"
-	@echo "make clean        delete what the package wrote in results/ (its runs, sweeps, studies) and .numba_cache/; says what it left"
+	@echo "make clean        delete what the package wrote in results/ (its runs, sweeps, studies) and .numba_cache/; says what it left (the kernels shared by your checkouts in ~/.cache/drystone/numba stay)"
 
 setup: system-deps $(STAMP)
 

@@ -16,6 +16,10 @@ What is the package's (everything else stays, and is listed):
 - a sweep's ``sweep.json`` written before the manifests existed (recognised by its keys);
 - a folder left empty by the above; ``.numba_cache/`` beside the package.
 
+The compiled kernels shared by this user's checkouts (``drystone.kernel_cache_root``) stay:
+other checkouts load them; the package keeps the most recently used versions there
+(``drystone.prune_kernel_cache``). ``make clean`` says where they are and their size.
+
 A symbolic link is never followed nor deleted. Files the package wrote before it kept
 manifests (a study's report of an older version) are left and listed: delete them by hand.
 """
@@ -144,6 +148,12 @@ def main(argv=None) -> int:
               + "".join(f"\n  {p}" for p in left[:50]) + (f"\n  ... and {len(left) - 50} more" if len(left) > 50 else ""))
     else:
         print("clean: nothing left")
+    import drystone
+    shared = drystone.kernel_cache_root()
+    if shared.is_dir():
+        size = sum(f.stat().st_size for f in shared.rglob("*") if f.is_file() and not f.is_symlink())
+        print(f"clean: the compiled kernels shared by your checkouts stay in {shared} ({size / 2**20:.0f} MiB; "
+              f"the {drystone.KEPT_KERNEL_VERSIONS} versions last used are kept)")
     return 0
 
 

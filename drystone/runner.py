@@ -67,7 +67,7 @@ def run(case_path, overrides=None, out_dir=None, threads=1, quiet=False, check_o
                   f"{spec['stages'][-1]['end'] / spec['dt']:.0f} steps", flush=True)
             if not drystone.kernels_cached():
                 print(f"[{spec['name']}] first run of the contact kernels since they changed: numba compiles them "
-                      f"(1.5-2.5 min of a core, once; cached in .numba_cache/)", flush=True)
+                      f"(1.5-2.5 min of a core, once; cached in {drystone.OWN_NUMBA_CACHE_DIR or 'NUMBA_CACHE_DIR'})", flush=True)
         try:
             simulate(spec, stage, threads, quiet, where, engine)
             summary = summ.build(spec, stage)

@@ -94,9 +94,9 @@ CLIP = textwrap.dedent('''
 
 def test_a_copied_checkout_loads_the_kernels_its_original_compiled(tmp_path):
     """A copy of a checkout (another folder, every file with a new modification time: a
-    clone, ``cp -r``, a ``git checkout`` that rewrote the files) loads the kernels from the
-    cache it carries instead of compiling them again in every process (numba's own keys, the
-    folder's path and the file's time, made the copy's cache unusable)."""
+    clone, ``cp -r``, a ``git checkout`` that rewrote the files) loads the kernels the
+    original compiled into the user's shared cache instead of compiling them again (numba's
+    own keys, the folder's path and the file's time, made them unusable to the copy)."""
     import shutil
     from pathlib import Path
     import drystone
@@ -117,3 +117,51 @@ def test_a_copied_checkout_loads_the_kernels_its_original_compiled(tmp_path):
         assert m == "4"  # the triangle cut by a plane through two of its edges: a quadrilateral
         hits.append(int(hit))
     assert hits == [0, 1], hits
+
+
+WHERE = "import drystone; print(drystone.OWN_NUMBA_CACHE_DIR)"
+
+
+def _cache_folder(env, cwd):
+    proc = subprocess.run([sys.executable, "-c", WHERE], env=env, cwd=cwd, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    return proc.stdout.strip()
+
+
+def test_the_kernel_cache_is_the_users_named_by_the_kernels_and_numba(tmp_path):
+    """The compiled kernels go to the cache this user's checkouts share, in a folder named by
+    the kernels' digest and numba's version ($XDG_CACHE_HOME, else ~/.cache); where that
+    cannot be written, to ``.numba_cache/`` beside the package; an explicit NUMBA_CACHE_DIR
+    is numba's."""
+    from importlib.metadata import version
+    from pathlib import Path
+    import drystone
+    root = Path(drystone.__file__).parent.parent
+    digest = Path(drystone.OWN_NUMBA_CACHE_DIR).name[:16]
+    env = {"PYTHONPATH": str(root), "PATH": "/usr/bin:/bin", "HOME": str(tmp_path / "home")}
+    name = f"{digest}-numba{version('numba')}"
+    assert _cache_folder(env, tmp_path) == str(tmp_path / "home" / ".cache" / "drystone" / "numba" / name)
+    assert (tmp_path / "home" / ".cache" / "drystone" / "numba" / name).is_dir()
+    assert _cache_folder(dict(env, XDG_CACHE_HOME=str(tmp_path / "xdg")), tmp_path) == str(
+        tmp_path / "xdg" / "drystone" / "numba" / name)
+    (tmp_path / "file").write_text("not a folder")
+    assert _cache_folder(dict(env, XDG_CACHE_HOME=str(tmp_path / "file")), tmp_path) == str(root / ".numba_cache" / digest)
+    assert _cache_folder(dict(env, NUMBA_CACHE_DIR=str(tmp_path / "own")), tmp_path) == ""
+
+
+def test_the_shared_cache_keeps_the_versions_last_used(tmp_path):
+    """Pruning deletes the kernel versions' folders used longest ago beyond the number kept,
+    never the one in use, and nothing it did not name."""
+    import os
+    import drystone
+    folders = [tmp_path / f"{i:016x}-numba0.58.1" for i in range(5)]
+    for i, f in enumerate(folders):
+        (f / "drystone.mechanics").mkdir(parents=True)
+        os.utime(f, (1000.0 + i, 1000.0 + i))  # folder 4 used last, 0 first
+    other = tmp_path / "mine"
+    other.mkdir()
+    (tmp_path / "notes.txt").write_text("kept")
+    gone = drystone.prune_kernel_cache(tmp_path, keep=folders[0], versions=3)
+    assert sorted(gone) == sorted(folders[1:3])
+    assert [f.is_dir() for f in folders] == [True, False, False, True, True]
+    assert other.is_dir() and (tmp_path / "notes.txt").is_file()
