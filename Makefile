@@ -72,11 +72,14 @@ system-deps:
 
 $(STAMP): requirements.txt requirements-nodeps.txt requirements-crosscheck.txt constraints.txt pyproject.toml | system-deps
 	@test -x $(PY) || /usr/bin/python3 -m venv --system-site-packages $(VENV)
-	$(PY) -m pip install -q --disable-pip-version-check -c constraints.txt -r requirements.txt
-	$(PY) -m pip install -q --disable-pip-version-check --no-deps -r requirements-nodeps.txt
-	$(PY) -m pip install -q --disable-pip-version-check -c constraints.txt --no-deps -r requirements-crosscheck.txt \
+	$(PY) -m pip install -q --no-compile --disable-pip-version-check -c constraints.txt -r requirements.txt
+	$(PY) -m pip install -q --no-compile --disable-pip-version-check --no-deps -r requirements-nodeps.txt
+	$(PY) -m pip install -q --no-compile --disable-pip-version-check -c constraints.txt --no-deps -r requirements-crosscheck.txt \
 	  || echo "setup: compas_lmgc90 (LMGC90, optional) not installed: make crosscheck will be skipped"
-	$(PY) -m pip install -q --disable-pip-version-check --no-deps --no-build-isolation -e .
+	$(PY) -m pip install -q --no-compile --disable-pip-version-check --no-deps --no-build-isolation -e .
+	@# the packages' bytecode on every core at once (pip writes it one file after another: half of its time); a file
+	@# that does not compile (pip skips those too) is left to the interpreter
+	$(PY) -m compileall -q -j 0 $(VENV)/lib >/dev/null || true
 	$(PY) -c "import numpy, scipy; assert numpy.__version__ == '1.24.2' and scipy.__version__ == '1.10.1', 'numpy/scipy are not Debian''s'"
 	@touch $@
 
