@@ -31,6 +31,7 @@ import shutil
 import sys
 from pathlib import Path
 
+import drystone
 from drystone import atomic, paths
 
 #: the package's hidden leftovers of an interrupted run or VTK write (simulate.py, postprocess/vtk.py)
@@ -148,7 +149,6 @@ def main(argv=None) -> int:
               + "".join(f"\n  {p}" for p in left[:50]) + (f"\n  ... and {len(left) - 50} more" if len(left) > 50 else ""))
     else:
         print("clean: nothing left")
-    import drystone
     shared = drystone.kernel_cache_root()
     if shared.is_dir():
         size = sum(f.stat().st_size for f in shared.rglob("*") if f.is_file() and not f.is_symlink())

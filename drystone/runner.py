@@ -8,6 +8,7 @@ run specification, ``drystone.simulate`` runs YADE in a staging folder, and
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import sys
 import time
@@ -67,7 +68,7 @@ def run(case_path, overrides=None, out_dir=None, threads=1, quiet=False, check_o
                   f"{spec['stages'][-1]['end'] / spec['dt']:.0f} steps", flush=True)
             if not drystone.kernels_cached():
                 print(f"[{spec['name']}] first run of the contact kernels since they changed: numba compiles them "
-                      f"(1.5-2.5 min of a core, once; cached in {drystone.OWN_NUMBA_CACHE_DIR or 'NUMBA_CACHE_DIR'})", flush=True)
+                      f"(1.5-2.5 min of a core, once; cached in {os.environ.get('NUMBA_CACHE_DIR', '.numba_cache/')})", flush=True)
         try:
             simulate(spec, stage, threads, quiet, where, engine)
             summary = summ.build(spec, stage)

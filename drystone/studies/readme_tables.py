@@ -350,7 +350,7 @@ def bench(results: Path) -> str:
             out += ["", "Parallel efficiency t1 / (2 t2) on 2 threads: " + "; ".join(effs) + "."]
         ph = [r for r in sc if "phases_ms" in (r.get("split") or {})]
         if ph:
-            from drystone.bench import PHASES as names
+            names = [k for k in ph[0]["split"]["phases_ms"] if k != "contacts"]  # bench.PHASES, in its order
             out += ["", "Where the settled step's time goes, µs per contact (each phase alone on one thread: the shapes "
                         "placed and the neighbour list checked, the search's box tests and clip, the law, the damping, "
                         "the sums on the bodies):", "",
