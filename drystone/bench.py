@@ -55,7 +55,8 @@ what the figures before were, is kept beside it.
 
 Every figure goes to results/bench/bench.json with the machine's facts (cores, load
 average at the start, YADE version); a partial run (``--only``) replaces its sections
-there and keeps the others.
+there and keeps the others, and a scale run of some walls or sizes (``--walls``,
+``--sizes``) replaces only their rows (each row says when it was measured).
 """
 from __future__ import annotations
 
@@ -612,6 +613,39 @@ def step_times(run_dir: Path, budget_s: float = 1.0) -> dict:
                                                           moving.copy(), *state, 1), budget_s / 2)}
 
 
+def _fit_key(row: dict, rows: list[dict]) -> str:
+    """A scale row's series: its wall, and its engine where the rows have several."""
+    return row["wall"] if len({r["engine"] for r in rows}) == 1 else f"{row['wall']}/{row['engine']}"
+
+
+def scale_fits(rows: list[dict]) -> tuple[dict, dict]:
+    """(cost growth exponent of ms/step over the stones, KiB per further stone) of each
+    series of scale rows (``_fit_key``) with two sizes or more; failed rows left out."""
+    fits, marginal = {}, {}
+    for key in dict.fromkeys(_fit_key(r, rows) for r in rows):
+        series = sorted((r for r in rows if _fit_key(r, rows) == key and "failed" not in r), key=lambda r: r["stones"])
+        if len(series) < 2:
+            continue
+        fits[key] = growth_exponent([r["stones"] for r in series], [r["ms_per_step"] for r in series])
+        mem = [(r["stones"], r["max_rss_mib"]) for r in series if r.get("max_rss_mib")]
+        if len(mem) >= 2 and mem[-1][0] > mem[0][0]:  # the memory each further stone takes
+            marginal[key] = 1024.0 * (mem[-1][1] - mem[0][1]) / (mem[-1][0] - mem[0][0])
+    return fits, marginal
+
+
+def merge_scale(old: dict | None, new: dict) -> dict:
+    """The scale section of bench.json after a run of some walls and sizes (``new``): its rows
+    replace the earlier rows of the same wall, engine and size, the others stay (each row
+    says when it was measured); the fits are made again over the rows kept."""
+    if not old or not old.get("rows"):
+        return new
+    key = lambda r: (r["wall"], r["engine"], r["size"])  # noqa: E731
+    fresh = {key(r): r for r in new["rows"]}
+    rows = [fresh.pop(key(r), r) for r in old["rows"]] + list(fresh.values())
+    fits, marginal = scale_fits(rows)
+    return dict(new, rows=rows, growth_exponent=fits, kib_per_further_stone=marginal)
+
+
 def scale_section(workdir: Path, sizes=SIZES, walls=WALLS, steps: int = 300, engines=None) -> dict:
     """Section b: each wall under gravity for ``steps`` steps (our law, native geometry,
     one thread; each of ``engines``, default the runner's), then its contact search alone
@@ -686,20 +720,14 @@ def scale_section(workdir: Path, sizes=SIZES, walls=WALLS, steps: int = 300, eng
                      if "parallel_efficiency" in r else "")
                   + (f"\n  {'':21s} memory: peak {r['max_rss_mib']:.0f} MiB, {r['kib_per_stone']:.0f} KiB per stone"
                      if "kib_per_stone" in r else ""), flush=True)
-    fits, marginal = {}, {}
-    for kind, engine in [(k, e or "default") for k in walls for e in engines]:
-        pts = [(r["stones"], r["ms_per_step"]) for r in rows
-               if r["wall"] == kind and r["engine"] == engine and "failed" not in r]
-        if len(pts) >= 2:
-            key = kind if len(engines) == 1 else f"{kind}/{engine}"
-            fits[key] = growth_exponent(*zip(*pts))
-            mem = [(r["stones"], r["max_rss_mib"]) for r in rows if r["wall"] == kind and r["engine"] == engine
-                   and r.get("max_rss_mib")]
-            extra = ""
-            if len(mem) >= 2 and mem[-1][0] > mem[0][0]:  # the memory each further stone takes
-                marginal[key] = 1024.0 * (mem[-1][1] - mem[0][1]) / (mem[-1][0] - mem[0][0])
-                extra = f"; memory {marginal[key]:.0f} KiB per further stone"
-            print(f"  {key}: cost ~ N^{fits[key]:.2f} over N = {', '.join(str(p[0]) for p in pts)}{extra}", flush=True)
+    measured = time.strftime("%Y-%m-%dT%H:%M:%S%z")  # a row kept by a later partial run says when it was made
+    for r in rows:
+        r["measured"] = measured
+    fits, marginal = scale_fits(rows)
+    for key, slope in fits.items():
+        pts = [r["stones"] for r in rows if _fit_key(r, rows) == key and "failed" not in r]
+        extra = f"; memory {marginal[key]:.0f} KiB per further stone" if key in marginal else ""
+        print(f"  {key}: cost ~ N^{slope:.2f} over N = {', '.join(str(n) for n in pts)}{extra}", flush=True)
     return {"steps": steps, "rows": rows, "growth_exponent": fits, "kib_per_further_stone": marginal}
 
 
@@ -881,7 +909,8 @@ def compile_section(workdir: Path) -> dict:
 
 def write_results(results: dict, path: Path | None = None) -> Path:
     """Merge ``results`` (sections of this run) into bench.json: sections not run this time
-    keep their earlier figures (each section carries its machine facts)."""
+    keep their earlier figures (each section carries its machine facts), and the scale
+    section its rows of the walls and sizes not run (``merge_scale``)."""
     path = path or paths.RESULTS / "bench" / "bench.json"
     path.parent.mkdir(parents=True, exist_ok=True)
     old = {}
@@ -890,6 +919,8 @@ def write_results(results: dict, path: Path | None = None) -> Path:
             old = json.loads(path.read_text())
         except json.JSONDecodeError:
             old = {}
+    if "scale" in results:  # a run of some walls or sizes keeps the others' rows
+        results = dict(results, scale=merge_scale(old.get("scale"), results["scale"]))
     old.update(results)
     return atomic.write_text(path, json.dumps(old, indent=1))
 

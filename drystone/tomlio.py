@@ -53,8 +53,11 @@ def to_toml(d: dict) -> str:
     return "\n".join(lines)
 
 
-def stage_durations(durations: dict) -> list[str]:
+def stage_durations(durations: dict, windows: tuple = ()) -> list[str]:
     """Case overrides setting stage durations, ``stages.K.duration=V`` (s), for each stage
     index K of ``durations`` whose value is given (None or 0 leaves that stage as it is):
-    the studies' shortened records and rests."""
-    return [f"stages.{k}.duration={value(float(d))}" for k, d in durations.items() if d]
+    the studies' shortened records and rests. A rest stage K in ``windows`` gets its
+    ``settle_window`` set to that duration too (a rest cut below the case's window, which the
+    case check refuses: it then ends by its duration unless the blocks were quiet throughout)."""
+    return [f"stages.{k}.{key}={value(float(d))}" for k, d in durations.items() if d
+            for key in (("duration", "settle_window") if k in windows else ("duration",))]

@@ -45,22 +45,25 @@ _WARM_CASE = {"case": {"name": "numba_warm", "geometry": {"generator": "boxes_on
 _WARM_OTHERS = (["--engine", "python"], ["--set", "contact.detection=yade"])
 #: cost of the test files (s), to order the files for ``-n N``: each file's tests' durations summed
 #: (setup, call, teardown) in one run of the whole suite as ``make test`` runs it (``-n 2``, nice)
-#: on a shared 2-core machine, so only their ratios matter; files not here (under 3 s) are costed
+#: on a shared 2-core machine, so only their ratios matter; files not here (under 1 s) are costed
 #: by marks (``_COST_S``, the same units). A stale figure only makes the two workers finish less together.
 _FILE_COST_S = {
-    "test_site_study.py": 160, "test_yade_contact.py": 65, "test_docs_runnable.py": 30, "test_shape_study.py": 80,
-    "test_analyses_assess.py": 56, "test_yade_worker.py": 50, "test_analyses_tilt.py": 24,
-    "test_analyses_fragility.py": 28, "test_sweep.py": 31, "test_fragility.py": 27, "test_reliability_site.py": 24,
-    "test_tilt_block.py": 23, "test_analyses_collapse.py": 23, "test_motions_catalogue.py": 22,
-    "test_cases_valid.py": 5, "test_damping.py": 22, "test_energy.py": 22, "test_restitution.py": 12,
-    "test_rocking_pulse.py": 20, "test_sacsayhuaman.py": 19, "test_fragility_measures.py": 19,
-    "test_multipart_runs.py": 15, "test_broad_phase.py": 19, "test_identification.py": 17, "test_crosscheck.py": 16,
-    "test_reliability_run.py": 15, "test_reliability_output.py": 15, "test_reliability_geometry.py": 14,
-    "test_yade_compiled.py": 14, "test_ogawa_study.py": 13, "test_verification.py": 13, "test_regression.py": 13,
-    "test_report.py": 11, "test_layers.py": 10, "test_earth_pressure_runs.py": 10, "test_polygonal_wall.py": 9,
-    "test_excitation.py": 9, "test_dxf.py": 7, "test_reliability_vertices.py": 7, "test_ogawa_3d.py": 6,
-    "test_analyses_modal.py": 5, "test_decompose.py": 5, "test_bench.py": 4, "test_modal.py": 4,
-    "test_limit_analysis.py": 4, "test_packaging.py": 4, "test_left_model_removed.py": 4, "test_meshes.py": 3}
+    "test_yade_contact.py": 66, "test_site_study.py": 58, "test_yade_worker.py": 43, "test_sweep.py": 39,
+    "test_shape_study.py": 36, "test_docs_runnable.py": 26, "test_analyses_fragility.py": 26,
+    "test_analyses_assess.py": 22, "test_tilt_block.py": 21, "test_reliability_site.py": 19,
+    "test_crosscheck.py": 18, "test_multipart_runs.py": 18, "test_yade_compiled.py": 17, "test_fragility.py": 15,
+    "test_restitution.py": 13, "test_sacsayhuaman.py": 12, "test_analyses_collapse.py": 12, "test_damping.py": 12,
+    "test_reliability_output.py": 12, "test_analyses_tilt.py": 11, "test_energy.py": 10, "test_numba_cache.py": 9,
+    "test_reliability_run.py": 9, "test_reliability_geometry.py": 9, "test_motions_catalogue.py": 9,
+    "test_fragility_measures.py": 8, "test_report.py": 7, "test_earth_pressure_runs.py": 7, "test_ogawa_study.py": 7,
+    "test_analyses_modal.py": 6, "test_regression.py": 6, "test_verification.py": 6, "test_dxf.py": 5,
+    "test_polygonal_wall.py": 5, "test_decompose.py": 4, "test_layers.py": 4, "test_excitation.py": 4,
+    "test_reliability_vertices.py": 4, "test_identification.py": 4, "test_overlap.py": 3, "test_cases_valid.py": 3,
+    "test_bench.py": 3, "test_rocking_pulse.py": 2, "test_left_model_removed.py": 2, "test_packaging.py": 2,
+    "test_compiled_step.py": 2, "test_ogawa_3d.py": 2, "test_limit_analysis.py": 2, "test_site.py": 2,
+    "test_intensity.py": 2, "test_walls.py": 2, "test_earth_pressure.py": 2, "test_modal.py": 2,
+    "test_limit_dem_study.py": 2, "test_meshes.py": 1, "test_limit_settled.py": 1, "test_ogawa_mrb1d.py": 1,
+    "test_broad_phase.py": 1}
 #: cost of a test (s) by its marks, for the files not in ``_FILE_COST_S``
 _COST_S = {"slow": 30.0, "yade": 3.0, "other": 0.3}
 

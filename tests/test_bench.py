@@ -23,6 +23,31 @@ def test_growth_exponent_is_the_log_log_slope():
     assert math.isnan(bench.growth_exponent([500, 500], [3.0, 4.0]))
 
 
+def test_a_partial_scale_run_keeps_the_other_rows_and_fits_them_all(tmp_path):
+    """``--only scale --sizes 500`` replaces the 500-stone rows in bench.json and keeps the
+    others; the growth exponent and memory per further stone are fitted over the rows kept."""
+    def row(wall, size, ms, mib, when):
+        return {"wall": wall, "engine": "default", "size": size, "stones": size, "ms_per_step": ms,
+                "max_rss_mib": mib, "measured": when}
+
+    path = tmp_path / "bench.json"
+    old = [row("running_bond", 40, 0.2, 100.0, "a"), row("running_bond", 500, 3.0, 140.0, "a"),
+           row("running_bond", 2000, 12.0, 260.0, "a"), row("polygonal", 500, 9.0, 150.0, "a")]
+    bench.write_results({"scale": {"steps": 300, "rows": old}, "machine": {"sections": ["scale"]}}, path)
+    new = [row("running_bond", 500, 2.0, 150.0, "b"), row("polygonal", 500, 8.0, 160.0, "b"),
+           row("polygonal", 2000, 32.0, 400.0, "b")]
+    bench.write_results({"scale": {"steps": 300, "rows": new}, "machine": {"sections": ["scale"]}}, path)
+    scale = json.loads(path.read_text())["scale"]
+    got = {(r["wall"], r["size"]): r["measured"] for r in scale["rows"]}
+    assert got == {("running_bond", 40): "a", ("running_bond", 500): "b", ("running_bond", 2000): "a",
+                   ("polygonal", 500): "b", ("polygonal", 2000): "b"}
+    assert scale["growth_exponent"]["running_bond"] == pytest.approx(
+        bench.growth_exponent([40, 500, 2000], [0.2, 2.0, 12.0]), rel=tol.EXACT_REL)
+    assert scale["growth_exponent"]["polygonal"] == pytest.approx(1.0, rel=tol.EXACT_REL)  # 8 -> 32 ms over 4x
+    assert scale["kib_per_further_stone"]["running_bond"] == pytest.approx(1024.0 * 160.0 / 1960, rel=tol.EXACT_REL)
+    assert scale["kib_per_further_stone"]["polygonal"] == pytest.approx(1024.0 * 240.0 / 1500, rel=tol.EXACT_REL)
+
+
 def test_steady_rate_separates_start_up_and_steps():
     ms, start = bench.steady_rate(20, 1.0 + 20 * 0.004, 680, 1.0 + 680 * 0.004)
     assert ms == pytest.approx(4.0) and start == pytest.approx(1.0)

@@ -45,7 +45,7 @@ import numpy as np
 
 from drystone import atomic
 from drystone import paths, tomlio
-from drystone.studies.common import StudyFolders, quick_gravity, write_if_changed
+from drystone.studies.common import StudyFolders, quick_gravity, quick_note, write_if_changed
 from drystone.studies.shape import plan as shape_plan
 
 CASES = paths.CASES / "site"
@@ -95,10 +95,10 @@ CONFIGS = {
     "small": Config(name="small", out="site_small", records=("ancash1970",),
                     polarities={"free": ("+",), "retained": ("+",)}, pga_cap_g={"free": 3.2, "retained": 0.6},
                     resolution_g={"free": 1.6, "retained": 0.3}, refine_g={}, level_resolution_m=2.0,
-                    record_duration_s=0.75, rest_max_s=1.5, quick=True,
+                    record_duration_s=0.75, rest_max_s=0.5, quick=True,
                     notes=("1 record cut to 0.75 s, as recorded only, 1.6 g (free) and 0.3 g (retained) brackets, "
-                           "a 2 m water-level bracket, rest at most 1.5 s, gravity held 1 s in the seismic and tilt "
-                           "runs, tilts at 8 then 4 deg/s: a pipeline check, not a result",)),
+                           "a 2 m water-level bracket, rest 0.5 s (1 s in the static runs), in the seismic "
+                           f"and tilt runs {quick_note()}: a pipeline check, not a result",)),
 }
 
 
@@ -138,10 +138,11 @@ def record_case(wall: str) -> Path:
 
 
 def common_overrides(cfg: Config) -> list[str]:
-    """Every seismic run's overrides: the record and the rest cut to the config's durations,
-    gravity shortened in a quick config."""
+    """Every seismic run's overrides: the record and the rest cut to the config's durations
+    (the rest's settle window with it), gravity shortened in a quick config."""
     return (quick_gravity(cfg.quick)
-            + tomlio.stage_durations({EXCITATION_STAGE: cfg.record_duration_s, REST_STAGE: cfg.rest_max_s}))
+            + tomlio.stage_durations({EXCITATION_STAGE: cfg.record_duration_s, REST_STAGE: cfg.rest_max_s},
+                                     windows=(REST_STAGE,)))
 
 
 def site_overrides(site: str) -> list[str]:
@@ -176,7 +177,7 @@ def static_run_name(level_m: float | None) -> str:
 
 
 def static_common(cfg: Config) -> list[str]:
-    return tomlio.stage_durations({STATIC_REST_STAGE: cfg.rest_max_s and 2 * cfg.rest_max_s})
+    return tomlio.stage_durations({STATIC_REST_STAGE: cfg.rest_max_s and 2 * cfg.rest_max_s}, windows=(STATIC_REST_STAGE,))
 
 
 def static_overrides(level_m: float | None) -> list[str]:
