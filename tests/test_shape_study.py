@@ -187,7 +187,7 @@ def test_strong_motion_window():
 @pytest.mark.slow
 def test_small_study_end_to_end(outdir):
     """The small plan (2 variants, 1 seed, ancash1970 cut to 1 s, a 1.6 g grid): plan, per
-    wall the tilt and collapse analyses, report, figure (about 1-2 min on 2 cores); run
+    wall the tilt and collapse analyses, report, figure (about 20 s on 2 cores); run
     again, every run is reused and the report is the same."""
     cfg = replace(P.CONFIGS["small"], results_root=str(outdir / "results"))
     r = S.run(cfg, workers=2)
