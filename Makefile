@@ -71,7 +71,8 @@ system-deps:
 	fi
 
 $(STAMP): requirements.txt requirements-nodeps.txt requirements-crosscheck.txt constraints.txt pyproject.toml | system-deps
-	@test -x $(PY) || /usr/bin/python3 -m venv --system-site-packages $(VENV)
+	@# no pip of its own: Debian's (python3-pip, which python3-venv brings) installs into it, 5 s less
+	@test -x $(PY) || /usr/bin/python3 -m venv --system-site-packages --without-pip $(VENV)
 	$(PY) -m pip install -q --no-compile --disable-pip-version-check -c constraints.txt -r requirements.txt
 	$(PY) -m pip install -q --no-compile --disable-pip-version-check --no-deps -r requirements-nodeps.txt
 	$(PY) -m pip install -q --no-compile --disable-pip-version-check -c constraints.txt --no-deps -r requirements-crosscheck.txt \
