@@ -109,7 +109,7 @@ CONFIGS = {
     "full": Config(name="full", out="shape"),
     "small": Config(name="small", out="shape_small", variants=("coursed", "polygonal"), seeds=(0,), records=("ancash1970",), resolution_g=1.6,
                     record_duration_s=1.0, rest_max_s=0.5, quick=True,
-                    notes=(f"1 seed, 1 record cut to 1 s, 2 variants, a 1.6 g bracket, rest 0.5 s, "
+                    notes=("1 seed, 1 record cut to 1 s, 2 variants, a 1.6 g bracket, rest 0.5 s, "
                            f"{quick_note()}: a pipeline check, not a result",)),
 }
 
