@@ -613,17 +613,22 @@ def step_times(run_dir: Path, budget_s: float = 1.0) -> dict:
                                                           moving.copy(), *state, 1), budget_s / 2)}
 
 
-def _fit_key(row: dict, rows: list[dict]) -> str:
-    """A scale row's series: its wall, and its engine where the rows have several."""
-    return row["wall"] if len({r["engine"] for r in rows}) == 1 else f"{row['wall']}/{row['engine']}"
+def scale_series(rows: list[dict]) -> dict:
+    """The scale rows that did not fail by series (a wall, and its engine where the rows have
+    several), each in increasing stone count."""
+    several = len({r["engine"] for r in rows}) > 1
+    out: dict = {}  # the series in the rows' order
+    for r in rows:
+        if "failed" not in r:
+            out.setdefault(f"{r['wall']}/{r['engine']}" if several else r["wall"], []).append(r)
+    return {k: sorted(v, key=lambda r: r["stones"]) for k, v in out.items()}
 
 
 def scale_fits(rows: list[dict]) -> tuple[dict, dict]:
     """(cost growth exponent of ms/step over the stones, KiB per further stone) of each
-    series of scale rows (``_fit_key``) with two sizes or more; failed rows left out."""
+    series of scale rows (``scale_series``) with two sizes or more."""
     fits, marginal = {}, {}
-    for key in dict.fromkeys(_fit_key(r, rows) for r in rows):
-        series = sorted((r for r in rows if _fit_key(r, rows) == key and "failed" not in r), key=lambda r: r["stones"])
+    for key, series in scale_series(rows).items():
         if len(series) < 2:
             continue
         fits[key] = growth_exponent([r["stones"] for r in series], [r["ms_per_step"] for r in series])
@@ -724,10 +729,11 @@ def scale_section(workdir: Path, sizes=SIZES, walls=WALLS, steps: int = 300, eng
     for r in rows:
         r["measured"] = measured
     fits, marginal = scale_fits(rows)
+    series = scale_series(rows)
     for key, slope in fits.items():
-        pts = [r["stones"] for r in rows if _fit_key(r, rows) == key and "failed" not in r]
         extra = f"; memory {marginal[key]:.0f} KiB per further stone" if key in marginal else ""
-        print(f"  {key}: cost ~ N^{slope:.2f} over N = {', '.join(str(n) for n in pts)}{extra}", flush=True)
+        print(f"  {key}: cost ~ N^{slope:.2f} over N = {', '.join(str(r['stones']) for r in series[key])}{extra}",
+              flush=True)
     return {"steps": steps, "rows": rows, "growth_exponent": fits, "kib_per_further_stone": marginal}
 
 

@@ -51,8 +51,8 @@ def search_params(cap_g: float, resolution_g: float) -> dict:
 
 #: the small configs' shortened protocol (a pipeline check, not a result): gravity ramped over
 #: 0.25 s and held to 0.5 s (the cases': 1 s and 2 s), and their tilts 8 deg/s to 5 deg, then 4
-#: deg/s until collapse and 0.5 s after it (the cases': 2 and 1 deg/s, 3 s): about a third of
-#: the simulated time of a tilt run
+#: deg/s until collapse and 0.5 s after it (the cases': 2 and 1 deg/s, 3 s): a quarter to a
+#: third of the simulated time of a tilt run
 QUICK_GRAVITY = {"duration": 0.5, "ramp": 0.25}
 QUICK_TILT = {"rate": 4.0, "lead_rate": 8.0, "after_collapse": 0.5}
 
