@@ -161,9 +161,10 @@ def die_with_parent(sig: int = 9) -> None:
         _PRCTL(1, int(sig), 0, 0, 0)  # PR_SET_PDEATHSIG = 1
 
 
-#: a YADE process per process (and thread count) that runs cases in turn
-#: (drystone/yade_scripts/worker.py): YADE's start, drystone's imports and numba's cache load
-#: paid once, not per run; ``DRYSTONE_YADE_WORKER=0`` runs each case in a YADE process of its own
+#: a YADE process per thread (and thread count of its runs) that runs cases in turn
+#: (drystone/yade_scripts/worker.py), keyed by (threads, the thread's ident): YADE's start,
+#: drystone's imports and numba's cache load paid once, not per run; ``DRYSTONE_YADE_WORKER=0``
+#: runs each case in a YADE process of its own
 _WORKERS: dict = {}
 #: a worker's YADE process grows by its runs (~1.6 MB per short run of a two-part stone, what
 #: ``O.reset()`` keeps): it is replaced by a new one after this many runs or this growth (MiB)
@@ -183,9 +184,14 @@ class _Worker:
     with this environment (a changed environment, or a forked child, gets another)."""
 
     def __init__(self, threads: int, env: dict):
+        import threading
+
         yade = shutil.which("yade") or "/usr/bin/yade"
         script = paths.PACKAGE / "yade_scripts" / "worker.py"
         self.env, self.root = _env_key(env), paths.ROOT
+        # the thread that starts it: the kernel kills the process when that thread ends (die_with_parent)
+        self.thread = threading.current_thread()
+        self.key = (threads, self.thread.ident)
         self.runs, self.first_mib = 0, None  # runs made; resident size after the first (MiB)
         self.proc = subprocess.Popen([sys.executable, yade, "-n", "-x", "-j", str(threads), str(script)],
                                      stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
@@ -241,20 +247,37 @@ atexit.register(end_workers)
 os.register_at_fork(after_in_child=_forget_workers)
 
 
-def _worker(threads: int, env: dict) -> _Worker | None:
-    """This process's worker for ``threads`` (started if needed), or None where runs get a
-    process each: switched off, or outside the main thread (a worker dies with the thread that
-    started it, ``die_with_parent``)."""
+def own_worker(threads: int = 1) -> _Worker | None:
+    """The calling thread's worker for ``threads``, if it has one."""
     import threading
 
-    if os.environ.get("DRYSTONE_YADE_WORKER", "1") == "0" or threading.current_thread() is not threading.main_thread():
+    return _WORKERS.get((threads, threading.get_ident()))
+
+
+def _drop_ended() -> None:
+    """Forget the workers of threads that have ended (the kernel has killed their processes)."""
+    for w in [w for w in list(_WORKERS.values()) if not w.thread.is_alive()]:
+        if _WORKERS.pop(w.key, None) is not None:
+            w.end()
+
+
+def _worker(threads: int, env: dict) -> _Worker | None:
+    """The calling thread's worker for ``threads`` (started if needed), or None where runs get a
+    process each (switched off). Each thread has its own: a worker dies with the thread that
+    started it (``die_with_parent``), and a thread runs one case at a time (a Dask worker's
+    task threads, which live as long as their worker, each keep one across their tasks).
+    The workers of threads that have ended are dropped first (``_drop_ended``)."""
+    if os.environ.get("DRYSTONE_YADE_WORKER", "1") == "0":
         return None
-    w = _WORKERS.get(threads)
+    _drop_ended()
+    w = own_worker(threads)
     if w is not None and not w.usable(env):
-        _WORKERS.pop(threads).end()
+        _WORKERS.pop(w.key, None)
+        w.end()
         w = None
     if w is None:
-        w = _WORKERS[threads] = _Worker(threads, env)
+        w = _Worker(threads, env)
+        _WORKERS[w.key] = w
     return w
 
 
@@ -290,13 +313,13 @@ def _simulate(spec_path: Path, threads: int, quiet: bool, engine: str = "compile
                 if not quiet and not line.startswith(NOISE) and "verletDist is set to 0" not in line:
                     print(line, end="", flush=True)
             if w is not None:  # the worker ended (a failed run): its exit code is the run's
-                _WORKERS.pop(threads, None)
+                _WORKERS.pop(w.key, None)
                 w.end()
             proc.stdout.close()
             return proc.wait()
         except BaseException:  # Ctrl-C, SIGTERM (sweep workers), errors: never leave YADE running
             if w is not None:
-                _WORKERS.pop(threads, None)
+                _WORKERS.pop(w.key, None)
                 w.end()
             else:
                 proc.kill()

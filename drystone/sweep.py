@@ -548,7 +548,7 @@ def _execute_dask(jobs: list[Job], workers: int, address: str | None):
     else:
         client = Client(address)
     try:
-        # each run is a separate YADE process started by the worker: one task per worker slot
+        # one task per worker slot; each task thread makes its runs in a YADE process of its own, kept between tasks
         futures = [client.submit(run_job, j, pure=False, key=f"drystone-{Path(j.out_dir).parent.name}-{j.name}")
                    for j in jobs]
         for f in dask_completed(futures):

@@ -58,7 +58,7 @@ def test_later_runs_of_a_worker_are_bit_for_bit_a_fresh_process(tmp_path, monkey
     order = ["l_stone", "four_blocks_yade_geometry", "four_blocks_stock_law", "four_blocks", "l_stone"]
     for k, name in enumerate(order):
         h, info = _run(tmp_path, f"worker{k}", name)
-        pids.append(simulate._WORKERS[1].proc.pid)
+        pids.append(simulate.own_worker(1).proc.pid)
         if name not in NOT_BITWISE:
             assert _same(h, fresh[name][0]) == [], f"run {k + 1} of the worker ({name})"
             assert info == fresh[name][1], f"run {k + 1} of the worker ({name})"
@@ -70,23 +70,23 @@ def test_a_failed_run_ends_the_worker_and_the_next_gets_a_new_one(tmp_path, monk
     RunError as for a run alone, that worker gone; the next run is made by a new worker."""
     monkeypatch.setenv("DRYSTONE_YADE_WORKER", "1")
     _run(tmp_path, "before", "four_blocks")
-    first = simulate._WORKERS[1].proc
+    first = simulate.own_worker(1).proc
     stage = tmp_path / "bad"
     stage.mkdir()
     spec = json.loads((tmp_path / "before_four_blocks" / "spec.json").read_text())
     del spec["blocks"]
     with pytest.raises(simulate.RunError, match=r"YADE failed \(exit 1\)(?s:.*)missing \[.blocks.\]"):
         simulate.simulate(spec, stage, quiet=True, where="bad")
-    assert first.poll() == 1 and 1 not in simulate._WORKERS
+    assert first.poll() == 1 and simulate.own_worker(1) is None
     h, _ = _run(tmp_path, "after", "four_blocks")
-    assert simulate._WORKERS[1].proc is not first
+    assert simulate.own_worker(1).proc is not first
     assert _same(h, _run(tmp_path, "again", "four_blocks")[0]) == []
 
 
 def _fork_run(tmp_path, tag: str) -> tuple[dict, int]:
     """In a forked child: a run, and the pid of the worker that made it."""
     h, _ = _run(tmp_path, tag, "four_blocks")
-    return h, simulate._WORKERS[1].proc.pid
+    return h, simulate.own_worker(1).proc.pid
 
 
 def test_a_forked_child_gets_its_own_worker(tmp_path, monkeypatch):
@@ -97,12 +97,36 @@ def test_a_forked_child_gets_its_own_worker(tmp_path, monkeypatch):
 
     monkeypatch.setenv("DRYSTONE_YADE_WORKER", "1")
     mine, _ = _run(tmp_path, "parent", "four_blocks")
-    pid = simulate._WORKERS[1].proc.pid
+    pid = simulate.own_worker(1).proc.pid
     with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("fork")) as pool:
         theirs, child_pid = pool.submit(_fork_run, tmp_path, "child").result()
-    assert child_pid != pid and simulate._WORKERS[1].proc.pid == pid
+    assert child_pid != pid and simulate.own_worker(1).proc.pid == pid
     assert _same(theirs, mine) == [] and _same(_run(tmp_path, "parent_again", "four_blocks")[0], mine) == []
-    assert simulate._WORKERS[1].proc.pid == pid
+    assert simulate.own_worker(1).proc.pid == pid
+
+
+def test_a_thread_keeps_a_worker_of_its_own_which_ends_with_it(tmp_path, monkeypatch):
+    """A thread that makes runs (a Dask worker's task thread) makes them all in one worker of
+    its own, not the main thread's; when the thread ends, the kernel kills that YADE process
+    (``die_with_parent``) and the next call forgets it."""
+    import threading
+
+    monkeypatch.setenv("DRYSTONE_YADE_WORKER", "1")
+    made = []
+
+    def runs():
+        for k in range(2):
+            made.append((_run(tmp_path, f"thread{k}", "four_blocks")[0], simulate.own_worker(1)))
+
+    t = threading.Thread(target=runs)
+    t.start()
+    t.join()
+    (h0, w0), (h1, w1) = made
+    assert w0 is w1 and w0.runs == 2 and w0.key == (1, t.ident) and w0.key[1] != threading.get_ident()
+    assert _same(h0, h1) == []
+    assert w0.proc.wait(timeout=30) == -9  # SIGKILL from the kernel: its thread ended
+    simulate._drop_ended()
+    assert w0.key not in simulate._WORKERS
 
 
 def test_a_worker_is_replaced_after_its_share_of_runs(tmp_path, monkeypatch):
@@ -112,8 +136,8 @@ def test_a_worker_is_replaced_after_its_share_of_runs(tmp_path, monkeypatch):
     monkeypatch.setattr(simulate, "RUNS_PER_WORKER", 2)
     simulate.end_workers()
     first = [_run(tmp_path, f"r{k}", "four_blocks")[0] for k in range(2)]
-    pid = simulate._WORKERS[1].proc.pid
-    assert simulate._WORKERS[1].runs == 2 and simulate._WORKERS[1].growth_mib() >= 0.0
+    pid = simulate.own_worker(1).proc.pid
+    assert simulate.own_worker(1).runs == 2 and simulate.own_worker(1).growth_mib() >= 0.0
     h, _ = _run(tmp_path, "r2", "four_blocks")
-    assert simulate._WORKERS[1].proc.pid != pid and simulate._WORKERS[1].runs == 1
+    assert simulate.own_worker(1).proc.pid != pid and simulate.own_worker(1).runs == 1
     assert _same(first[0], first[1]) == [] and _same(h, first[0]) == []
