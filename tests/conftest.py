@@ -48,7 +48,7 @@ _WARM_OTHERS = (["--engine", "python"], ["--set", "contact.detection=yade"])
 #: on a shared 2-core machine, so only their ratios matter; files not here (under 1 s) are costed
 #: by marks (``_COST_S``, the same units). A stale figure only makes the two workers finish less together.
 _FILE_COST_S = {
-    "test_yade_contact.py": 66, "test_site_study.py": 58, "test_yade_worker.py": 43, "test_sweep.py": 39,
+    "test_yade_contact.py": 44, "test_site_study.py": 58, "test_yade_worker.py": 46, "test_sweep.py": 39,
     "test_shape_study.py": 36, "test_docs_runnable.py": 26, "test_analyses_fragility.py": 26,
     "test_analyses_assess.py": 22, "test_tilt_block.py": 21, "test_reliability_site.py": 19,
     "test_crosscheck.py": 18, "test_multipart_runs.py": 18, "test_yade_compiled.py": 17, "test_fragility.py": 15,

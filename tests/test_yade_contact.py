@@ -56,33 +56,54 @@ def disp(h, block):
     return h["pos"][:, j] - h["pos0"][j]
 
 
-@pytest.mark.slow
-def test_push_below_friction_sticks_elastically(outdir):
+#: the push tests' slabs, in one run per contact geometry (``pushed``): slab 1 pushed at 0.4 W
+#: (below friction), slab 2 beside it unloaded, slab 3 in a row of its own pushed at 0.8 W
+#: (above friction); the platform is fixed, so the slabs share nothing but the run
+PUSHED = TWO + [{"id": 3, "center_xy": [0.0, 0.6], "size": SLAB}]
+PUSHES = [{"block": 1, "force": [0.4 * W, 0.0, 0.0], "start": PUSH_T},
+          {"block": 3, "force": [0.8 * W, 0.0, 0.0], "start": PUSH_T}]
+#: the run ends this long after the pushes (s), at the end of the sticking slab's drift window
+PUSHED_FOR = 0.5
+
+
+@pytest.fixture(scope="module")
+def pushed(tmp_path_factory):
+    """(summary, histories, spec) of the pushes' run with the test's contact geometry, made
+    once per geometry for the module's tests."""
+    made = {}
+
+    def get():
+        if DETECTION not in made:
+            made[DETECTION] = run_case(case(PUSHED, SETTLE + [{"type": "rest", "duration": PUSHED_FOR}], PUSHES),
+                                       tmp_path_factory.mktemp(f"push_{DETECTION}"))
+        return made[DETECTION]
+    return get
+
+
+def test_push_below_friction_sticks_elastically(pushed):
     """0.4 W with mu = 0.7: the block deflects by F / (K_t A) (elastic joint) and stops:
     drift between 0.25 s and 0.5 s after the push below 1e-7 m per 1.5 s; the unloaded
     neighbour moves < 1e-9 m (with YADE's stock law it creeps: test_stock_law_leaks_shear)."""
     F = 0.4 * W
-    # the run ends 0.5 s after the push, at the end of the drift window
-    s, h, _ = run_case(case(TWO, SETTLE + [{"type": "rest", "duration": 0.5}],
-                            [{"block": 1, "force": [F, 0.0, 0.0], "start": PUSH_T}]), outdir)
+    s, h, _ = pushed()
     t = h["t"]
     x = disp(h, 1)[:, 0]
     i1, i2 = np.searchsorted(t, PUSH_T + 0.25), len(t) - 1
-    assert t[i2] == pytest.approx(PUSH_T + 0.5, abs=0.5 * (t[1] - t[0]))
+    assert t[i2] == pytest.approx(PUSH_T + PUSHED_FOR, abs=0.5 * (t[1] - t[0]))
     assert abs(x[i2] - x[i1]) < tol.STICK_DRIFT_RATE_M_S * (t[i2] - t[i1])
     # elastic deflection F / (K_t A); 3 % covers the slab's tilt under the push (1.5 %)
     assert x[i2] == pytest.approx(F / (1e8 * 0.16), rel=tol.ELASTIC_DEFLECTION_REL)
     assert np.abs(disp(h, 2)[:, :2]).max() < tol.NEIGHBOUR_M  # horizontal: it only settles vertically
 
 
-def test_push_above_friction_slides_with_coulomb_acceleration(outdir):
+def test_push_above_friction_slides_with_coulomb_acceleration(pushed):
     """0.8 W with mu = 0.7: uniform acceleration (0.8 - 0.7) g, within 2 % (fitted over 0.3 s
     from 0.1 s after the push: 30 samples, 4.4 cm of slide)."""
-    s, h, _ = run_case(case(TWO[:1], SETTLE + [{"type": "rest", "duration": 0.4}],
-                            [{"block": 1, "force": [0.8 * W, 0.0, 0.0], "start": PUSH_T}]), outdir)
+    s, h, _ = pushed()
     t = h["t"]
-    x = disp(h, 1)[:, 0]
-    win = t > PUSH_T + 0.1  # to the run's end, 0.4 s after the push
+    x = disp(h, 3)[:, 0]
+    win = (t > PUSH_T + 0.1) & (t <= PUSH_T + 0.4 + 1e-9)
+    assert win.sum() == 30
     a = 2 * np.polyfit(t[win], x[win], 2)[0]
     assert a == pytest.approx(0.1 * G, rel=tol.COULOMB_ACCELERATION_REL)
 

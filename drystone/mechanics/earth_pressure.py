@@ -424,6 +424,24 @@ def clip_z(poly: np.ndarray, z: float, keep_below: bool) -> np.ndarray:
     return np.array(out).reshape(-1, 3)
 
 
+#: ``_part_faces``' memory: a case's stones are resolved again for every run of a sweep, and a
+#: retained wall's loads computed again for every water level of a search, from the same parts
+_FACES: dict = {}
+_FACES_KEPT = 4096
+
+
+def _part_faces(v: np.ndarray):
+    """``polyhedron.faces`` of a convex part's vertices (m), computed once per vertex array
+    (its bytes) of this process; read-only."""
+    key = (v.shape, v.tobytes())
+    f = _FACES.get(key)
+    if f is None:
+        if len(_FACES) >= _FACES_KEPT:
+            _FACES.clear()
+        f = _FACES[key] = polyhedron.faces(v)
+    return f
+
+
 def back_faces(parts, ep: EarthPressure, plane_tol: float = PLANE_TOL) -> list[np.ndarray]:
     """The faces (each a (k, 3) polygon, m, counter-clockwise seen from the soil) of a stone's
     convex parts (lists of vertices, m) that lie on the back plane with their outward normal
@@ -432,7 +450,7 @@ def back_faces(parts, ep: EarthPressure, plane_tol: float = PLANE_TOL) -> list[n
     out = []
     for verts in parts:
         v = np.asarray(verts, dtype=float)
-        f = polyhedron.faces(v)
+        f = _part_faces(v)
         for normal, poly in zip(f.normals, f.polygons):
             if normal @ n >= math.cos(NORMAL_TOL) and np.all(np.abs(v[poly] @ n - c) <= plane_tol):
                 out.append(v[poly])
