@@ -180,8 +180,9 @@ def _env_key(env: dict) -> dict:
 
 
 class _Worker:
-    """One YADE process serving runs (drystone/yade_scripts/worker.py), started by this process
-    with this environment (a changed environment, or a forked child, gets another)."""
+    """One YADE process serving runs (drystone/yade_scripts/worker.py), started by one thread of
+    this process with this environment (another thread, a changed environment or a forked child
+    gets another)."""
 
     def __init__(self, threads: int, env: dict):
         import threading
