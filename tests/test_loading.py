@@ -191,3 +191,28 @@ def test_many_times_at_once_are_each_time_alone_bit_for_bit():
     for t in ts[:50]:
         assert np.array_equal(p.body_acceleration(t), p.body_acceleration_at(np.array([t]))[0])
         assert p.tilt_deg(t) == p.tilt_deg_at(np.array([t]))[0]
+
+
+def test_the_field_ahead_is_each_steps_field_bit_for_bit():
+    """``FieldAhead`` (the engines whose every step goes through the driver: the field a block
+    of steps ahead) gives each step's ``body_acceleration`` bit for bit, across a stage's end, a
+    block's end and a record's samples, and again after a step at a time it did not foresee;
+    one computation per block."""
+    from drystone.yade_scripts.quiet_steps import FieldAhead
+
+    p = LoadProgramme([
+        Stage("gravity", 0.0, 2.0, {"ramp": 1.0}),
+        Stage("tilt", 2.0, 12.0, {"rate_deg_s": 1.3, "towards": [0, -1, 0]}),
+        Stage("excitation", 12.0, 14.0, {"acc": np.array([0.0, -1.0, 2.5]), "dt": 0.5, "direction": [1, 0, 0]}),
+    ], G)
+    dt = 0.0123
+    runs = [np.add.accumulate(np.concatenate([[t0], np.full(n - 1, dt)])) for t0, n in ((1.9, 300), (11.9, 200))]
+    calls = []
+    at = p.body_acceleration_at
+    p.body_acceleration_at = lambda ts: calls.append(len(ts)) or at(ts)
+    f = FieldAhead(p)
+    got = np.array([f.at(t, dt) for t in np.concatenate(runs)])
+    p.body_acceleration_at = at
+    want = np.array([p.body_acceleration(t) for t in np.concatenate(runs)])
+    assert np.array_equal(got, want) and np.array_equal(np.signbit(got), np.signbit(want))
+    assert calls == [FieldAhead.BLOCK] * (-(-300 // FieldAhead.BLOCK) + -(-200 // FieldAhead.BLOCK))

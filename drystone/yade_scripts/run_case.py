@@ -33,6 +33,7 @@ from drystone.simulate import ENGINES as REQUESTS  # noqa: E402 (what ENGINE may
 from drystone.model.spec import Spec, load_spec  # noqa: E402
 from drystone.yade_scripts import scene as sc  # noqa: E402
 from drystone.yade_scripts.engines import ENGINES  # noqa: E402
+from drystone.yade_scripts.quiet_steps import FieldAhead  # noqa: E402
 from drystone.yade_scripts.recorder import Recorder  # noqa: E402
 
 # YADE's polyhedra intersection warns "Unhandled switch case" on exactly touching faces,
@@ -105,6 +106,7 @@ class Driver:
         self.jumps, self.jump_dvs = [], []  # velocity jumps at stage starts (run_info.json; the speed bound)
         self.g_integral = 0.0  # integral of |g_eff| dt over the steps taken, m/s (stability.speed_budget)
         self.iter, self.t = 0, 0.0  # the step being taken: YADE's iteration and time
+        self.field = FieldAhead(self.prog)  # the body-force field of the steps one at a time
         self.python_time = self.kernel_time = 0.0  # s in the per-step Python, of which in compiled kernels
         self.progress = monitors.Progress()
 
@@ -115,7 +117,7 @@ class Driver:
         e = self.engine
         e.clock()
         t = self.t
-        g = self.prog.body_acceleration(t)
+        g = self.field.at(t, self.O.dt) if e.yade_integrates else self.prog.body_acceleration(t)
         self.g_integral += float(np.linalg.norm(g)) * self.O.dt  # the speed bound (stability.speed_budget)
         k = self.prog.stage_index(t)
         if k != self.stage:
