@@ -41,8 +41,9 @@ def quiet_steps(run, dt) -> np.ndarray:
 class FieldAhead:
     """``prog.body_acceleration(t)`` of a run's steps taken one at a time, computed ``BLOCK``
     steps ahead at the times YADE will reach (dt added as YADE adds it, as ``quiet_steps``):
-    the per-step values bit for bit (``LoadProgramme.body_acceleration_at``), without the
-    ~80 us of a call per step. A step at another time than foreseen computes them again."""
+    the per-step values bit for bit (``LoadProgramme.body_acceleration_at``), 2-4 us a step
+    instead of 36-119 us (gravity, a tilt, a record). A step at another time than foreseen
+    computes them again."""
 
     BLOCK = 128
 
