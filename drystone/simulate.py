@@ -10,6 +10,7 @@ import os
 import shutil
 import subprocess
 import sys
+import threading
 from pathlib import Path
 
 from drystone import paths
@@ -185,8 +186,6 @@ class _Worker:
     gets another)."""
 
     def __init__(self, threads: int, env: dict):
-        import threading
-
         yade = shutil.which("yade") or "/usr/bin/yade"
         script = paths.PACKAGE / "yade_scripts" / "worker.py"
         self.env, self.root = _env_key(env), paths.ROOT
@@ -250,8 +249,6 @@ os.register_at_fork(after_in_child=_forget_workers)
 
 def own_worker(threads: int = 1) -> _Worker | None:
     """The calling thread's worker for ``threads``, if it has one."""
-    import threading
-
     return _WORKERS.get((threads, threading.get_ident()))
 
 

@@ -74,6 +74,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from drystone.geometry import polyhedron
+from drystone.kept import Kept
 from drystone.units import GRAVITY
 
 #: unit weight of water (N/m^3): 1000 kg/m^3 times the simulations' default gravity
@@ -424,22 +425,9 @@ def clip_z(poly: np.ndarray, z: float, keep_below: bool) -> np.ndarray:
     return np.array(out).reshape(-1, 3)
 
 
-#: ``_part_faces``' memory: a case's stones are resolved again for every run of a sweep, and a
-#: retained wall's loads computed again for every water level of a search, from the same parts
-_FACES: dict = {}
-_FACES_KEPT = 4096
-
-
-def _part_faces(v: np.ndarray):
-    """``polyhedron.faces`` of a convex part's vertices (m), computed once per vertex array
-    (its bytes) of this process; read-only."""
-    key = (v.shape, v.tobytes())
-    f = _FACES.get(key)
-    if f is None:
-        if len(_FACES) >= _FACES_KEPT:
-            _FACES.clear()
-        f = _FACES[key] = polyhedron.faces(v)
-    return f
+#: the faces of stone parts, by their vertices: a case's stones are resolved again for every run
+#: of a sweep, and a retained wall's loads computed again for every water level of a search
+_FACES = Kept(4096)
 
 
 def back_faces(parts, ep: EarthPressure, plane_tol: float = PLANE_TOL) -> list[np.ndarray]:
@@ -450,7 +438,7 @@ def back_faces(parts, ep: EarthPressure, plane_tol: float = PLANE_TOL) -> list[n
     out = []
     for verts in parts:
         v = np.asarray(verts, dtype=float)
-        f = _part_faces(v)
+        f = _FACES.get((v.shape, v.tobytes()), lambda: polyhedron.faces(v))
         for normal, poly in zip(f.normals, f.polygons):
             if normal @ n >= math.cos(NORMAL_TOL) and np.all(np.abs(v[poly] @ n - c) <= plane_tol):
                 out.append(v[poly])

@@ -13,6 +13,11 @@ import time
 import numpy as np
 
 
+def step_times(t: float, dt: float, n: int) -> np.ndarray:
+    """The times (s) of n steps from t, dt added one step after another as YADE adds it."""
+    return np.add.accumulate(np.concatenate([[t], np.full(n - 1, dt)]))
+
+
 def quiet_steps(run, dt) -> np.ndarray:
     """Times (s) of the steps from ``run.iter`` on that need no Python: up to the next
     recorded sample, stage start or switch of an applied force, and to the step after
@@ -21,7 +26,7 @@ def quiet_steps(run, dt) -> np.ndarray:
     nxt = min((i // run.rec_every + 1) * run.rec_every if i % run.rec_every else i, run.steps_total)
     if nxt <= i:
         return np.zeros(0)
-    ts = np.add.accumulate(np.concatenate([[run.t], np.full(nxt - i - 1, dt)]))  # as YADE adds dt
+    ts = step_times(run.t, dt, nxt - i)
     ends = np.array([st.end for st in run.prog.stages])
     k = np.minimum(np.searchsorted(ends, ts, side="right"), len(ends) - 1)  # prog.stage_index
     cut = len(ts) if np.all(k == k[0]) else int(np.argmax(k != k[0]))
@@ -40,7 +45,7 @@ def quiet_steps(run, dt) -> np.ndarray:
 
 class FieldAhead:
     """``prog.body_acceleration(t)`` of a run's steps taken one at a time, computed ``BLOCK``
-    steps ahead at the times YADE will reach (dt added as YADE adds it, as ``quiet_steps``):
+    steps ahead at the times YADE will reach (``step_times``):
     the per-step values bit for bit (``LoadProgramme.body_acceleration_at``), 2-4 us a step
     instead of 36-119 us (gravity, a tilt, a record). A step at another time than foreseen
     computes them again."""
@@ -54,7 +59,7 @@ class FieldAhead:
     def at(self, t: float, dt: float) -> np.ndarray:
         """The field (m/s^2, (3,)) at step time t (s) of steps dt (s) apart."""
         if self.next >= len(self.ts) or self.ts[self.next] != t:
-            self.ts = np.add.accumulate(np.concatenate([[t], np.full(self.BLOCK - 1, dt)]))
+            self.ts = step_times(t, dt, self.BLOCK)
             self.g, self.next = self.prog.body_acceleration_at(self.ts), 0
         self.next += 1
         return self.g[self.next - 1].copy()
