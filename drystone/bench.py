@@ -41,6 +41,12 @@
                   fingerprint); ``--tolerance`` (g, ``FRAGILITY_TOLERANCE``) and
                   ``--duration`` (s of each record from 1 s before its peak; default whole)
                   trade precision for runs and simulated time.
+``profile``       each scale wall's run (500 stones by default) replayed outside YADE in one
+                  compiled call (``transient``: from rest, gravity ramped, as the run) and
+                  sampled by ``perf`` (``drystone.kernel_profile``): the share of the step of
+                  each kernel and of each phase (clip, damping, law, ...), measured inside
+                  the compiled loop; skipped, saying why, where perf is missing (Debian:
+                  linux-perf).
 ``compile``       the 40-block wall for ``WARM`` steps through the compiled step in a fresh
                   process on an empty numba cache (what the first run after a change of the
                   kernels' sources, or on a fresh clone, pays), then again on the cache it
@@ -79,7 +85,7 @@ from drystone.mechanics import laws
 
 from drystone import paths, runner
 
-SECTIONS = ("running_bond", "scale", "threads", "sacsayhuaman", "limit", "fragility_ida", "compile")
+SECTIONS = ("running_bond", "scale", "threads", "sacsayhuaman", "limit", "fragility_ida", "compile", "profile")
 
 CASE = {
     "case": {"name": "bench_running_bond", "geometry": {"generator": "running_bond"}},
@@ -554,6 +560,100 @@ def step_phases(step, pos, rot, vel, angvel, dt, budget_s: float = 1.0) -> dict:
     return out
 
 
+def compiled_step_of(run_dir: Path, s, moving, owner, threads: int = 1):
+    """(CompiledStep, mass (nb,) kg, principal moments (nb, 3) kg m^2, the material table) for
+    a finished run's blocks (``settled_configuration``'s shapes ``s``, ``moving``, ``owner``):
+    masses the run's (histories.npz); principal moments those of each block's box in its body
+    frame, materials the spec's first (the cost does not depend on their values)."""
+    from drystone.mechanics import contact as law
+    from drystone.mechanics import contact_step as cs
+
+    spec = json.loads((run_dir / "spec.json").read_text())
+    h = np.load(run_dir / "histories.npz")
+    row = {int(b): k for k, b in enumerate(h["block_ids"])}
+    nb = len(moving)
+    mass = np.array([h["mass"][row[b["id"]]] if b["id"] in row else np.inf for b in spec["blocks"]], float)
+    ext = np.array([np.ptp(np.asarray(b["vertices"], float), axis=0) for b in spec["blocks"]])
+    box = np.stack([ext[:, 1] ** 2 + ext[:, 2] ** 2, ext[:, 0] ** 2 + ext[:, 2] ** 2, ext[:, 0] ** 2 + ext[:, 1] ** 2], 1)
+    inertia = np.where(moving[:, None], np.where(moving, mass, 1.0)[:, None] / 12.0 * box, 1.0)
+    mat = next(iter(spec["materials"].values()))
+    props = law.pair_properties(mat, mat)
+    table = np.array([[[props[k] for k in ("kn", "kt", "mu", "damping")]]])
+    step = cs.CompiledStep(mass, inertia, [s.verts[i, :s.nv[i]] for i in range(len(s.nv))], np.zeros(nb, int), table,
+                           owner=owner, threads=threads)
+    return step, mass, inertia, table
+
+
+def transient(run_dir: Path):
+    """A callable that replays a scale run's steps outside YADE (``CompiledStep.advance``, one
+    call): from its blocks' starting positions at rest, under gravity ramped over the first
+    fifth of the run as ``scale_case`` ramps it, the run's dt and number of steps. The stones
+    settle, contacts form, stick and slip: the step as a run pays for it, where ``step_times``
+    takes the settled state. The step's kernels are loaded (compiled) when this returns."""
+    s, pos, rot, moving, owner = settled_configuration(run_dir)
+    spec = json.loads((run_dir / "spec.json").read_text())
+    h = np.load(run_dir / "histories.npz")
+    row = {int(b): k for k, b in enumerate(h["block_ids"])}
+    for i, b in enumerate(spec["blocks"]):  # the free blocks where the run started them
+        k = row.get(b["id"])
+        if k is not None:
+            pos[i] = h["pos0"][k]
+            rot[i] = np.eye(3)
+    step, mass, inertia, _ = compiled_step_of(run_dir, s, moving, owner)
+    nb, dt = len(pos), float(spec["dt"])
+    n = int(json.loads((run_dir / "run_info.json").read_text())["steps"])
+    vel, w = np.zeros((nb, 3)), np.zeros((nb, 3))
+    free = np.where(moving[:, None], 1.0, 0.0) * np.ones((nb, 3))
+    quat = np.tile([0.0, 0.0, 0.0, 1.0], (nb, 1))
+    motion = (np.where(moving, mass, 1.0), inertia, free, free, moving.copy(), np.zeros((nb, 3)), quat)
+    t = dt * np.arange(1, n + 1)
+    g = np.zeros((n, 3))
+    g[:, 2] = -9.81 * np.minimum(1.0, t / (0.2 * n * dt))
+    step.forces(pos, rot, vel, w, dt)  # the kernels loaded before anything is timed
+
+    def run():
+        done, _, _, ok = step.advance(pos, rot, vel, w, dt, g, np.zeros((nb, 3)), motion)
+        return {"steps": int(done), "contacts": int(len(step.keys)), "completed": bool(ok)}
+    return run
+
+
+def profile_section(workdir: Path, sizes=(500,), walls=("running_bond", "polygonal"), steps: int = 300) -> dict:
+    """Section profile: each scale wall's run replayed outside YADE (``transient``) under
+    ``perf`` (``drystone.kernel_profile``): the share of the step of each kernel and each
+    phase, sampled inside the compiled loop. Skipped, saying why, where perf is missing."""
+    from drystone import kernel_profile as kprof
+
+    print("\nprofile: the scale walls' runs replayed in one compiled call, sampled by perf:", flush=True)
+    why = kprof.available()
+    if why:
+        print(f"  skipped: {why}", flush=True)
+        return {"skipped": why}
+    rows = []
+    for kind in walls:
+        for size in [n for n in sizes if n in WALL_SIZES.get(kind, sizes)]:
+            geo = wall_geometry(kind, size)
+            data = build_wall(geo)
+            dt = time_step(data)
+            run_geo = geo
+            tag = f"profile_{kind}_{size}"
+            if "tiles" in geo:
+                from drystone.geometry import blockfile
+                run_geo = str(blockfile.write(data, workdir / f"{tag}.json"))
+            runner.run_dict(scale_case(run_geo, dt, scale_steps(steps, size)), workdir / f"{tag}.toml",
+                            out_dir=workdir / tag, quiet=True,
+                            overrides=["contact.law=penalty_coulomb", "contact.detection=native"])
+            p = kprof.profile(transient(workdir / tag))
+            r = p.pop("result")
+            row = dict(wall=kind, size=size, stones=stone_count(data), ms_per_step=1e3 * p["samples_s"] / r["steps"],
+                       **r, **p)
+            rows.append(row)
+            print(f"  {kind:12s} {size:5d} stones: {row['ms_per_step']:.2f} ms/step over {r['steps']} steps "
+                  f"({r['contacts']} contacts at the end); % of the samples:", flush=True)
+            print("    " + ", ".join(f"{k} {v:.1f}" for k, v in p["phases"].items() if v >= 0.05), flush=True)
+            print("    " + ", ".join(f"{k} {v:.1f}" for k, v in list(p["kernels"].items())[:8]), flush=True)
+    return {"rows": rows, "steps": steps}
+
+
 def step_times(run_dir: Path, budget_s: float = 1.0) -> dict:
     """ms per call, outside YADE, on a run's settled positions (``settled_configuration``),
     of the compiled step's two halves: the contact forces (``CompiledStep.forces``: search,
@@ -567,31 +667,18 @@ def step_times(run_dir: Path, budget_s: float = 1.0) -> dict:
     frame, materials the spec's first (the cost does not depend on their values)."""
     from scipy.spatial.transform import Rotation
 
-    from drystone.mechanics import contact as law
-    from drystone.mechanics import contact_step as cs
     from drystone.mechanics import integration
 
     s, pos, rot, moving, owner = settled_configuration(run_dir)
+    step, mass, inertia, _ = compiled_step_of(run_dir, s, moving, owner)
     spec = json.loads((run_dir / "spec.json").read_text())
-    h = np.load(run_dir / "histories.npz")
-    row = {int(b): k for k, b in enumerate(h["block_ids"])}
     nb = len(pos)
-    mass = np.array([h["mass"][row[b["id"]]] if b["id"] in row else np.inf for b in spec["blocks"]], float)
-    ext = np.array([np.ptp(np.asarray(b["vertices"], float), axis=0) for b in spec["blocks"]])
-    box = np.stack([ext[:, 1] ** 2 + ext[:, 2] ** 2, ext[:, 0] ** 2 + ext[:, 2] ** 2, ext[:, 0] ** 2 + ext[:, 1] ** 2], 1)
-    inertia = np.where(moving[:, None], np.where(moving, mass, 1.0)[:, None] / 12.0 * box, 1.0)
-    mat = next(iter(spec["materials"].values()))
-    props = law.pair_properties(mat, mat)
-    table = np.array([[[props[k] for k in ("kn", "kt", "mu", "damping")]]])
-    step = cs.CompiledStep(mass, inertia, [s.verts[i, :s.nv[i]] for i in range(len(s.nv))], np.zeros(nb, int), table,
-                           owner=owner)
     vel, w, dt = np.zeros((nb, 3)), np.zeros((nb, 3)), float(spec["dt"])
     F, T = step.forces(pos, rot, vel, w, dt)
     free = np.where(moving[:, None], 1.0, 0.0) * np.ones((nb, 3))
     m_int = np.where(moving, mass, 1.0)
     state = [pos.copy(), vel.copy(), w.copy(), np.zeros((nb, 3)), np.tile([0.0, 0.0, 0.0, 1.0], (nb, 1)), rot.copy()]
-    step2 = cs.CompiledStep(mass, inertia, [s.verts[i, :s.nv[i]] for i in range(len(s.nv))], np.zeros(nb, int), table,
-                            owner=owner, threads=2)
+    step2 = compiled_step_of(run_dir, s, moving, owner, threads=2)[0]
     t1, t2 = _interleaved_ms([lambda: step.forces(pos, rot, vel, w, dt), lambda: step2.forces(pos, rot, vel, w, dt)],
                              budget_s, rounds=20)
     # what a run calls: ``advance`` (ADVANCE_STEPS steps under gravity), each thread count on its own copy of the state
@@ -1082,6 +1169,9 @@ def main(only=None, sizes=SIZES, walls=WALLS, steps: int = 300, engines=None, fr
             results["fragility_ida"] = dict(fragility_section(**(fragility or {})), machine=facts)
         if "compile" in only:
             results["compile"] = dict(compile_section(tmp), machine=facts)
+        if "profile" in only:
+            big = [n for n in sizes if n >= 500]  # the smallest of the big walls: its contacts, not its size, matter
+            results["profile"] = dict(profile_section(tmp, [min(big) if big else 500], walls, steps), machine=facts)
     results["machine"] = dict(facts, sections=only, wall_s=time.time() - t0)
     out = write_results(results)
     print(f"written {out} ({time.time() - t0:.0f} s)")

@@ -63,7 +63,7 @@ def main(argv=None) -> int:
     c.add_argument("folders", nargs="+")
     b = sub.add_parser("bench", help="speed figures: 40-block wall, 500/2000-stone walls, threads, Sacsayhuaman")
     b.add_argument("--only", nargs="+", choices=("running_bond", "scale", "threads", "sacsayhuaman", "limit",
-                                                 "fragility_ida", "compile"),
+                                                 "fragility_ida", "compile", "profile"),
                    help="run only these sections (bench.json keeps the others' earlier figures)")
     b.add_argument("--sizes", nargs="+", type=int, choices=(40, 500, 2000), default=[40, 500, 2000],
                    help="scale section: wall sizes (stones, about)")

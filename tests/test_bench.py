@@ -216,6 +216,22 @@ def test_step_times_run_the_compiled_step_on_the_settled_blocks(tmp_path):
     assert r["phases_ms"]["contacts"] == 1 and all(r["phases_ms"][k] > 0 for k in bench.PHASES)
 
 
+def test_transient_replays_the_run_from_rest(tmp_path):
+    """The profile section's replay of a run (bench.transient): the run's steps from its blocks'
+    starting places at rest, gravity ramped: a block set on the platform sinks into it and
+    touches it (one contact), every step done."""
+    box = [[x, y, z] for x in (0.0, 2.0) for y in (0.0, 1.0) for z in (0.0, 0.5)]
+    spec = {"blocks": [{"id": 0, "role": "platform", "vertices": [[x, y, z - 0.5] for x, y, z in box]},
+                       {"id": 7, "role": "free", "vertices": box}],
+            "materials": {"stone": {"density": 2300.0, "kn": 2e8, "kt": 1e8, "mu": 0.4, "damping": 0.8}}, "dt": 1e-4}
+    (tmp_path / "spec.json").write_text(json.dumps(spec))
+    (tmp_path / "run_info.json").write_text(json.dumps({"steps": 50}))
+    q = np.array([0.0, 0.0, 0.0, 1.0])
+    np.savez(tmp_path / "histories.npz", block_ids=np.array([7]), pos0=np.array([[1.0, 0.5, 0.25]]), quat0=q[None],
+             pos=np.array([[[3.0, 0.5, 0.25]]]), quat=q[None, None], mass=np.array([2300.0]))
+    assert bench.transient(tmp_path)() == {"steps": 50, "contacts": 1, "completed": True}
+
+
 def _row(engine, threads, ms):
     return {"law": "penalty_coulomb", "detection": "native", "engine_used": engine, "threads": threads,
             "ms_per_step": ms}
