@@ -27,7 +27,11 @@ import time
 from pathlib import Path
 
 #: the step's phases by the kernels that do their work (module.function as ``short_name``
-#: gives it; the first matching prefix wins); other kernels are "other"
+#: gives it; the first matching prefix wins); other kernels are "other". A ``prange`` loop's
+#: body is compiled into numba's gufunc (``<dynamic>.__numba_parfor_gufunc``) with the range
+#: kernels it calls inlined there (the shapes' placement, the integration), so their work is
+#: counted under that name, also on one thread (the kernels cut rows into as many ranges as
+#: numba may run threads)
 PHASES = (
     ("contact search: clip", ("overlap.",)),
     ("contact search: list and placement", ("neighbours.",)),
@@ -37,7 +41,7 @@ PHASES = (
              "contact.polar_moment", "contact.carried_share")),
     ("sums and energy", ("contact_rows.", "energy.")),
     ("integration", ("integration.",)),
-    ("numba's threads, sorts and arrays", ("<dynamic>.", "NRT_", "numba.")),
+    ("parallel loops (placement, integration) and numba's sorts", ("<dynamic>.", "NRT_", "numba.")),
 )
 
 

@@ -38,7 +38,7 @@ def test_the_report_is_summed_by_kernel_and_by_phase():
     ph = kp.by_phase(k)
     assert abs(ph["contact search: clip"] - 38.21) < 1e-12
     assert abs(ph["damping"] - 16.13) < 1e-12 and abs(ph["law"] - 3.44) < 1e-12
-    assert abs(ph["numba's threads, sorts and arrays"] - (2.52 + 0.54)) < 1e-12
+    assert abs(ph["parallel loops (placement, integration) and numba's sorts"] - (2.52 + 0.54)) < 1e-12
     assert abs(ph["other"] - (0.22 + 0.09)) < 1e-12
     assert abs(sum(ph.values()) - sum(k.values())) < 1e-9
 
