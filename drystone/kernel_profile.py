@@ -36,7 +36,7 @@ PHASES = (
     ("contact search: clip", ("overlap.",)),
     ("contact search: list and placement", ("neighbours.",)),
     ("damping", ("contact._jacobi", "contact._series_root", "contact._damp_range", "contact._add_body",
-                 "contact._slip", "contact.damping")),
+                 "contact.damping")),
     ("law", ("contact_rows._law", "contact_rows._global_inverse", "contact_rows._props", "contact.twist_spring",
              "contact.polar_moment", "contact.carried_share")),
     ("sums and energy", ("contact_rows.", "energy.")),
