@@ -401,6 +401,18 @@ def scale_steps(steps: int, size: int) -> int:
     return 4 * steps if size <= 40 else steps
 
 
+def scale_wall(kind: str, size: int, workdir: Path, tag: str) -> tuple:
+    """(geometry, the geometry a case reads, stones, dt s) of a scale wall: a tiled wall,
+    which no generator draws, written to ``workdir/tag.json`` for the case to read."""
+    geo = wall_geometry(kind, size)
+    data = build_wall(geo)
+    run_geo = geo
+    if "tiles" in geo:
+        from drystone.geometry import blockfile
+        run_geo = str(blockfile.write(data, workdir / f"{tag}.json"))
+    return geo, run_geo, stone_count(data), time_step(data)
+
+
 def scale_case(geometry: dict, dt: float, steps: int) -> dict:
     """A gravity run of ``steps`` steps of ``dt`` (gravity ramped over the first fifth),
     recording 5 samples (the recording is not what is measured)."""
@@ -631,20 +643,14 @@ def profile_section(workdir: Path, sizes=(500,), walls=("running_bond", "polygon
     rows = []
     for kind in walls:
         for size in [n for n in sizes if n in WALL_SIZES.get(kind, sizes)]:
-            geo = wall_geometry(kind, size)
-            data = build_wall(geo)
-            dt = time_step(data)
-            run_geo = geo
             tag = f"profile_{kind}_{size}"
-            if "tiles" in geo:
-                from drystone.geometry import blockfile
-                run_geo = str(blockfile.write(data, workdir / f"{tag}.json"))
+            _, run_geo, n, dt = scale_wall(kind, size, workdir, tag)
             runner.run_dict(scale_case(run_geo, dt, scale_steps(steps, size)), workdir / f"{tag}.toml",
                             out_dir=workdir / tag, quiet=True,
                             overrides=["contact.law=penalty_coulomb", "contact.detection=native"])
             p = kprof.profile(transient(workdir / tag))
             r = p.pop("result")
-            row = dict(wall=kind, size=size, stones=stone_count(data), ms_per_step=1e3 * p["samples_s"] / r["steps"],
+            row = dict(wall=kind, size=size, stones=n, ms_per_step=1e3 * p["samples_s"] / r["steps"],
                        **r, **p)
             rows.append(row)
             print(f"  {kind:12s} {size:5d} stones: {row['ms_per_step']:.2f} ms/step over {r['steps']} steps "
@@ -753,14 +759,8 @@ def scale_section(workdir: Path, sizes=SIZES, walls=WALLS, steps: int = 300, eng
     rows = []
     for kind, engine in [(k, e) for k in walls for e in engines]:
         for size in [n for n in sizes if n in WALL_SIZES.get(kind, sizes)]:
-            geo = wall_geometry(kind, size)
-            data = build_wall(geo)
-            n, dt = stone_count(data), time_step(data)
             tag = f"scale_{kind}_{size}" + (f"_{engine}" if engine else "")
-            run_geo = geo
-            if "tiles" in geo:  # no generator draws it: the case reads it from a block file
-                from drystone.geometry import blockfile
-                run_geo = str(blockfile.write(data, workdir / f"{tag}.json"))
+            geo, run_geo, n, dt = scale_wall(kind, size, workdir, tag)
             try:
                 r = timed_run(scale_case(run_geo, dt, scale_steps(steps, size)), workdir, tag, 1,
                               ["contact.law=penalty_coulomb", "contact.detection=native"], engine,
