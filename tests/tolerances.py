@@ -201,11 +201,19 @@ FLAT_SLAB_COUPLING_REL = 1e-4
 #: the Cholesky + Jacobi kernel and scipy agree to ~2e-6 on these contacts: 1e-5 of the
 #: largest wrench
 KERNEL_REL = 1e-5
+#: the compiled damping kernel's highest modal frequency of a contact (contact._jacobi_sqrt)
+#: against numpy's eigh: the largest diagonal entry of V^T B V in the basis where the series
+#: is taken, low by eps^2 (lambda_1 - lambda_k) for a basis turned by eps between the top mode
+#: and mode k. The series takes X = eps (s_1 - s_k) up to SERIES_TOL^(1/3) s_1 = 4.6e-5 s_1:
+#: (4.6e-5)^2 (s_1 + s_k) / (s_1 - s_k) of lambda_1, 6.4e-9 for a mode k at half the top
+#: frequency, half of it on omega: 3.2e-9 (2.1e-9 measured on the test's 40 contacts): 1e-8
+DAMPING_OMEGA_REL = 1e-8
 #: the damping's second-order series square root (contact._series_root) of A = S S for a
 #: known S = diag(s) + Y, s_i 1e3-1e4, Y 3e-6 of s off the diagonal: A's entries (<= s_max^2)
 #: are rounded by ~2 eps s_max^2, which moves the root by that over s_i + s_j >= 2 s_min:
 #: eps s_max (s_max / s_min) = 2.2e-15 of the largest root; the terms the series drops are
-#: below SERIES_TOL (1e-16) of it: 1e-14. The first order alone (no S2 = -X X / (s_i + s_j))
+#: of third order, (Y / s)^3 = 2.7e-17 of it here (it accepts up to SERIES_TOL = 1e-13):
+#: 1e-14. The first order alone (no S2 = -X X / (s_i + s_j))
 #: is off by ~Y^2 / s, 2e-12 to 5e-12 of it (the test checks that it shows above 1e-12)
 SERIES_EXACT_REL = 1e-14
 #: the same series inside ``_jacobi_sqrt`` on a basis V within 1e-8 rad of the eigenvectors

@@ -373,7 +373,9 @@ def _jacobi_sqrt(B, T, Q, s6, x6, A, V, warm):
     until a step's B has moved too far from it for the series, when sweeps refresh it;
     cyclic Jacobi is quadratically convergent; the result is a cold solve's to ~1e-9 of the
     largest eigenvalue's scale). The largest eigenvalue returned is V^T B V's largest
-    diagonal entry, to the square of V's misalignment (~1e-10 relative). A basis whose
+    diagonal entry, low by the square of V's misalignment (where the series is taken: up to
+    ~1e-8 relative; 2e-9 measured on random contacts, tests/tolerances.py
+    DAMPING_OMEGA_REL). A basis whose
     columns have drifted from unit length (round-off over many steps: > 1e-13) is
     re-orthonormalised first (modified Gram-Schmidt); one with a column far from unit
     length or not finite is not used."""
@@ -481,28 +483,33 @@ def _jacobi_sqrt(B, T, Q, s6, x6, A, V, warm):
 
 
 #: ``_series_root``'s bound on the neglected terms of the square root (third order and the
-#: fourth's leading part), over the largest square root: below double precision's round-off
-#: (2.2e-16)
-SERIES_TOL = 1e-16
+#: fourth's leading part), over the largest square root: what the Jacobi sweeps leave when
+#: they stop (``_jacobi_sqrt``: the off-diagonal part of V^T B V below 1e-13 of its
+#: diagonal, taken as zero: the root then off by up to 1e-13 lambda_max / (s_i + s_j), at
+#: least 5e-14 of the largest root). 1e-16 (round-off) made the series refuse a warm basis
+#: turned by more than ~5e-6 (X / s): sticking contacts then swept at 26 % of a settled
+#: running-bond wall's contact-steps and 61 % of its settling ones; 1e-13 reaches ~5e-5, and
+#: the sweeps' share of that settling step fell from 18 to 10 % (``bench --only profile``)
+SERIES_TOL = 1e-13
 
 
 @njit(cache=True, _nrt=False)
 def _series_root(A, S, Q, s, x):
     """The square root S (6 x 6) of a symmetric positive semi-definite A = D + E that is
-    nearly diagonal (D its diagonal), when the expansion to second order gives it to below
-    round-off; returns whether it did (S then written; else S is scratch). Q (6 x 6), s, x
+    nearly diagonal (D its diagonal), when the expansion to second order gives it as
+    closely as converged Jacobi sweeps would (SERIES_TOL); returns whether it did (S then written; else S is scratch). Q (6 x 6), s, x
     (6,): work arrays. With s_i = sqrt(D_ii), S = diag(s) + X + S2 + S3 + ..., each term
     matching S S to A at the next order: diag(s) X + X diag(s) = E, X_ij = E_ij / (s_i +
     s_j); S2_ij = -(X X)_ij / (s_i + s_j); S3_ij = -(X S2 + S2 X)_ij / (s_i + s_j); the
     fourth order -(X S3 + S3 X + S2 S2)_ij / (s_i + s_j). S = diag(s) + X + S2 is taken when
     the bound |(X S2 + S2 X)_ij| + |(S2 S2)_ij| <= q (x_i + x_j) + 6 q^2 (q the largest
     |S2_kl|, x_i the sum of |X_ik| over k) is <= SERIES_TOL max(s) (s_i + s_j) for every
-    i, j: the neglected terms are then below the round-off of the largest entry (the rest a
+    i, j: the neglected terms are then below SERIES_TOL of the largest entry (the rest a
     further factor X / s smaller). This stands for the Jacobi sweeps (quadratic
     convergence: each sweep squares the off-diagonal part) at a fraction of their cost: a
-    warm start (the previous step's modes) leaves off-diagonal terms that small (X / s ~
-    1e-6) on a settled or shaken wall, where the first order alone (neglecting S2 ~ X X / s)
-    needed a sweep first. A zero eigenvalue of B (a slipping contact) coupled to the others
+    warm start (the previous step's modes) leaves off-diagonal terms that small (X / s up to
+    SERIES_TOL^(1/3) ~ 5e-5) on a settled or shaken wall, where the first order alone
+    (neglecting S2 ~ X X / s) needed a sweep first. A zero eigenvalue of B (a slipping contact) coupled to the others
     fails the test (s_i + s_j near 0), and the sweeps go on there."""
     n = 6
     smax = 0.0
