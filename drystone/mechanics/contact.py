@@ -495,22 +495,23 @@ SERIES_TOL = 1e-13
 
 @njit(cache=True, _nrt=False)
 def _series_root(A, S, Q, s, x):
-    """The square root S (6 x 6) of a symmetric positive semi-definite A = D + E that is
-    nearly diagonal (D its diagonal), when the expansion to second order gives it as
-    closely as converged Jacobi sweeps would (SERIES_TOL); returns whether it did (S then written; else S is scratch). Q (6 x 6), s, x
-    (6,): work arrays. With s_i = sqrt(D_ii), S = diag(s) + X + S2 + S3 + ..., each term
-    matching S S to A at the next order: diag(s) X + X diag(s) = E, X_ij = E_ij / (s_i +
-    s_j); S2_ij = -(X X)_ij / (s_i + s_j); S3_ij = -(X S2 + S2 X)_ij / (s_i + s_j); the
-    fourth order -(X S3 + S3 X + S2 S2)_ij / (s_i + s_j). S = diag(s) + X + S2 is taken when
-    the bound |(X S2 + S2 X)_ij| + |(S2 S2)_ij| <= q (x_i + x_j) + 6 q^2 (q the largest
-    |S2_kl|, x_i the sum of |X_ik| over k) is <= SERIES_TOL max(s) (s_i + s_j) for every
-    i, j: the neglected terms are then below SERIES_TOL of the largest entry (the rest a
-    further factor X / s smaller). This stands for the Jacobi sweeps (quadratic
+    """The square root S (6 x 6) of a symmetric positive semi-definite A = D + E that is nearly
+    diagonal (D its diagonal), when the expansion to second order gives it as closely as
+    converged Jacobi sweeps would (SERIES_TOL); returns whether it did (S then written; else
+    S is scratch). Q (6 x 6), s, x (6,): work arrays. With s_i = sqrt(D_ii), S = diag(s) + X
+    + S2 + S3 + ..., each term matching S S to A at the next order: diag(s) X + X diag(s) =
+    E, X_ij = E_ij / (s_i + s_j); S2_ij = -(X X)_ij / (s_i + s_j); S3_ij = -(X S2 + S2 X)_ij
+    / (s_i + s_j); the fourth order -(X S3 + S3 X + S2 S2)_ij / (s_i + s_j). S = diag(s) + X
+    + S2 is taken when the bound |(X S2 + S2 X)_ij| + |(S2 S2)_ij| <= q (x_i + x_j) + 6 q^2
+    (q the largest |S2_kl|, x_i the sum of |X_ik| over k) is <= SERIES_TOL max(s) (s_i +
+    s_j) for every i, j: the neglected terms are then below SERIES_TOL of the largest entry
+    (the rest a further factor X / s smaller). This stands for the Jacobi sweeps (quadratic
     convergence: each sweep squares the off-diagonal part) at a fraction of their cost: a
     warm start (the previous step's modes) leaves off-diagonal terms that small (X / s up to
     SERIES_TOL^(1/3) ~ 5e-5) on a settled or shaken wall, where the first order alone
-    (neglecting S2 ~ X X / s) needed a sweep first. A zero eigenvalue of B (a slipping contact) coupled to the others
-    fails the test (s_i + s_j near 0), and the sweeps go on there."""
+    (neglecting S2 ~ X X / s) needed a sweep first. A zero eigenvalue of B (a slipping
+    contact) coupled to the others fails the test (s_i + s_j near 0), and the sweeps go on
+    there."""
     n = 6
     smax = 0.0
     for i in range(n):
