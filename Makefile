@@ -30,6 +30,7 @@ help:
 	@echo "make bench [BENCH='--only scale --sizes 500']   speed figures (not a test; all sections ~15 min on 2 cores)"
 	@echo "                  BENCH='--only fragility_ida --records 2 --tolerance 0.2': fragility by IDA of the Sacsayhuaman wall over N far-field records, extrapolated to 22"
 	@echo "                  BENCH='--only profile --sizes 500 --walls polygonal': the step's time per kernel and phase, sampled by perf inside the compiled loop (needs linux-perf)"
+	@echo "                  BENCH='--baseline e18ca1f --sizes 500 --walls polygonal': this tree's scale section and an earlier commit's, back to back in alternating rounds (~8 min)"
 	@echo "make reference    regenerate tests/data/reference/ (stored histories of test_regression.py) after an intended change"
 	@echo "make pulse-overturning   least one-sine pulse that overturns a slender block, damping 0.8 and Housner's, beside Zhang & Makris's rigid block (~20 min)"
 	@echo "make free-decay   damping ratio per mode of one block, both contact geometries, and a slender block's rocking restitution per impact vs Housner at 3 K_n x 4 dampings (~3 min)"

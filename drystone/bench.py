@@ -53,6 +53,12 @@
                   left: the wall seconds of each, their difference (the compilation) and the
                   kernels' compiled overloads (numba's cache files).
 
+``--baseline COMMIT`` (``drystone.bench_baseline``; alone unless ``--only`` names sections too):
+                  the scale section of an earlier commit, in a git worktree, and of this
+                  tree, run back to back in ``--rounds`` alternating rounds (2): both trees'
+                  ms/step in every round and the speed-ups of the fastest and of the medians
+                  (issue 35's "2.5x over e18ca1f, run back to back on one machine").
+
 ms per step: a run's YADE wall time has a fixed start-up (about a second: the first step
 loads the compiled kernels) besides its steps, so each measured run goes with a short one
 (``WARM`` steps) of the same case: ms/step is the slope (wall_long - wall_short) / (steps
@@ -1138,13 +1144,19 @@ def fragility_section(n_records: int | None = None, tolerance: float = FRAGILITY
     return row
 
 
-def main(only=None, sizes=SIZES, walls=WALLS, steps: int = 300, engines=None, fragility: dict | None = None) -> dict:
-    """Run the sections ``only`` (default all, in SECTIONS' order) and write bench.json;
-    ``fragility``: the fragility_ida section's options (``fragility_section``'s keywords)."""
-    only = list(SECTIONS) if not only else [s for s in SECTIONS if s in only]
+def main(only=None, sizes=SIZES, walls=WALLS, steps: int = 300, engines=None, fragility: dict | None = None,
+         baseline: str | None = None, rounds: int = 2) -> dict:
+    """Run the sections ``only`` (default all, in SECTIONS' order; with ``baseline`` and no
+    ``only``, that section alone) and write bench.json; ``fragility``: the fragility_ida
+    section's options (``fragility_section``'s keywords); ``baseline``: a commit whose scale
+    section is run back to back with this tree's in ``rounds`` rounds (``bench_baseline``)."""
+    if baseline is not None:
+        from drystone import bench_baseline
+        bench_baseline.resolve(baseline)  # a name that is no commit stops here, before any run
+    only = ([] if baseline is not None else list(SECTIONS)) if not only else [s for s in SECTIONS if s in only]
     facts = machine()
     print(f"machine: {facts['cores']} cores, load average {facts['load_average_at_start'][0]:.2f} at the start, "
-          f"YADE {facts['yade_version']}; sections: {', '.join(only)}", flush=True)
+          f"YADE {facts['yade_version']}; sections: {', '.join(only + (['baseline'] if baseline else []))}", flush=True)
     results: dict = {}
     t0 = time.time()
     with tempfile.TemporaryDirectory(dir=paths.ROOT) as tmp:
@@ -1172,7 +1184,10 @@ def main(only=None, sizes=SIZES, walls=WALLS, steps: int = 300, engines=None, fr
         if "profile" in only:
             big = [n for n in sizes if n >= 500]  # the smallest of the big walls: its contacts, not its size, matter
             results["profile"] = dict(profile_section(tmp, [min(big) if big else 500], walls, steps), machine=facts)
-    results["machine"] = dict(facts, sections=only, wall_s=time.time() - t0)
+    if baseline is not None:
+        results["baseline"] = dict(bench_baseline.section(baseline, sizes, walls, rounds), machine=facts)
+    results["machine"] = dict(facts, sections=only + (["baseline"] if baseline is not None else []),
+                              wall_s=time.time() - t0)
     out = write_results(results)
     print(f"written {out} ({time.time() - t0:.0f} s)")
     return results

@@ -79,6 +79,10 @@ def main(argv=None) -> int:
     b.add_argument("--duration", type=float, default=None,
                    help="fragility_ida section: S seconds of each record from 1 s before its peak (default whole)")
     b.add_argument("--workers", type=int, default=2, help="fragility_ida section: parallel runs (2)")
+    b.add_argument("--baseline", metavar="COMMIT", default=None,
+                   help="also run COMMIT's scale section (a git worktree) and this tree's back to back, "
+                        "alternating, for --walls and --sizes: both ms/step and the speed-up (alone without --only)")
+    b.add_argument("--rounds", type=int, default=2, help="--baseline: alternating rounds (2)")
     sub.add_parser("free-decay", help="damping ratio per mode of one block (both contact geometries) and rocking "
                    "restitution per impact against Housner's -> "
                    "results/free_decay/report.md")
@@ -148,7 +152,15 @@ def main(argv=None) -> int:
             from drystone import bench
             frag = {"n_records": a.records, "duration_s": a.duration, "workers": a.workers,
                     **({"tolerance": a.tolerance} if a.tolerance is not None else {})}
-            bench.main(a.only, a.sizes, a.walls, a.steps, a.engines, frag)
+            from drystone.bench_baseline import BaselineError
+            if a.rounds < 1:
+                print(f"error: bench --rounds: {a.rounds} (at least 1)", file=sys.stderr)
+                return 2
+            try:
+                bench.main(a.only, a.sizes, a.walls, a.steps, a.engines, frag, a.baseline, a.rounds)
+            except BaselineError as exc:
+                print(f"error: {exc}", file=sys.stderr)
+                return 2
     except KeyboardInterrupt:
         print("interrupted: the results folder is unchanged", file=sys.stderr)
         return 130

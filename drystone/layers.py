@@ -55,11 +55,14 @@ LAYERS = (
     Layer(4, "postprocess", (), ("drystone.postprocess",), "`drystone/postprocess/`",
           "`summary.json` from histories, figures, comparison with the papers, identification, VTK"),
     Layer(5, "applications", ("drystone.runner", "drystone.sweep", "drystone.cli", "drystone.bench",
-                              "drystone.kernel_profile", "drystone.clean", "drystone.__main__"),
+                              "drystone.kernel_profile", "drystone.bench_baseline", "drystone.clean",
+                              "drystone.__main__"),
           ("drystone.analyses",),
-          "`drystone/` (`runner.py`, `sweep.py`, `cli.py`, `bench.py`, `kernel_profile.py`, `clean.py`), "
+          "`drystone/` (`runner.py`, `sweep.py`, `cli.py`, `bench.py`, `bench_baseline.py`, `kernel_profile.py`, "
+          "`clean.py`), "
           "`drystone/analyses/` (with `free_decay.py`, `restitution.py`: the analyses of one block)",
-          "run a case, sweeps (local or Dask), the command line, speed figures and the kernels' profile under perf, "
+          "run a case, sweeps (local or Dask), the command line, speed figures (also back to back with an earlier "
+          "commit) and the kernels' profile under perf, "
           "the free-decay check and the "
           "rocking restitution, `make clean` (only what the package wrote); the analyses of any case (tilt, modal, "
           "collapse, fragility, ...: one command each, the one collapse criterion `analyses/common.py` outcome)"),
