@@ -57,7 +57,7 @@
                   the scale section of an earlier commit, in a git worktree, and of this
                   tree, run back to back in ``--rounds`` alternating rounds (2): both trees'
                   ms/step in every round and the speed-ups of the fastest and of the medians
-                  (issue 35's "2.5x over e18ca1f, run back to back on one machine").
+                  (a speed goal over a commit, both figures from one machine).
 
 ms per step: a run's YADE wall time has a fixed start-up (about a second: the first step
 loads the compiled kernels) besides its steps, so each measured run goes with a short one

@@ -1,6 +1,6 @@
 """``python -m drystone bench --baseline COMMIT``: this tree's step against an earlier commit's,
-measured back to back on one machine (issue 35: a speed-up over a commit is stated with both
-figures from one run on one machine).
+measured back to back on one machine (a speed-up over a commit stated with both figures from
+one run on one machine).
 
 Each of ``--rounds`` rounds (2 by default) runs the bench's scale section (``bench --only scale``,
 the walls and sizes asked) twice, each in a fresh process: first in a git worktree of COMMIT, then
