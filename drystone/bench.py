@@ -89,7 +89,7 @@ import numpy as np
 from drystone import atomic
 from drystone.mechanics import laws
 
-from drystone import paths, runner
+from drystone import paths, runner, units
 
 SECTIONS = ("running_bond", "scale", "threads", "sacsayhuaman", "limit", "fragility_ida", "compile", "profile")
 
@@ -419,12 +419,16 @@ def scale_wall(kind: str, size: int, workdir: Path, tag: str) -> tuple:
     return geo, run_geo, stone_count(data), time_step(data)
 
 
+#: the scale runs' gravity ramp, a fraction of the run (``scale_case``; ``transient`` replays it)
+SCALE_RAMP = 0.2
+
+
 def scale_case(geometry: dict, dt: float, steps: int) -> dict:
-    """A gravity run of ``steps`` steps of ``dt`` (gravity ramped over the first fifth),
-    recording 5 samples (the recording is not what is measured)."""
+    """A gravity run of ``steps`` steps of ``dt`` (gravity ramped over the first
+    ``SCALE_RAMP`` of it), recording 5 samples (the recording is not what is measured)."""
     duration = steps * dt
     return {"case": {"name": "bench_scale", "geometry": geometry},
-            "stages": [{"type": "gravity", "duration": duration, "ramp": 0.2 * duration}],
+            "stages": [{"type": "gravity", "duration": duration, "ramp": SCALE_RAMP * duration}],
             "output": {"interval": duration / 5}}
 
 
@@ -626,7 +630,7 @@ def transient(run_dir: Path):
     motion = (np.where(moving, mass, 1.0), inertia, free, free, moving.copy(), np.zeros((nb, 3)), quat)
     t = dt * np.arange(1, n + 1)
     g = np.zeros((n, 3))
-    g[:, 2] = -9.81 * np.minimum(1.0, t / (0.2 * n * dt))
+    g[:, 2] = -units.GRAVITY * np.minimum(1.0, t / (SCALE_RAMP * n * dt))
     step.forces(pos, rot, vel, w, dt)  # the kernels loaded before anything is timed
 
     def run():
@@ -1154,9 +1158,10 @@ def main(only=None, sizes=SIZES, walls=WALLS, steps: int = 300, engines=None, fr
         from drystone import bench_baseline
         bench_baseline.resolve(baseline)  # a name that is no commit stops here, before any run
     only = ([] if baseline is not None else list(SECTIONS)) if not only else [s for s in SECTIONS if s in only]
+    sections = only + (["baseline"] if baseline is not None else [])
     facts = machine()
     print(f"machine: {facts['cores']} cores, load average {facts['load_average_at_start'][0]:.2f} at the start, "
-          f"YADE {facts['yade_version']}; sections: {', '.join(only + (['baseline'] if baseline else []))}", flush=True)
+          f"YADE {facts['yade_version']}; sections: {', '.join(sections)}", flush=True)
     results: dict = {}
     t0 = time.time()
     with tempfile.TemporaryDirectory(dir=paths.ROOT) as tmp:
@@ -1186,8 +1191,7 @@ def main(only=None, sizes=SIZES, walls=WALLS, steps: int = 300, engines=None, fr
             results["profile"] = dict(profile_section(tmp, [min(big) if big else 500], walls, steps), machine=facts)
     if baseline is not None:
         results["baseline"] = dict(bench_baseline.section(baseline, sizes, walls, rounds), machine=facts)
-    results["machine"] = dict(facts, sections=only + (["baseline"] if baseline is not None else []),
-                              wall_s=time.time() - t0)
+    results["machine"] = dict(facts, sections=sections, wall_s=time.time() - t0)
     out = write_results(results)
     print(f"written {out} ({time.time() - t0:.0f} s)")
     return results

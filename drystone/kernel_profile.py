@@ -26,6 +26,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from drystone import atomic
+
 #: the step's phases by the kernels that do their work (module.function as ``short_name``
 #: gives it; the first matching prefix wins); other kernels are "other". A ``prange`` loop's
 #: body is compiled into numba's gufunc (``<dynamic>.__numba_parfor_gufunc``) with the range
@@ -101,10 +103,7 @@ def write_map(path: Path | None = None) -> Path:
     keys = sorted(addrs)
     lines = [f"{a:x} {min(b - a, 1 << 20):x} {addrs[a]}" for a, b in zip(keys, keys[1:] + [keys[-1] + 4096])] \
         if keys else []
-    tmp = path.with_name(path.name + ".part")
-    tmp.write_text("\n".join(lines) + "\n")
-    os.replace(tmp, path)
-    return path
+    return atomic.write_text(path, "\n".join(lines) + "\n")
 
 
 _COMPONENT = re.compile(r"(\d+)")
