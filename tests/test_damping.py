@@ -202,6 +202,45 @@ def test_compiled_kernel_matches_the_reference(sticking):
     assert np.allclose(mo, m_ref, rtol=tol.KERNEL_REL, atol=tol.KERNEL_REL * np.abs(m_ref).max())
 
 
+def test_moment_cap_takes_the_patch_axes_of_an_axis_aligned_joint():
+    """The kernel's moment cap (``damping_wrenches``) = the reference (``cap_damping``, numpy's
+    pseudo-inverse) for patches whose axes are the kernel's in-plane basis (u, w), the long
+    one along w, with a round-off off-diagonal (1e-21 m^4): the bed joints of a wall along
+    x. The 2 x 2 eigenvector (l1 - j22, j12) was then two round-off numbers: the cap took
+    the patch's axes in any direction, its moment off by up to 0.95 % here. Caps active
+    (fn 5 N); tolerance KERNEL_REL of the largest moment, as
+    ``test_compiled_kernel_matches_the_reference``."""
+    rng = np.random.default_rng(5)
+    m = 400
+    a = rng.uniform(0.0, 0.6, m)  # a tilt about y: u = -y in the kernel's basis
+    n = np.stack([np.sin(a), np.zeros(m), np.cos(a)], axis=1)
+    u = np.array([0.0, -1.0, 0.0])
+    w = np.cross(n, u)
+    area = rng.uniform(0.02, 0.2, m)
+    long_, short = rng.uniform(0.2, 0.6, m), rng.uniform(0.1, 0.2, m)
+    pj = area[:, None, None] * (long_[:, None, None] ** 2 / 12 * w[:, :, None] * w[:, None, :]
+                                + short[:, None, None] ** 2 / 12 * np.outer(u, u))
+    pj[:, 0, 1] += 1e-21
+    pj[:, 1, 0] += 1e-21
+    pj[:, 1, 2] -= 1e-21
+    pj[:, 2, 1] -= 1e-21
+    kn, kt, xi, stick = np.full(m, 2e8), np.full(m, 1e8), np.full(m, 0.8), np.ones(m, bool)
+    ra, rb = np.zeros((m, 3)), -0.1 * n
+    ima, imb = np.zeros(m), np.full(m, 1 / 36.8)
+    iia, iib = np.zeros((m, 3, 3)), np.tile(np.diag([4.0, 2.0, 3.0]), (m, 1, 1))
+    twist = np.tile([0.0, 0.0, 0.0, 0.3, 0.2, 0.1], (m, 1))
+    fn, fs, mu, lever = np.full(m, 5.0), np.zeros((m, 3)), np.full(m, 0.8), np.zeros((m, 3))
+    C, _ = law.damping_matrix(law.patch_stiffness(n, area, pj, kn, kt, stick),
+                              law.mobility(ra, rb, ima, imb, iia, iib), xi)
+    wd = -np.matmul(C, twist[:, :, None])[:, :, 0]
+    f_ref, m_ref = law.cap_damping(wd[:, :3], wd[:, 3:], n, fn, fs, mu, lever, area, pj)
+    assert (np.linalg.norm(m_ref, axis=1) < 0.9 * np.linalg.norm(wd[:, 3:], axis=1)).all()  # the caps act
+    _, mo, _ = law.damping_wrenches(n, area, pj, kn, kt, xi, stick, ra, rb, ima, imb, iia, iib, twist, fn, fs, mu,
+                                    lever)
+    err = np.abs(mo - m_ref).max(axis=1) / np.abs(m_ref).max(axis=1)
+    assert err.max() <= tol.KERNEL_REL, (int(np.argmax(err)), err.max())
+
+
 def test_warm_start_gives_the_cold_result_and_survives_a_broken_basis():
     """``damping_wrenches_warm`` started from a near basis (another contact state's modes),
     from the identity, or from a non-finite basis gives the cold solve's wrenches: the warm

@@ -839,15 +839,19 @@ def _damp_range(c0, c1, n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, ii
         dif = np.sqrt(0.25 * (j11 - j22) ** 2 + j12 * j12)
         l1 = 0.5 * tr + dif
         l2 = 0.5 * tr - dif
-        if abs(j12) > 1e-300:
+        # v1 from the row of the 2 x 2 without cancellation: where j12 is round-off and j22 >
+        # j11, l1 - j22 is round-off too, and (l1 - j22, j12) points anywhere (a bed joint
+        # along w, as an axis-aligned wall's: the cap then took the patch's axes wrong)
+        if j11 >= j22:  # l1 - j22 >= j11 - j22 >= 0
             v10, v11 = l1 - j22, j12
-        elif j11 >= j22:
-            v10, v11 = 1.0, 0.0
-        else:
-            v10, v11 = 0.0, 1.0
+        else:  # l1 - j11 >= j22 - j11 > 0
+            v10, v11 = j12, l1 - j11
         vn = np.sqrt(v10 * v10 + v11 * v11)
-        v10 /= vn
-        v11 /= vn
+        if vn > 0.0:
+            v10 /= vn
+            v11 /= vn
+        else:  # j11 = j22 and j12 = 0: every direction is principal
+            v10, v11 = 1.0, 0.0
         v20, v21 = -v11, v10
         tol = 1e-9 * l1
         i1 = 1.0 / l1 if l1 > tol else 0.0
