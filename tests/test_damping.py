@@ -239,6 +239,54 @@ def test_moment_cap_takes_the_patch_axes_of_an_axis_aligned_joint():
                                     lever)
     err = np.abs(mo - m_ref).max(axis=1) / np.abs(m_ref).max(axis=1)
     assert err.max() <= tol.KERNEL_REL, (int(np.argmax(err)), err.max())
+def test_slipping_contact_damps_each_mode_at_xi_and_its_null_space_not_at_all():
+    """A slipping contact's damping (the kernel's rank-3 path, ``contact._slip_damping``) is
+    exact in the contact's modes: for every mode of K phi = omega^2 M phi (scipy's generalised
+    eigh, M = W^-1), C phi = 2 xi omega M phi, and C phi = 0 for the motions K does not
+    resist (sliding and twist: omega = 0), on random contacts, a line contact among them
+    (its patch of rank 1: one more mode without stiffness). C is read column by column from
+    the kernel's wrench of unit twists (caps out of reach). Tolerance
+    ``SLIP_DAMPING_MODAL_REL`` of C's largest entry; the 6 x 6 root it replaced was off by
+    2.3e-9 of it here (B's zero eigenvalues)."""
+    from scipy.linalg import eigh
+
+    rng = np.random.default_rng(3)
+    m = 12
+    n = rng.normal(size=(m, 3))
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    ra, rb = 0.3 * rng.normal(size=(m, 3)), 0.3 * rng.normal(size=(m, 3))
+    ima = np.where(rng.random(m) < 0.3, 0.0, 1.0 / rng.uniform(10, 500, m))
+    imb = 1.0 / rng.uniform(10, 500, m)
+    iia = np.zeros((m, 3, 3))
+    iib = np.zeros((m, 3, 3))
+    pj = np.empty((m, 3, 3))
+    for k in range(m):
+        for ii, im in ((iia, ima[k]), (iib, imb[k])):
+            q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+            ii[k] = q @ np.diag(1.0 / rng.uniform(0.5, 20, 3)) @ q.T if im > 0 else 0.0
+        t = np.linalg.svd(n[k][None])[2][1:]
+        pj[k] = t.T @ np.diag(rng.uniform(1e-5, 1e-3, 2) * ([1.0, 0.0] if k == 0 else 1.0)) @ t
+    area, xi = rng.uniform(0.01, 0.2, m), rng.uniform(0.05, 0.8, m)
+    kn, kt, slip = np.full(m, 2e8), np.full(m, 1e8), np.zeros(m, bool)
+    W = law.mobility(ra, rb, ima, imb, iia, iib)
+    K = law.patch_stiffness(n, area, pj, kn, kt, slip)
+    for k in range(m):
+        one = (n[k:k + 1], area[k:k + 1], pj[k:k + 1], kn[k:k + 1], kt[k:k + 1], xi[k:k + 1], slip[k:k + 1],
+               ra[k:k + 1], rb[k:k + 1], ima[k:k + 1], imb[k:k + 1], iia[k:k + 1], iib[k:k + 1])
+        C = np.empty((6, 6))
+        for j in range(6):
+            f, mo, om = law.damping_wrenches(*one, np.eye(6)[j][None], np.full(1, 1e30), np.zeros((1, 3)),
+                                             np.full(1, 1e30), np.zeros((1, 3)))
+            C[:, j] = -np.concatenate([f[0], mo[0]])
+        mass = np.linalg.inv(W[k])
+        lam, phi = eigh(K[k], mass)
+        stiff = lam > 1e-9 * lam.max()
+        assert stiff.sum() == (2 if k == 0 else 3)  # normal and rocking (one rocking mode for the line)
+        assert om[0] == pytest.approx(np.sqrt(lam.max()), rel=tol.NUMERICAL_REL)
+        for i in range(6):
+            want = 2 * xi[k] * np.sqrt(lam[i]) * mass @ phi[:, i] if stiff[i] else np.zeros(6)
+            err = np.abs(C @ phi[:, i] - want).max() / np.abs(phi[:, i]).max()
+            assert err <= tol.SLIP_DAMPING_MODAL_REL * np.abs(C).max(), (k, i, err)
 
 
 def test_warm_start_gives_the_cold_result_and_survives_a_broken_basis():

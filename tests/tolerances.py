@@ -197,9 +197,10 @@ EIGEN_ABS = 1e-10
 #: effect (h / b)^2 = 6e-6 on the rocking dashpot plus the 4 h^2 of I_p: 1e-4
 FLAT_SLAB_COUPLING_REL = 1e-4
 #: the compiled damping kernel against numpy/scipy: the square root of a semi-definite
-#: matrix loses digits near its null space (the twist has no stiffness); numpy's eigh,
-#: the Cholesky + Jacobi kernel and scipy agree to ~2e-6 on these contacts: 1e-5 of the
-#: largest wrench
+#: matrix loses digits near its null space (a slipping contact: no tangential or twist
+#: stiffness); numpy's eigh (the reference), the Cholesky + Jacobi kernel and scipy agreed to
+#: ~2e-6 on these contacts (the kernel's slipping path is now exact there:
+#: SLIP_DAMPING_MODAL_REL): 1e-5 of the largest wrench
 KERNEL_REL = 1e-5
 #: the compiled damping kernel's highest modal frequency of a contact (contact._jacobi_sqrt)
 #: against numpy's eigh: the largest diagonal entry of V^T B V in the basis where the series
@@ -208,6 +209,15 @@ KERNEL_REL = 1e-5
 #: (4.6e-5)^2 (s_1 + s_k) / (s_1 - s_k) of lambda_1, 6.4e-9 for a mode k at half the top
 #: frequency, half of it on omega: 3.2e-9 (2.1e-9 measured on the test's 40 contacts): 1e-8
 DAMPING_OMEGA_REL = 1e-8
+#: a slipping contact's damping (contact._slip_damping) against the modes of K phi =
+#: omega^2 M phi (scipy's generalised eigh): C phi = 2 xi omega M phi, and 0 on K's null space.
+#: Its 3 x 3 G^T W G is diagonalised to 1e-13 of its diagonal (_jacobi3's stop), its entries
+#: rounded by a few eps; the mobility's condition (~1e3 on these contacts: masses 10-500 kg,
+#: levers 0.3 m) carries that into C: ~1e-13 x 1e3 = 1e-10 of the largest entry of C (measured:
+#: 4.4e-13 on 40 random contacts). The 6 x 6 root of the rank-3 K it replaced was off by
+#: 2.3e-9 on the test's contacts, numpy's eigh by 3e-7: the square roots of B's three zero
+#: eigenvalues, +-1e-16 of the largest, are ~1e-8 of the largest root
+SLIP_DAMPING_MODAL_REL = 1e-10
 #: the damping's second-order series square root (contact._series_root) of A = S S for a
 #: known S = diag(s) + Y, s_i 1e3-1e4, Y 3e-6 of s off the diagonal: A's entries (<= s_max^2)
 #: are rounded by ~2 eps s_max^2, which moves the root by that over s_i + s_j >= 2 s_min:

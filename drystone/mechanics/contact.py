@@ -357,7 +357,10 @@ def critical_time_step(mass, stiffness, damping_ratio=0.0) -> float:
 # tests/test_damping.py checks that both agree). W = L L^T by Cholesky, B = L^T K L, its
 # square root in the contact's modal basis of an earlier step (a second-order series where
 # that basis nearly diagonalises B, else cyclic Jacobi rotations, 6 x 6), and
-# C u = 2 xi L^-T B^1/2 L^-1 u by triangular solves.
+# C u = 2 xi L^-T B^1/2 L^-1 u by triangular solves. A slipping contact's K has rank 3
+# (no tangential or twist stiffness): there C u = 2 xi G (G^T W G)^-1/2 G^T u with K = G G^T,
+# a 3 x 3 inverse square root, exact in the contact's modes (``_slip_damping``), where the
+# 6 x 6 root's three zero eigenvalues cost Jacobi sweeps at every step and errors of ~1e-9.
 
 # called, not inlined into the contact loop: inlined, numba took 290 s to compile the damping (47 s called)
 @njit(cache=True, _nrt=False)  # it allocates nothing: no reference counts on its arrays
@@ -509,9 +512,9 @@ def _series_root(A, S, Q, s, x):
     convergence: each sweep squares the off-diagonal part) at a fraction of their cost: a
     warm start (the previous step's modes) leaves off-diagonal terms that small (X / s up to
     SERIES_TOL^(1/3) ~ 5e-5) on a settled or shaken wall, where the first order alone
-    (neglecting S2 ~ X X / s) needed a sweep first. A zero eigenvalue of B (a slipping
-    contact) coupled to the others fails the test (s_i + s_j near 0), and the sweeps go on
-    there."""
+    (neglecting S2 ~ X X / s) needed a sweep first. A zero eigenvalue of B (a sticking line
+    contact's rocking about its line; a slipping contact takes ``_slip_damping``) coupled to
+    the others fails the test (s_i + s_j near 0), and the sweeps go on there."""
     n = 6
     smax = 0.0
     for i in range(n):
@@ -582,6 +585,131 @@ def _add_body(W, IS, r, im, ii, c):
             W[3 + a, 3 + b] += ii[c, a, b]
 
 
+@njit(cache=True, _nrt=False, inline="always")
+def _wsym(W, i, j):
+    """Element (i, j) of the symmetric W stored in its lower triangle."""
+    return W[i, j] if i >= j else W[j, i]
+
+
+@njit(cache=True, _nrt=False)  # it allocates nothing: no reference counts on its arrays
+def _slip_damping(W, n0, n1, n2, kna, kn, u0, u1, u2, w0, w1, w2, l1, l2, v10, v11, v20, v21, twist, c, M, Q, y):
+    """A slipping contact's C u / (2 xi) into y (6,), u = twist[c]; returns the largest
+    omega^2 (0 where C is zero: no stiffness, or no mobility). W: the mobility's lower
+    triangle; kna = K_n A; (u, w) a basis of the plane normal to n in which the patch's
+    second moment has the eigenvalues l1, l2 along v1, v2 (its eigenvectors in that basis).
+    M, Q (3 x 3): work arrays.
+
+    While a contact slips, K = G G^T with G (6 x 3) of the columns sqrt(K_n A) (n, 0) and
+    sqrt(K_n l_k) (0, n x e_k), e_k = v_k[0] u + v_k[1] w (K_n [n]x J [n]x^T = sum_k K_n l_k
+    (n x e_k)(n x e_k)^T; no tangential or twist stiffness). Then M^-1/2 K M^-1/2 = P P^T
+    with P = W^1/2 G (M = W^-1), whose square root is P (P^T P)^-1/2 P^T, so that
+    C = 2 xi G (G^T W G)^-1/2 G^T: a 3 x 3 inverse square root (cyclic Jacobi) for the 6 x 6
+    root of a matrix of rank 3, whose null space (the tangential and twist motions) C then
+    leaves exactly undamped; the omega^2 of the contact's modes are the eigenvalues of
+    G^T W G. A mode of l_k <= 0 (a line contact) is left out: its column is zero."""
+    sa = np.sqrt(kna)
+    a0, a1, a2 = sa * n0, sa * n1, sa * n2  # G's column 0, translational
+    e10, e11, e12 = v10 * u0 + v11 * w0, v10 * u1 + v11 * w1, v10 * u2 + v11 * w2
+    e20, e21, e22 = v20 * u0 + v21 * w0, v20 * u1 + v21 * w1, v20 * u2 + v21 * w2
+    s1 = np.sqrt(kn * l1) if l1 > 0.0 else 0.0
+    s2 = np.sqrt(kn * l2) if l2 > 0.0 else 0.0
+    # G's columns 1, 2, rotational: sqrt(K_n l_k) n x e_k (rows 0 and 1 of Q for now)
+    Q[0, 0], Q[0, 1], Q[0, 2] = s1 * (n1 * e12 - n2 * e11), s1 * (n2 * e10 - n0 * e12), s1 * (n0 * e11 - n1 * e10)
+    Q[1, 0], Q[1, 1], Q[1, 2] = s2 * (n1 * e22 - n2 * e21), s2 * (n2 * e20 - n0 * e22), s2 * (n0 * e21 - n1 * e20)
+    # M = G^T W G
+    m00 = 0.0
+    for i in range(3):
+        wa = _wsym(W, i, 0) * a0 + _wsym(W, i, 1) * a1 + _wsym(W, i, 2) * a2
+        m00 += (a0, a1, a2)[i] * wa
+    M[0, 0] = m00
+    for k in range(2):
+        m0k = 0.0
+        for i in range(3):  # a^T W_tr b_k, W_tr[i, j] = W[3 + j, i]
+            m0k += (a0, a1, a2)[i] * (W[3, i] * Q[k, 0] + W[4, i] * Q[k, 1] + W[5, i] * Q[k, 2])
+        M[0, 1 + k] = m0k
+        M[1 + k, 0] = m0k
+        for q in range(k, 2):
+            mkq = 0.0
+            for i in range(3):
+                mkq += Q[k, i] * (_wsym(W, 3 + i, 3) * Q[q, 0] + _wsym(W, 3 + i, 4) * Q[q, 1]
+                                  + _wsym(W, 3 + i, 5) * Q[q, 2])
+            M[1 + k, 1 + q] = mkq
+            M[1 + q, 1 + k] = mkq
+    # t = G^T u
+    t0 = a0 * twist[c, 0] + a1 * twist[c, 1] + a2 * twist[c, 2]
+    t1 = Q[0, 0] * twist[c, 3] + Q[0, 1] * twist[c, 4] + Q[0, 2] * twist[c, 5]
+    t2 = Q[1, 0] * twist[c, 3] + Q[1, 1] * twist[c, 4] + Q[1, 2] * twist[c, 5]
+    b10, b11, b12, b20, b21, b22 = Q[0, 0], Q[0, 1], Q[0, 2], Q[1, 0], Q[1, 1], Q[1, 2]
+    lmax = _jacobi3(M, Q)
+    if lmax != lmax:  # a non-finite state: NaN wrenches, as the 6 x 6 path's
+        for i in range(6):
+            y[i] = np.nan
+        return lmax
+    if not lmax > 0.0:
+        return lmax
+    # x = M^-1/2 t = Q diag(mu^-1/2) Q^T t (modes of mu <= 0 carry nothing)
+    p0 = Q[0, 0] * t0 + Q[1, 0] * t1 + Q[2, 0] * t2
+    p1 = Q[0, 1] * t0 + Q[1, 1] * t1 + Q[2, 1] * t2
+    p2 = Q[0, 2] * t0 + Q[1, 2] * t1 + Q[2, 2] * t2
+    p0 = p0 / np.sqrt(M[0, 0]) if M[0, 0] > 0.0 else 0.0
+    p1 = p1 / np.sqrt(M[1, 1]) if M[1, 1] > 0.0 else 0.0
+    p2 = p2 / np.sqrt(M[2, 2]) if M[2, 2] > 0.0 else 0.0
+    x0 = Q[0, 0] * p0 + Q[0, 1] * p1 + Q[0, 2] * p2
+    x1 = Q[1, 0] * p0 + Q[1, 1] * p1 + Q[1, 2] * p2
+    x2 = Q[2, 0] * p0 + Q[2, 1] * p1 + Q[2, 2] * p2
+    # y = G x
+    y[0], y[1], y[2] = a0 * x0, a1 * x0, a2 * x0
+    y[3] = b10 * x1 + b20 * x2
+    y[4] = b11 * x1 + b21 * x2
+    y[5] = b12 * x1 + b22 * x2
+    return lmax
+
+
+@njit(cache=True, _nrt=False)
+def _jacobi3(A, V):
+    """Eigen-decomposition of a symmetric 3 x 3 A by cyclic Jacobi rotations, in place: on
+    exit A's diagonal holds the eigenvalues, V's columns the eigenvectors; returns the
+    largest eigenvalue (NaN for a non-finite A). Sweeps until the off-diagonal part is
+    below 1e-13 of the diagonal's (its squares: 1e-26, as ``_jacobi_sqrt``)."""
+    for i in range(3):
+        for j in range(3):
+            V[i, j] = 1.0 if i == j else 0.0
+    for _ in range(50):
+        off = A[0, 1] * A[0, 1] + A[0, 2] * A[0, 2] + A[1, 2] * A[1, 2]
+        scale = A[0, 0] * A[0, 0] + A[1, 1] * A[1, 1] + A[2, 2] * A[2, 2]
+        if not off > 1e-26 * scale:  # converged, zero, or not finite
+            break
+        for p in range(2):
+            for q in range(p + 1, 3):
+                apq = A[p, q]
+                if abs(apq) <= 1e-17 * (abs(A[p, p]) + abs(A[q, q])):
+                    continue
+                theta = (A[q, q] - A[p, p]) / (2.0 * apq)
+                t = (1.0 if theta >= 0 else -1.0) / (abs(theta) + np.sqrt(theta * theta + 1.0))
+                cs = 1.0 / np.sqrt(t * t + 1.0)
+                s = t * cs
+                tau = s / (1.0 + cs)
+                A[p, p] -= t * apq
+                A[q, q] += t * apq
+                A[p, q] = 0.0
+                A[q, p] = 0.0
+                k = 3 - p - q  # the third index
+                g = A[k, p]
+                h = A[k, q]
+                A[k, p] = g - s * (h + g * tau)
+                A[k, q] = h + s * (g - h * tau)
+                A[p, k] = A[k, p]
+                A[q, k] = A[k, q]
+                for r in range(3):
+                    g = V[r, p]
+                    h = V[r, q]
+                    V[r, p] = g - s * (h + g * tau)
+                    V[r, q] = h + s * (g - h * tau)
+    if not (A[0, 0] == A[0, 0] and A[1, 1] == A[1, 1] and A[2, 2] == A[2, 2]):
+        return np.nan
+    return max(A[0, 0], A[1, 1], A[2, 2])
+
+
 @njit(cache=True)
 def joint_share(ia, ib, nb, area):
     """(m,) factor on the damping ratio of each contact between bodies ia and ib (ids
@@ -638,9 +766,9 @@ def damping_wrenches_warm(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, 
     earlier step (of B = L^T K L, the scaled stiffness), and on exit the basis this step's
     square root was taken in, for every contact damped here (``_jacobi_sqrt``: refreshed
     when the step's B has moved too far from it). A basis that is not one (zeros, NaN) gives a cold
-    solve. The result is the cold solve's to ~1e-9 of the largest wrench (while a contact
-    slips the twist about n has no stiffness: the square root of B's zero eigenvalue
-    amplifies round-off).
+    solve. The result is the cold solve's to ~1e-9 of the largest wrench. A slipping
+    contact takes neither (``_slip_damping``: its K has rank 3) and leaves its basis as it
+    was, for when it sticks again.
 
     Threads: the contacts are cut into ``chunks`` contiguous ranges, shared among numba's
     threads (``numba.set_num_threads``; one range per thread the caller may run; one range:
@@ -682,6 +810,8 @@ def _damp_range(c0, c1, n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, ii
     SJ = np.empty((3, 3))
     y = np.empty(6)
     z = np.empty(6)
+    M3 = np.empty((3, 3))  # work arrays of _slip_damping
+    Q3 = np.empty((3, 3))
     for c in range(c0, c1):
         if xi[c] <= 0.0 or parea[c] <= 0.0:
             continue
@@ -696,85 +826,132 @@ def _damp_range(c0, c1, n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, ii
         kta = kt[c] * parea[c] if sticking[c] else 0.0
         kna = kn[c] * parea[c]
         J = pj[c]
-        ktj = kt[c] * polar_moment(nc, J) if sticking[c] else 0.0  # the twist spring
-        # [n]x J [n]x^T
-        S[0, 1], S[0, 2], S[1, 0], S[1, 2], S[2, 0], S[2, 1] = -n2, n1, n2, -n0, -n1, n0
-        for a in range(3):
-            for q in range(3):
-                SJ[a, q] = S[a, 0] * J[0, q] + S[a, 1] * J[1, q] + S[a, 2] * J[2, q]
-        for a in range(3):
-            for b in range(3):
-                Rr[a, b] = SJ[a, 0] * S[b, 0] + SJ[a, 1] * S[b, 1] + SJ[a, 2] * S[b, 2]
-        for a in range(3):  # (the blocks off the diagonal are zero, never read)
-            for b in range(3):
-                nn = nc[a] * nc[b]
-                K[a, b] = kna * nn + kta * ((1.0 if a == b else 0.0) - nn)
-                K[3 + a, 3 + b] = kn[c] * Rr[a, b] + ktj * nn
-        # Cholesky W = L L^T (L's lower triangle; its upper one is zero, never read)
-        ok = True
-        for i in range(6):
-            for j in range(i + 1):
-                s = W[i, j]
-                for k in range(j):
-                    s -= L[i, k] * L[j, k]
-                if i == j:
-                    if s <= 0.0:
-                        ok = False
-                        break
-                    L[i, i] = np.sqrt(s)
-                else:
-                    L[i, j] = s / L[j, j]
-            if not ok:
-                break
-        if not ok:
-            continue
-        # B = L^T K L (K block diagonal, L lower triangular: the sums skip their zero terms)
-        for i in range(6):
-            lo = 0 if i < 3 else 3
-            for j in range(lo + 3):  # KL[i, j] = 0 for j > lo + 2
-                acc = 0.0
-                for k in range(max(lo, j), lo + 3):
-                    acc += K[i, k] * L[k, j]
-                KL[i, j] = acc
-        for i in range(6):
-            for j in range(i, 6):
-                acc = 0.0
-                for k in range(max(i, 3) if j > 2 else i, 6):
-                    acc += L[k, i] * KL[k, j]
-                B[i, j] = acc
-        for i in range(6):
-            for j in range(i + 1, 6):
-                B[j, i] = B[i, j]
-        V6 = basis[c]
-        lmax, series = _jacobi_sqrt(B, T6, Q6, s6, x6, A6, V6, warm[c])
-        om[c] = np.sqrt(lmax)
-        # y = L^-1 u (forward), z = B^1/2 y, w = L^-T z (backward); wrench = -2 xi w
-        for i in range(6):
-            s = twist[c, i]
-            for k in range(i):
-                s -= L[i, k] * y[k]
-            y[i] = s / L[i, i]
-        for k in range(6):  # z = B^1/2 y = V A6 V^T y (A6 diagonal unless ``series``)
-            s = 0.0
+        # the patch second moment in the plane (2 x 2 in a basis u, w): its eigenvalues l1 >= l2
+        # and eigenvectors v1, v2 (the slipping contact's stiffness and the moment's cap)
+        if abs(n0) < 0.9:
+            u0, u1, u2 = 0.0, -n2, n1
+        else:
+            u0, u1, u2 = n2, 0.0, -n0
+        un = np.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
+        u0 /= un
+        u1 /= un
+        u2 /= un
+        w0 = n1 * u2 - n2 * u1
+        w1 = n2 * u0 - n0 * u2
+        w2 = n0 * u1 - n1 * u0
+        Ju0 = J[0, 0] * u0 + J[0, 1] * u1 + J[0, 2] * u2
+        Ju1 = J[1, 0] * u0 + J[1, 1] * u1 + J[1, 2] * u2
+        Ju2 = J[2, 0] * u0 + J[2, 1] * u1 + J[2, 2] * u2
+        Jw0 = J[0, 0] * w0 + J[0, 1] * w1 + J[0, 2] * w2
+        Jw1 = J[1, 0] * w0 + J[1, 1] * w1 + J[1, 2] * w2
+        Jw2 = J[2, 0] * w0 + J[2, 1] * w1 + J[2, 2] * w2
+        j11 = u0 * Ju0 + u1 * Ju1 + u2 * Ju2
+        j12 = u0 * Jw0 + u1 * Jw1 + u2 * Jw2
+        j22 = w0 * Jw0 + w1 * Jw1 + w2 * Jw2
+        tr = j11 + j22
+        dif = np.sqrt(0.25 * (j11 - j22) ** 2 + j12 * j12)
+        l1 = 0.5 * tr + dif
+        l2 = 0.5 * tr - dif
+        # v1 from the row of the 2 x 2 without cancellation: where j12 is round-off and j22 >
+        # j11, l1 - j22 is round-off too, and (l1 - j22, j12) points anywhere (a bed joint
+        # along w, as an axis-aligned wall's: the cap then took the patch's axes wrong)
+        if j11 >= j22:  # l1 - j22 >= j11 - j22 >= 0
+            v10, v11 = l1 - j22, j12
+        else:  # l1 - j11 >= j22 - j11 > 0
+            v10, v11 = j12, l1 - j11
+        vn = np.sqrt(v10 * v10 + v11 * v11)
+        if vn > 0.0:
+            v10 /= vn
+            v11 /= vn
+        else:  # j11 = j22 and j12 = 0: every direction is principal
+            v10, v11 = 1.0, 0.0
+        v20, v21 = -v11, v10
+        if not sticking[c]:  # K of rank 3: C from its factor, no 6 x 6 root (_slip_damping)
+            lmax = _slip_damping(W, n0, n1, n2, kna, kn[c], u0, u1, u2, w0, w1, w2, l1, l2, v10, v11, v20, v21,
+                                 twist, c, M3, Q3, y)
+            if lmax <= 0.0:  # no stiffness or no mobility: no damping (NaN: a blown-up state, NaN wrenches)
+                continue
+            om[c] = np.sqrt(lmax)
+        else:  # the contact's 6 x 6: W = L L^T, B = L^T K L, B^1/2 (_jacobi_sqrt)
+            ktj = kt[c] * polar_moment(nc, J)  # the twist spring
+            # [n]x J [n]x^T
+            S[0, 1], S[0, 2], S[1, 0], S[1, 2], S[2, 0], S[2, 1] = -n2, n1, n2, -n0, -n1, n0
+            for a in range(3):
+                for q in range(3):
+                    SJ[a, q] = S[a, 0] * J[0, q] + S[a, 1] * J[1, q] + S[a, 2] * J[2, q]
+            for a in range(3):
+                for b in range(3):
+                    Rr[a, b] = SJ[a, 0] * S[b, 0] + SJ[a, 1] * S[b, 1] + SJ[a, 2] * S[b, 2]
+            for a in range(3):  # (the blocks off the diagonal are zero, never read)
+                for b in range(3):
+                    nn = nc[a] * nc[b]
+                    K[a, b] = kna * nn + kta * ((1.0 if a == b else 0.0) - nn)
+                    K[3 + a, 3 + b] = kn[c] * Rr[a, b] + ktj * nn
+            # Cholesky W = L L^T (L's lower triangle; its upper one is zero, never read)
+            ok = True
             for i in range(6):
-                s += V6[i, k] * y[i]
-            z[k] = s
-            w6[k] = A6[k, k] * s
-        if series:
-            for k in range(6):
-                for j in range(6):
-                    if j != k:
-                        w6[k] += A6[k, j] * z[j]
-        for i in range(6):
-            s = 0.0
-            for k in range(6):
-                s += V6[i, k] * w6[k]
-            z[i] = s
-        for i in range(5, -1, -1):
-            s = z[i]
-            for k in range(i + 1, 6):
-                s -= L[k, i] * y[k]
-            y[i] = s / L[i, i]
+                for j in range(i + 1):
+                    s = W[i, j]
+                    for k in range(j):
+                        s -= L[i, k] * L[j, k]
+                    if i == j:
+                        if s <= 0.0:
+                            ok = False
+                            break
+                        L[i, i] = np.sqrt(s)
+                    else:
+                        L[i, j] = s / L[j, j]
+                if not ok:
+                    break
+            if not ok:
+                continue
+            # B = L^T K L (K block diagonal, L lower triangular: the sums skip their zero terms)
+            for i in range(6):
+                lo = 0 if i < 3 else 3
+                for j in range(lo + 3):  # KL[i, j] = 0 for j > lo + 2
+                    acc = 0.0
+                    for k in range(max(lo, j), lo + 3):
+                        acc += K[i, k] * L[k, j]
+                    KL[i, j] = acc
+            for i in range(6):
+                for j in range(i, 6):
+                    acc = 0.0
+                    for k in range(max(i, 3) if j > 2 else i, 6):
+                        acc += L[k, i] * KL[k, j]
+                    B[i, j] = acc
+            for i in range(6):
+                for j in range(i + 1, 6):
+                    B[j, i] = B[i, j]
+            V6 = basis[c]
+            lmax, series = _jacobi_sqrt(B, T6, Q6, s6, x6, A6, V6, warm[c])
+            om[c] = np.sqrt(lmax)
+            # y = L^-1 u (forward), z = B^1/2 y, w = L^-T z (backward); wrench = -2 xi w
+            for i in range(6):
+                s = twist[c, i]
+                for k in range(i):
+                    s -= L[i, k] * y[k]
+                y[i] = s / L[i, i]
+            for k in range(6):  # z = B^1/2 y = V A6 V^T y (A6 diagonal unless ``series``)
+                s = 0.0
+                for i in range(6):
+                    s += V6[i, k] * y[i]
+                z[k] = s
+                w6[k] = A6[k, k] * s
+            if series:
+                for k in range(6):
+                    for j in range(6):
+                        if j != k:
+                            w6[k] += A6[k, j] * z[j]
+            for i in range(6):
+                s = 0.0
+                for k in range(6):
+                    s += V6[i, k] * w6[k]
+                z[i] = s
+            for i in range(5, -1, -1):
+                s = z[i]
+                for k in range(i + 1, 6):
+                    s -= L[k, i] * y[k]
+                y[i] = s / L[i, i]
         f0 = -2.0 * xi[c] * y[0]
         f1 = -2.0 * xi[c] * y[1]
         f2 = -2.0 * xi[c] * y[2]
@@ -814,45 +991,6 @@ def _damp_range(c0, c1, n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, ii
         a1x = n1 * mdz - n2 * mdy
         a1y = n2 * mdx - n0 * mdz
         a1z = n0 * mdy - n1 * mdx
-        # pseudo-inverse of the patch second moment in the plane (2 x 2 in a basis t1, t2)
-        if abs(n0) < 0.9:
-            u0, u1, u2 = 0.0, -n2, n1
-        else:
-            u0, u1, u2 = n2, 0.0, -n0
-        un = np.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
-        u0 /= un
-        u1 /= un
-        u2 /= un
-        w0 = n1 * u2 - n2 * u1
-        w1 = n2 * u0 - n0 * u2
-        w2 = n0 * u1 - n1 * u0
-        Ju0 = J[0, 0] * u0 + J[0, 1] * u1 + J[0, 2] * u2
-        Ju1 = J[1, 0] * u0 + J[1, 1] * u1 + J[1, 2] * u2
-        Ju2 = J[2, 0] * u0 + J[2, 1] * u1 + J[2, 2] * u2
-        Jw0 = J[0, 0] * w0 + J[0, 1] * w1 + J[0, 2] * w2
-        Jw1 = J[1, 0] * w0 + J[1, 1] * w1 + J[1, 2] * w2
-        Jw2 = J[2, 0] * w0 + J[2, 1] * w1 + J[2, 2] * w2
-        j11 = u0 * Ju0 + u1 * Ju1 + u2 * Ju2
-        j12 = u0 * Jw0 + u1 * Jw1 + u2 * Jw2
-        j22 = w0 * Jw0 + w1 * Jw1 + w2 * Jw2
-        tr = j11 + j22
-        dif = np.sqrt(0.25 * (j11 - j22) ** 2 + j12 * j12)
-        l1 = 0.5 * tr + dif
-        l2 = 0.5 * tr - dif
-        # v1 from the row of the 2 x 2 without cancellation: where j12 is round-off and j22 >
-        # j11, l1 - j22 is round-off too, and (l1 - j22, j12) points anywhere (a bed joint
-        # along w, as an axis-aligned wall's: the cap then took the patch's axes wrong)
-        if j11 >= j22:  # l1 - j22 >= j11 - j22 >= 0
-            v10, v11 = l1 - j22, j12
-        else:  # l1 - j11 >= j22 - j11 > 0
-            v10, v11 = j12, l1 - j11
-        vn = np.sqrt(v10 * v10 + v11 * v11)
-        if vn > 0.0:
-            v10 /= vn
-            v11 /= vn
-        else:  # j11 = j22 and j12 = 0: every direction is principal
-            v10, v11 = 1.0, 0.0
-        v20, v21 = -v11, v10
         tol = 1e-9 * l1
         i1 = 1.0 / l1 if l1 > tol else 0.0
         i2 = 1.0 / l2 if l2 > tol else 0.0
