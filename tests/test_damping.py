@@ -152,6 +152,17 @@ def test_free_decay_rocking_and_sliding(outdir, detection, xi):
             f"mode {k} ({om[k - 1] / 2 / np.pi:.1f} Hz)"
 
 
+def _random_contacts(rng, m):
+    """m random contacts' unit normals n, levers ra, rb (m) and inverse masses ima, imb
+    (1/kg; about 30 % of the A bodies fixed: 0), drawn from ``rng`` in this order."""
+    n = rng.normal(size=(m, 3))
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    ra, rb = 0.3 * rng.normal(size=(m, 3)), 0.3 * rng.normal(size=(m, 3))
+    ima = np.where(rng.random(m) < 0.3, 0.0, 1.0 / rng.uniform(10, 500, m))
+    imb = 1.0 / rng.uniform(10, 500, m)
+    return n, ra, rb, ima, imb
+
+
 @pytest.mark.parametrize("sticking", [True, False])
 def test_compiled_kernel_matches_the_reference(sticking):
     """``damping_wrenches`` (the numba kernel, cold) = mobility -> patch_stiffness ->
@@ -162,11 +173,7 @@ def test_compiled_kernel_matches_the_reference(sticking):
     kernel and scipy's generalised eigh agree to ~2e-6 on these contacts."""
     rng = np.random.default_rng(1)
     m = 40
-    n = rng.normal(size=(m, 3))
-    n /= np.linalg.norm(n, axis=1)[:, None]
-    ra, rb = 0.3 * rng.normal(size=(m, 3)), 0.3 * rng.normal(size=(m, 3))
-    ima = np.where(rng.random(m) < 0.3, 0.0, 1.0 / rng.uniform(10, 500, m))
-    imb = 1.0 / rng.uniform(10, 500, m)
+    n, ra, rb, ima, imb = _random_contacts(rng, m)
 
     def inertia():
         q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
@@ -239,6 +246,8 @@ def test_moment_cap_takes_the_patch_axes_of_an_axis_aligned_joint():
                                     lever)
     err = np.abs(mo - m_ref).max(axis=1) / np.abs(m_ref).max(axis=1)
     assert err.max() <= tol.KERNEL_REL, (int(np.argmax(err)), err.max())
+
+
 def test_slipping_contact_damps_each_mode_at_xi_and_its_null_space_not_at_all():
     """A slipping contact's damping (the kernel's rank-3 path, ``contact._slip_damping``) is
     exact in the contact's modes: for every mode of K phi = omega^2 M phi (scipy's generalised
@@ -252,11 +261,7 @@ def test_slipping_contact_damps_each_mode_at_xi_and_its_null_space_not_at_all():
 
     rng = np.random.default_rng(3)
     m = 12
-    n = rng.normal(size=(m, 3))
-    n /= np.linalg.norm(n, axis=1)[:, None]
-    ra, rb = 0.3 * rng.normal(size=(m, 3)), 0.3 * rng.normal(size=(m, 3))
-    ima = np.where(rng.random(m) < 0.3, 0.0, 1.0 / rng.uniform(10, 500, m))
-    imb = 1.0 / rng.uniform(10, 500, m)
+    n, ra, rb, ima, imb = _random_contacts(rng, m)
     iia = np.zeros((m, 3, 3))
     iib = np.zeros((m, 3, 3))
     pj = np.empty((m, 3, 3))
