@@ -527,12 +527,12 @@ def contact_search_times(run_dir: Path, budget_s: float = 1.0) -> dict:
     return r
 
 
-#: the step's phases ``step_phases`` times, in the order ``contact_step._contact_forces`` runs them
+#: the step's phases ``step_phases`` times, in the order ``contact_step._advance`` runs them
 PHASES = ("placement", "search", "law", "damping", "sums")
 
 
 def step_phases(step, pos, rot, vel, angvel, dt, budget_s: float = 1.0) -> dict:
-    """ms per call of each phase of one contact step (``contact_step._contact_forces``),
+    """ms per call of each phase of one contact step (``contact_step._advance``),
     each kernel called from Python on ``step``'s state (a ``CompiledStep`` after a call of
     ``forces`` on that state: its contacts' history and damping bases warm, as in a
     settled run), one thread: the shapes' placement and the neighbour list's check

@@ -224,7 +224,7 @@ def test_python_calls_of_the_step_type_no_argument_in_python(monkeypatch):
     arrays (the neighbour list's and the search's state passed as two tuples) went through it
     at every call in numba 0.58 (its type fingerprint outgrows 40 bytes and never hits numba's
     cache), 0.4 ms a call, more than a small wall's step (the note above
-    ``contact_step._contact_forces``). After a first call of each (which may type and
+    ``contact_step._advance``). After a first call of each (which may type and
     compile), further calls must not reach ``typeof_pyval``. ``forces`` and ``peek`` run the kernel
     ``advance`` runs (``_advance`` asked for no step): one compiled signature for the three."""
     local, mass, inertia, pos, quat, vel, angvel, moving = _wall(0, courses=2, per_course=2)

@@ -362,38 +362,43 @@ def critical_time_step(mass, stiffness, damping_ratio=0.0) -> float:
 # a 3 x 3 inverse square root, exact in the contact's modes (``_slip_damping``), where the
 # 6 x 6 root's three zero eigenvalues cost Jacobi sweeps at every step and errors of ~1e-9.
 
-@njit(cache=True, _nrt=False, inline="always")
-def _jacobi_rotation(A, V, n, p, q):
-    """One cyclic-Jacobi rotation of the symmetric n x n A, in place: J^T A J with A[p, q]
-    zeroed, and V <- V J (the eigenvectors gathered in V's columns). An element below
-    round-off of both diagonal entries is already zero: no rotation. (``_jacobi_sqrt``'s
-    6 x 6 and ``_jacobi3``'s 3 x 3 sweeps.)"""
-    apq = A[p, q]
-    if abs(apq) <= 1e-17 * (abs(A[p, p]) + abs(A[q, q])):
-        return
-    theta = (A[q, q] - A[p, p]) / (2.0 * apq)
-    t = (1.0 if theta >= 0 else -1.0) / (abs(theta) + np.sqrt(theta * theta + 1.0))
-    c = 1.0 / np.sqrt(t * t + 1.0)
-    s = t * c
-    tau = s / (1.0 + c)
-    # on the symmetric matrix (rows = columns)
-    A[p, p] -= t * apq
-    A[q, q] += t * apq
-    A[p, q] = 0.0
-    A[q, p] = 0.0
-    for k in range(n):
-        if k != p and k != q:
-            g = A[k, p]
-            h = A[k, q]
-            A[k, p] = g - s * (h + g * tau)
-            A[k, q] = h + s * (g - h * tau)
-            A[p, k] = A[k, p]
-            A[q, k] = A[k, q]
-    for k in range(n):
-        g = V[k, p]
-        h = V[k, q]
-        V[k, p] = g - s * (h + g * tau)
-        V[k, q] = h + s * (g - h * tau)
+# one call a sweep, not a rotation: LLVM does not inline a called rotation, and numba's
+# inlining of it took 3.7 s of the step's compile at each of its two callers (docs/physics.md,
+# Step engine)
+@njit(cache=True, _nrt=False)
+def _jacobi_sweep(A, V, n):
+    """One cyclic-Jacobi sweep of the symmetric n x n A, in place: for each p < q in turn,
+    the rotation J^T A J that zeroes A[p, q], and V <- V J (the eigenvectors gathered in V's
+    columns). An element below round-off of both diagonal entries is already zero: no
+    rotation. (``_jacobi_sqrt``'s 6 x 6 and ``_jacobi3``'s 3 x 3 sweeps.)"""
+    for p in range(n - 1):
+        for q in range(p + 1, n):
+            apq = A[p, q]
+            if abs(apq) <= 1e-17 * (abs(A[p, p]) + abs(A[q, q])):
+                continue
+            theta = (A[q, q] - A[p, p]) / (2.0 * apq)
+            t = (1.0 if theta >= 0 else -1.0) / (abs(theta) + np.sqrt(theta * theta + 1.0))
+            c = 1.0 / np.sqrt(t * t + 1.0)
+            s = t * c
+            tau = s / (1.0 + c)
+            # on the symmetric matrix (rows = columns)
+            A[p, p] -= t * apq
+            A[q, q] += t * apq
+            A[p, q] = 0.0
+            A[q, p] = 0.0
+            for k in range(n):
+                if k != p and k != q:
+                    g = A[k, p]
+                    h = A[k, q]
+                    A[k, p] = g - s * (h + g * tau)
+                    A[k, q] = h + s * (g - h * tau)
+                    A[p, k] = A[k, p]
+                    A[q, k] = A[k, q]
+            for k in range(n):
+                g = V[k, p]
+                h = V[k, q]
+                V[k, p] = g - s * (h + g * tau)
+                V[k, q] = h + s * (g - h * tau)
 
 
 # called, not inlined into the contact loop: inlined, numba took 290 s to compile the damping (47 s called)
@@ -476,9 +481,7 @@ def _jacobi_sqrt(B, T, Q, s6, x6, A, V, warm):
         if _series_root(A, T, Q, s6, x6):  # nearly diagonal: its square root to below round-off, no sweep more
             series = True
             break
-        for p in range(n - 1):
-            for q in range(p + 1, n):
-                _jacobi_rotation(A, V, n, p, q)
+        _jacobi_sweep(A, V, n)
     lmax = 0.0
     for i in range(n):
         if A[i, i] > lmax:
@@ -687,9 +690,7 @@ def _jacobi3(A, V):
         scale = A[0, 0] * A[0, 0] + A[1, 1] * A[1, 1] + A[2, 2] * A[2, 2]
         if not off > 1e-26 * scale:  # converged, zero, or not finite
             break
-        for p in range(2):
-            for q in range(p + 1, 3):
-                _jacobi_rotation(A, V, 3, p, q)
+        _jacobi_sweep(A, V, 3)
     if not (A[0, 0] == A[0, 0] and A[1, 1] == A[1, 1] and A[2, 2] == A[2, 2]):
         return np.nan
     return max(A[0, 0], A[1, 1], A[2, 2])

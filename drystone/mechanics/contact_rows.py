@@ -1,6 +1,6 @@
 """The compiled step's work per contact and per body, on numba's threads (no YADE import).
 
-``contact_step._contact_forces`` finds a step's contacts (``drystone.mechanics.neighbours``)
+``contact_step._advance`` finds a step's contacts (``drystone.mechanics.neighbours``)
 and then calls, in this order:
 
 * ``law_rows``: each contact's joint properties, its history of the previous step, the

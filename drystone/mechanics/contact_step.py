@@ -305,96 +305,6 @@ def _previous(keys, prev_keys):
     return out
 
 
-# The neighbour list's arrays (14: ``NeighbourList.arrays``) and the search's buffers (16:
-# ``neighbours.contact_buffers``) reach the kernel called from Python (``_advance``) one per argument,
-# not as two tuples: numba 0.58 types an argument whose type
-# fingerprint outgrows 40 bytes (a tuple of more than four arrays) in Python at every call, 0.1 to
-# 0.4 ms, more than a small wall's whole step (the fingerprint's first bytes are lost when its
-# buffer grows, so its cache never hits: github.com/numba/numba/issues/9097); an
-# array argument is typed in C (about 0.1 us). Within compiled code they travel as tuples.
-# ``_contact_forces`` is inlined into ``_advance``, its only caller (``CompiledStep.forces`` and ``peek``
-# are calls of no step): numba emits a kernel's callees again in each kernel compiled on its own (this
-# one on its own: 109 s of a core for the step's first compile, 104 s inlined).
-@njit(cache=True, inline="always")
-def _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving, inv_mass,
-                    inv_inertia_local, mat, table, jkeys, jvals, prev_keys, prev_shear, prev_basis, dt, tol, size, shared,
-                    with_energy, nl, buf):
-    """One step's contacts between shapes (ia, ib: shape indices; shape s a convex part of
-    body ``owner[s]``, ``size`` per shape; ``shared``: some body has several shapes) and
-    the forces and torques on the bodies. The contacts come from the neighbour list's arrays
-    ``nl`` (``drystone.mechanics.neighbours``: the full search's contacts, in its order), into
-    the search's buffers ``buf``; both are returned last (grown, rebuilt). The elastic
-    energy e_el only ``with_energy`` or for a step deeper than its sizes allow (``depth_ratio``
-    > 1), else NaN: it is recorded at samples only. The work
-    per contact and per body runs on numba's threads (``drystone.mechanics.contact_rows``:
-    the same numbers for any number)."""
-    nb = len(pos)
-    ns = len(nv)
-    nt = buf[8].shape[0]  # ranges of rows for the threads: one per thread numba may run
-    nl = nbr.update(nl, verts, nv, normals, offsets, nf, owner, pos, rot, nt)
-    m, buf = nbr.search(nl, buf, nv, nf, faces, fk, tol, bool(ov.TOUCHING_IS_NO_CONTACT))  # bool(): see the constant
-    ia = buf[0][:m]
-    ib = buf[1][:m]
-    vol = buf[2][:m]
-    c = buf[3][:m]
-    n = buf[4][:m]
-    area = buf[5][:m]
-    pc = buf[6][:m]
-    pj = buf[7][:m]
-    keys = ia * ns + ib  # a contact's history is its pair of shapes'
-    oa = owner[ia]
-    ob = owner[ib]
-    # each contact's history: its shear force (columns 0-2) and twisting moment about n (3),
-    # and its damping's modal basis (zeros for a new contact: no basis, a cold solve, also at
-    # the next step if it is not damped now); with the carried force scaled by the patch
-    # (``area_scaling``, contact.carried_share), two more columns: the contact's area A_c (4)
-    # and polar moment J_p (5) at the step
-    prev = _previous(keys, prev_keys)
-    warm = prev >= 0
-    kn = np.empty(m)
-    kt = np.empty(m)
-    mu = np.empty(m)
-    xi = np.empty(m)
-    fn = np.empty(m)
-    fs = np.empty((m, prev_shear.shape[1]))
-    basis = np.empty((m, 6, 6))
-    jp = np.empty(m)
-    slipping = np.empty(m, np.bool_)
-    ra = np.empty((m, 3))
-    rb = np.empty((m, 3))
-    pa = np.empty((m, 3))
-    pb = np.empty((m, 3))
-    lever = np.empty((m, 3))
-    twist = np.empty((m, 6))
-    iia = np.empty((m, 3, 3))
-    iib = np.empty((m, 3, 3))
-    slip_terms = np.empty((m, 4))
-    rows.law_rows(oa, ob, c, n, area, pc, pj, vol, pos, vel, angvel, rot, inv_inertia_local, mat, table, jkeys, jvals,
-                  prev, prev_shear, prev_basis, dt, kn, kt, mu, xi, fn, fs, basis, jp, slipping, ra, rb, pa, pb, lever,
-                  twist, iia, iib, slip_terms, nt)
-    slip = rows.slip_work(slip_terms)  # plastic work of Coulomb slip over the step, J (energy.slip_work)
-    if shared:  # a body of several shapes: its joints' contacts share the damping ratio
-        xi *= law.joint_share(oa, ob, nb, area)
-    fd, md, om = law.damping_wrenches_warm(n, area, pj, kn, kt, xi, ~slipping, pa, pb, inv_mass[oa], inv_mass[ob],
-                                           iia, iib, twist, fn, fs, mu, lever, basis, warm,
-                                           rows.range_count(m, nt))
-    F, T, Fd, Td = rows.body_sums(oa, ob, nb, fs, fn, n, fd, md, ra, rb, pa, pb, nt)
-    om_max = 0.0
-    depth_ratio = 0.0  # largest depth V/A over the smaller shape's size
-    for k in range(m):
-        if area[k] > 0.0:
-            r = vol[k] / area[k] / min(size[ia[k]], size[ib[k]])
-            if r > depth_ratio:
-                depth_ratio = r
-        if om[k] > om_max:
-            om_max = om[k]
-    e_el = np.nan
-    if with_energy or depth_ratio > 1.0:  # (a step too deep ends ``_advance``: its energy is the last)
-        e_el = rows.elastic_energy(ia, ib, oa, ob, kn, kt, vol, c, n, area, fs, jp, normals, offsets, nf, rot, pos)
-    return (ia, ib, vol, c, n, area, fn, fs, fd, slipping, keys, basis, F, T, e_el, om_max, depth_ratio, slip, Fd, Td, nl,
-            buf)
-
-
 class CompiledStep:
     """The project's law (native contact geometry) as one compiled call per step.
 
@@ -468,7 +378,7 @@ class CompiledStep:
 
     def _search_state(self) -> tuple:
         """The neighbour list's arrays and the search's buffers, one tuple (the kernels take them one
-        by one: the note above ``_contact_forces``)."""
+        by one: the note above ``_advance``)."""
         numba.set_num_threads(self.threads)  # the search's (numba's setting is per calling thread)
         nl = self.neighbours
         return nl.arrays + nl.contacts
@@ -601,44 +511,125 @@ def applied_wrench(c, Fb, Tb, F, T):
             T[i, q] += t
 
 
+# The neighbour list's arrays (14: ``NeighbourList.arrays``) and the search's buffers (16:
+# ``neighbours.contact_buffers``) reach ``_advance`` one per argument, not as two tuples: numba
+# 0.58 types an argument whose type fingerprint outgrows 40 bytes (a tuple of more than four
+# arrays) in Python at every call, 0.1 to 0.4 ms, more than a small wall's whole step (the
+# fingerprint's first bytes are lost when its buffer grows, so its cache never hits:
+# github.com/numba/numba/issues/9097); an array argument is typed in C (about 0.1 us). Within
+# compiled code they travel as tuples. The step's contact forces are written into ``_advance``
+# itself, not called: numba emits a kernel's callees again in each kernel compiled on its own
+# (a ``_contact_forces`` of its own: 109 s of a core for the step's first compile), and a
+# function inlined by numba (``inline="always"``) is copied statement by statement, each copy
+# taking every variable of its scope with it: 17 s of the compile for this one.
 @njit(cache=True)
 def _advance(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving, inv_mass, inv_inertia_local,
              mat, table, jkeys, jvals, keys, shear, basis, dt, tol, size, shared, g, F_ext, coef, Fb, Tb, e_last,
              acc, mass, inertia, lin_free, rot_free, aspherical, angmom, quat,
              l0, l1, l2, l3, l4, l5, l6, l7, l8, l9, l10, l11, l12, l13,
              b0, b1, b2, b3, b4, b5, b6, b7, b8, b9, b10, b11, b12, b13, b14, b15):
-    """``CompiledStep.advance``: len(g) steps of ``_contact_forces`` + ``integrate`` (+
-    ``energy.account`` into ``acc``) without leaving compiled code, the arithmetic of each
-    step that of one call of each (the same results bit for bit); with no step (len(g) = 0:
-    ``CompiledStep.forces``, ``peek``) the contacts of the state given, ``acc`` unchanged and
-    the neighbour list's arrays and the search's buffers the only state kept. The loads' wrench of
-    step s is ``applied_wrench(coef[s], Fb, Tb)`` (nothing when coef has no column). The
-    elastic energy (``e_prev``, ``e_last``) of the last two steps only (what a sample
-    after them records): a step that stops the call on the depth check has its own, the
-    step before it NaN unless it was one of the last two. l0 .. l13, b0 .. b15: the
-    neighbour list's arrays and the search's buffers one by one (the note above ``_contact_forces``)."""
+    """``CompiledStep.advance``: len(g) steps, each the step's contacts between shapes and the
+    forces and torques on the bodies, then ``integrate`` (+ ``energy.account`` into ``acc``),
+    without leaving compiled code, the arithmetic of each step that of one call of
+    ``CompiledStep.forces`` and one of each kernel (the same results bit for bit); with no step
+    (len(g) = 0: ``CompiledStep.forces``, ``peek``) the contacts of the state given, ``acc``
+    unchanged and the neighbour list's arrays and the search's buffers the only state kept.
+
+    A contact is a pair of shapes (ia, ib: shape indices; shape s a convex part of body
+    ``owner[s]``, ``size`` per shape; ``shared``: some body has several shapes); ``keys``,
+    ``shear``, ``basis``: the last step's contacts' keys and histories. The contacts come from
+    the neighbour list's arrays (``drystone.mechanics.neighbours``: the full search's contacts,
+    in its order), into the search's buffers; both are returned last (grown, rebuilt). The work
+    per contact and per body runs on numba's threads (``drystone.mechanics.contact_rows``: the
+    same numbers for any number). The loads' wrench of step s is ``applied_wrench(coef[s], Fb,
+    Tb)`` (nothing when coef has no column). The elastic energy (``e_prev``, ``e_last``) of the
+    last two steps only (what a sample after them records), else NaN: a step that stops the
+    call on the depth check (``depth_ratio`` > 1, the largest depth V/A over the smaller
+    shape's size) has its own, the step before it NaN unless it was one of the last two. l0 ..
+    l13, b0 .. b15: the neighbour list's arrays and the search's buffers one by one (the note
+    above)."""
     nl = (l0, l1, l2, l3, l4, l5, l6, l7, l8, l9, l10, l11, l12, l13)
     buf = (b0, b1, b2, b3, b4, b5, b6, b7, b8, b9, b10, b11, b12, b13, b14, b15)
-    n = len(g)
+    n_steps = len(g)
     loaded = coef.shape[1] > 0
     e_prev = e_last
     om_max = 0.0
     s = 0
     v0 = np.empty_like(vel)
     w0 = np.empty_like(angvel)
+    nb = len(pos)
+    ns = len(nv)
+    nt = buf[8].shape[0]  # ranges of rows for the threads: one per thread numba may run
     while True:
-        (ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, basis, F, T, e_el, om, depth, slip, Fd,
-         Td, nl, buf) = _contact_forces(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, angvel, moving,
-                                        inv_mass, inv_inertia_local, mat, table, jkeys, jvals, keys, shear, basis, dt,
-                                        tol, size, shared, s >= n - 2, nl, buf)
+        # -- the step's contacts and their forces (``CompiledStep.forces``) --
+        nl = nbr.update(nl, verts, nv, normals, offsets, nf, owner, pos, rot, nt)
+        m, buf = nbr.search(nl, buf, nv, nf, faces, fk, tol, bool(ov.TOUCHING_IS_NO_CONTACT))  # bool(): see the constant
+        ia = buf[0][:m]
+        ib = buf[1][:m]
+        vol = buf[2][:m]
+        c = buf[3][:m]
+        nrm = buf[4][:m]
+        area = buf[5][:m]
+        pc = buf[6][:m]
+        pj = buf[7][:m]
+        prev_keys = keys
+        keys = ia * ns + ib  # a contact's history is its pair of shapes'
+        oa = owner[ia]
+        ob = owner[ib]
+        # each contact's history: its shear force (columns 0-2) and twisting moment about n (3),
+        # and its damping's modal basis (zeros for a new contact: no basis, a cold solve, also at
+        # the next step if it is not damped now); with the carried force scaled by the patch
+        # (``area_scaling``, contact.carried_share), two more columns: the contact's area A_c (4)
+        # and polar moment J_p (5) at the step
+        prev = _previous(keys, prev_keys)
+        warm = prev >= 0
+        kn = np.empty(m)
+        kt = np.empty(m)
+        mu = np.empty(m)
+        xi = np.empty(m)
+        fn = np.empty(m)
+        fs = np.empty((m, shear.shape[1]))
+        prev_basis = basis
+        basis = np.empty((m, 6, 6))
+        jp = np.empty(m)
+        slipping = np.empty(m, np.bool_)
+        ra = np.empty((m, 3))
+        rb = np.empty((m, 3))
+        pa = np.empty((m, 3))
+        pb = np.empty((m, 3))
+        lever = np.empty((m, 3))
+        twist = np.empty((m, 6))
+        iia = np.empty((m, 3, 3))
+        iib = np.empty((m, 3, 3))
+        slip_terms = np.empty((m, 4))
+        rows.law_rows(oa, ob, c, nrm, area, pc, pj, vol, pos, vel, angvel, rot, inv_inertia_local, mat, table, jkeys,
+                      jvals, prev, shear, prev_basis, dt, kn, kt, mu, xi, fn, fs, basis, jp, slipping, ra, rb, pa, pb,
+                      lever, twist, iia, iib, slip_terms, nt)
+        slip = rows.slip_work(slip_terms)  # plastic work of Coulomb slip over the step, J (energy.slip_work)
+        if shared:  # a body of several shapes: its joints' contacts share the damping ratio
+            xi *= law.joint_share(oa, ob, nb, area)
+        fd, md, om = law.damping_wrenches_warm(nrm, area, pj, kn, kt, xi, ~slipping, pa, pb, inv_mass[oa],
+                                               inv_mass[ob], iia, iib, twist, fn, fs, mu, lever, basis, warm,
+                                               rows.range_count(m, nt))
+        F, T, Fd, Td = rows.body_sums(oa, ob, nb, fs, fn, nrm, fd, md, ra, rb, pa, pb, nt)
         shear = fs
+        depth = 0.0  # largest depth V/A over the smaller shape's size
+        for k in range(m):
+            if area[k] > 0.0:
+                r = vol[k] / area[k] / min(size[ia[k]], size[ib[k]])
+                if r > depth:
+                    depth = r
+            if om[k] > om_max:
+                om_max = om[k]
         e_prev = e_last
-        e_last = e_el
-        if om > om_max:
-            om_max = om
-        if s == n:  # no step asked for (``forces``, ``peek``): the contacts of the state given
+        e_last = np.nan
+        if s >= n_steps - 2 or depth > 1.0:  # (a step too deep ends the call: its energy is the last)
+            e_last = rows.elastic_energy(ia, ib, oa, ob, kn, kt, vol, c, nrm, area, fs, jp, normals, offsets, nf, rot,
+                                         pos)
+        if s == n_steps:  # no step asked for (``forces``, ``peek``): the contacts of the state given
             return (s, ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, basis, F, T, e_prev, e_last, om_max, depth,
                     slip, Fd, Td, nl, buf)
+        # -- the step --
         F += F_ext
         if loaded:
             applied_wrench(coef[s], Fb, Tb, F, T)
@@ -648,12 +639,11 @@ def _advance(verts, nv, normals, offsets, nf, faces, fk, owner, pos, rot, vel, a
                     slip, Fd, Td, nl, buf)
         v0[:] = vel
         w0[:] = angvel
-        integrate(dt, g[s], F, T, mass, inertia, lin_free, rot_free, aspherical, pos, vel, angvel, angmom, quat, rot,
-                  buf[8].shape[0])
+        integrate(dt, g[s], F, T, mass, inertia, lin_free, rot_free, aspherical, pos, vel, angvel, angmom, quat, rot, nt)
         energy.account(dt, g[s], F, T, Fd, Td, F_ext, moving, mass, lin_free, v0, w0, vel, angvel, 0.5 * slip, acc)
         if loaded:
             acc[0] += energy.load_work(dt, coef[s], Fb, Tb, moving, lin_free, rot_free, v0, w0, vel, angvel)
         s += 1
-        if s == n:
+        if s == n_steps:
             return (s, ia, ib, vol, c, nrm, area, fn, fs, fd, slipping, keys, basis, F, T, e_prev, e_last, om_max, depth,
                     slip, Fd, Td, nl, buf)
