@@ -65,6 +65,16 @@ LOCK_NAME = ".drystone-lock"
 #: 158 s before and 93 s after: ``make bench``'s compile section)
 FIRST = np.int64(0)
 
+#: the ``parallel`` option of the kernels that run on numba's threads: their ``prange`` loops
+#: over ranges of rows and nothing else. Numba's other conversions (array expressions,
+#: ``np.zeros`` and the like, reductions and in-place operators made parallel loops of their
+#: own) are off: each such loop is one more function to compile (the step's first compile
+#: 114 s without them against 126 s, one run each, the same tree) and runs on numba's
+#: schedule, which ``numba.set_parallel_chunksize`` also sets; the kernels' results are the
+#: same bit for bit (their ``prange`` loops are the threads' whole work)
+PARALLEL = {"prange": True, "numpy": False, "setitem": False, "reduction": False, "inplace_binop": False,
+            "comprehension": False, "stencil": False, "fusion": False}
+
 
 @contextlib.contextmanager
 def locked(folder: str, exclusive: bool):

@@ -52,7 +52,7 @@ from numba import njit, prange
 
 from drystone.geometry import blockfile as bf
 from drystone import numba_cache
-from drystone.numba_cache import FIRST
+from drystone.numba_cache import FIRST, PARALLEL
 
 numba_cache.install()  # numba's cache safe for processes compiling at once
 
@@ -744,7 +744,7 @@ def damping_wrenches(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, 
                                  np.zeros(m, np.bool_), 1)
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=PARALLEL)
 def damping_wrenches_warm(n, parea, pj, kn, kt, xi, sticking, ra, rb, ima, imb, iia, iib, twist,
                           fn_el, fs, mu, lever, basis, warm, chunks):
     """``damping_wrenches`` with each contact's modal basis carried between steps:

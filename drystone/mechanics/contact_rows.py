@@ -30,7 +30,7 @@ from numba import njit, prange
 from drystone.mechanics import contact as law
 from drystone.mechanics import energy
 from drystone import numba_cache
-from drystone.numba_cache import FIRST
+from drystone.numba_cache import FIRST, PARALLEL
 
 numba_cache.install()  # numba's cache safe for processes compiling at once
 
@@ -174,7 +174,7 @@ def _law_range(r0, r1, oa, ob, c, n, area, pc, pj, vol, pos, vel, angvel, rot, i
             twist[k, 3 + q] = angvel[b, q] - angvel[a, q]
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=PARALLEL)
 def law_rows(oa, ob, c, n, area, pc, pj, vol, pos, vel, angvel, rot, inv_inertia_local, mat, table, jkeys, jvals,
              prev, prev_shear, prev_basis, dt, kn, kt, mu, xi, fn, fs, basis, jp, slipping, ra, rb, pa, pb, lever,
              twist, iia, iib, slip_terms, chunks):
@@ -287,7 +287,7 @@ def _body_range(r0, r1, start, entries, fs, fn, n, fd, md, ra, rb, pa, pb, F, T,
                     Td[i, q] += w[3, q]
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=PARALLEL)
 def _add_by_body(start, entries, fs, fn, n, fd, md, ra, rb, pa, pb, F, T, Fd, Td, chunks):
     """Every body's terms (``_by_body``, ``_wrench_terms``) added in its list's order."""
     nb = len(start) - 1

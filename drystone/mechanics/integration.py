@@ -18,7 +18,7 @@ from numba import njit, prange
 from drystone.mechanics import rotations
 from drystone.mechanics.contact_rows import range_count
 from drystone import numba_cache
-from drystone.numba_cache import FIRST
+from drystone.numba_cache import FIRST, PARALLEL
 
 numba_cache.install()  # numba's cache safe for processes compiling at once
 
@@ -155,7 +155,7 @@ def _integrate_range(r0, r1, dt, g, F, T, mass, inertia, lin_free, rot_free, asp
         _quat_matrix(quat[i], rot[i])
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=PARALLEL)
 def integrate(dt, g, F, T, mass, inertia, lin_free, rot_free, aspherical, pos, vel, angvel, angmom, quat, rot, chunks):
     """One leapfrog step of every body, in place (module docstring). ``g`` (3,) body
     acceleration m/s^2; F, T (nb, 3) N, N m; lin_free, rot_free (nb, 3) 1.0 on free

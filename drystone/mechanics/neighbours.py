@@ -39,7 +39,7 @@ from numba import njit, prange
 from drystone.mechanics import overlap as ov
 from drystone.mechanics.contact_rows import range_count
 from drystone import numba_cache
-from drystone.numba_cache import FIRST
+from drystone.numba_cache import FIRST, PARALLEL
 
 numba_cache.install()  # numba's cache safe for processes compiling at once
 
@@ -139,7 +139,7 @@ def _shape_range(r0, r1, verts, nv, normals, offsets, nf, owner, pos, rot, GV, G
         ok[s] = good
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=PARALLEL)
 def _shape_geometry(verts, nv, normals, offsets, nf, owner, pos, rot, GV, GN, GD, lo, hi, ok, chunks):
     """Every shape's vertices, face planes and box in the global frame, into the work
     arrays (``overlap.place_shape`` at pos[owner], rot[owner]);
@@ -216,7 +216,7 @@ def update(nl, verts, nv, normals, offsets, nf, owner, pos, rot, chunks):
     return (la, lb, meta, ref_pos, ref_rot, radius, hs, moving_s, GV, GN, GD, lo, hi, ok)
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=PARALLEL)
 def search(nl, buf, nv, nf, faces, fk, tol, touching):
     """This step's contacts among the listed pairs (``update`` first): the pairs whose
     closed boxes overlap and whose shapes are finite, clipped (``overlap.pair_contact``)
