@@ -27,7 +27,7 @@ help:
 	@echo "make analyse ANALYSIS=tilt|collapse|... CASE=cases/x.toml [ARGS='--towards all'] [DASK=...]   an analysis of any case (python -m drystone ANALYSIS CASE ARGS) -> results/<case name>/<analysis>/"
 	@echo "make gravity4 | settlement4   the paper's four-block verification cases"
 	@echo "make limit [CASE=cases/sacsayhuaman/sine.toml] [ARGS='--towards all']   rigid-block limit analysis: collapse multiplier, tilt angle and mechanism, both frictions (seconds, no YADE) -> results/<case name>/limit/"
-	@echo "make bench [BENCH='--only scale --sizes 500']   speed figures (not a test; all sections ~15 min on 2 cores)"
+	@echo "make bench [BENCH='--only scale --sizes 500']   speed figures (not a test; every section but fragility_ida ~12 min on 2 cores; fragility_ida, the 22-record IDA, hours: pick sections with --only)"
 	@echo "                  BENCH='--only fragility_ida --records 2 --tolerance 0.2': fragility by IDA of the Sacsayhuaman wall over N far-field records, extrapolated to 22"
 	@echo "                  BENCH='--only profile --sizes 500 --walls polygonal': the step's time per kernel and phase, sampled by perf inside the compiled loop (needs linux-perf)"
 	@echo "                  BENCH='--baseline e18ca1f --sizes 500 --walls polygonal': this tree's scale section and an earlier commit's, back to back in alternating rounds (~8 min)"
